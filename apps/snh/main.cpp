@@ -1,0 +1,24 @@
+// snh: command-line entry point. Subcommands live in one file each.
+#include <exception>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "material_command.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"snh " SNH_VERSION ": Stable Neo-Hookean flesh simulation toolkit (Smith, de Goes & Kim 2018)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "snh " SNH_VERSION);
+  int exit_code = 0;
+  snh::cli::add_material_command(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::cerr << "snh: error: " << e.what() << "\n";
+    return 2;
+  }
+  return exit_code;
+}

@@ -1,0 +1,275 @@
+#include "material_command.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "snh/material/registry.hpp"
+#include "snh/material/stability.hpp"
+#include "snh/math/svd.hpp"
+
+namespace snh::cli {
+namespace {
+
+using nlohmann::json;
+
+struct Options {
+  std::string name;
+  double mu = 1.0, lambda = 10.0;
+  double youngs = std::nan(""), poisson = std::nan("");
+  bool reparametrize = false;
+  std::string F_text;
+  std::vector<double> stretch;
+  std::string projection = "clamp";
+  bool json = false, stability = false, list = false;
+  int samples = 200;
+  unsigned seed = 1;
+};
+
+/// Nine finite numbers separated by spaces or commas: vec(F), column by column.
+Mat3 parse_F(const std::string& text) {
+  std::string cleaned = text;
+  for (char& c : cleaned)
+    if (c == ',') c = ' ';
+  std::istringstream in(cleaned);
+  std::vector<double> values;
+  std::string token;
+  while (in >> token) {
+    char* end = nullptr;
+    const double v = std::strtod(token.c_str(), &end);
+    if (end == token.c_str() || *end != '\0' || !std::isfinite(v))
+      throw std::invalid_argument(
+          fmt::format("--F entry {} is not a finite number: '{}'", values.size(), token));
+    values.push_back(v);
+  }
+  if (values.size() != 9)
+    throw std::invalid_argument(fmt::format("--F needs 9 numbers (vec(F), column by column), got {}", values.size()));
+  Mat3 F;
+  for (int k = 0; k < 9; ++k) F.data()[k] = values[k];
+  return F;
+}
+
+json matrix_json(const Mat3& A) {
+  json rows = json::array();
+  for (int i = 0; i < 3; ++i) rows.push_back({A(i, 0), A(i, 1), A(i, 2)});
+  return rows;
+}
+
+std::string matrix_text(const Mat3& A, const std::string& indent) {
+  std::string out;
+  for (int i = 0; i < 3; ++i)
+    out += fmt::format("{}[{:>13.6g} {:>13.6g} {:>13.6g} ]\n", indent, A(i, 0), A(i, 1), A(i, 2));
+  return out;
+}
+
+Lame chosen_parameters(const Options& o) {
+  if (!std::isnan(o.youngs) || !std::isnan(o.poisson)) {
+    if (std::isnan(o.youngs) || std::isnan(o.poisson))
+      throw ParameterError("--youngs and --poisson go together");
+    return lame_from_youngs(o.youngs, o.poisson);
+  }
+  const Lame p{o.mu, o.lambda};
+  validate(p);
+  return p;
+}
+
+int run_inspect(const Options& o) {
+  if (o.name.empty()) throw std::invalid_argument("give a material NAME (see --list), or --stability");
+  if (o.F_text.empty() == o.stretch.empty())
+    throw std::invalid_argument("give exactly one of --F \"f0 ... f8\" or --stretch sx sy sz");
+  const auto projection = parse_projection(o.projection);
+  if (!projection) throw std::invalid_argument(fmt::format("--projection must be none, clamp or abs, got '{}'", o.projection));
+  Mat3 F;
+  if (!o.F_text.empty()) {
+    F = parse_F(o.F_text);
+  } else {
+    for (std::size_t i = 0; i < 3; ++i)
+      if (!std::isfinite(o.stretch[i]))
+        throw std::invalid_argument(fmt::format("--stretch value {} is not a finite number", i));
+    F = Vec3(o.stretch[0], o.stretch[1], o.stretch[2]).asDiagonal();
+  }
+  const Lame given = chosen_parameters(o);
+  const AnyMaterial material = make_material(o.name, given, o.reparametrize);
+
+  return std::visit(
+      [&](const auto& m) {
+        using M = std::decay_t<decltype(m)>;
+        const Lame used = m.params();
+        const Svd3 svd = rotation_variant_svd(F);
+        const bool defined = m.defined(F);
+        Eigensystem9 es;
+        if (defined) es = eigensystem(m, svd);
+        const double J = F.determinant();
+        if (o.json) {
+          json j;
+          j["material"] = std::string(M::name);
+          j["formula"] = std::string(M::formula);
+          j["mu"] = used.mu;
+          j["lambda"] = used.lambda;
+          j["nu"] = poisson_ratio(used);
+          j["reparametrized"] = o.reparametrize;
+          if (o.reparametrize) j["linear"] = {{"mu", given.mu}, {"lambda", given.lambda}};
+          j["F"] = matrix_json(F);
+          j["J"] = J;
+          j["I_C"] = F.squaredNorm();
+          j["sigma"] = {svd.sigma[0], svd.sigma[1], svd.sigma[2]};
+          j["defined"] = defined;
+          j["projection"] = o.projection;
+          if (defined) {
+            j["psi"] = m.psi(F);
+            j["P"] = matrix_json(m.pk1(F));
+            json eig = json::array();
+            for (int i = 0; i < 9; ++i)
+              eig.push_back({{"label", std::string(kEigenLabels[i])},
+                             {"value", es.values[i]},
+                             {"projected", project_eigenvalue(es.values[i], *projection)}});
+            j["eigenvalues"] = eig;
+          } else {
+            j["psi"] = nullptr;
+            j["reason"] = fmt::format("{} is undefined for J <= 0 (J = {:g})", M::name, J);
+          }
+          std::cout << j.dump(2) << "\n";
+          return 0;
+        }
+        std::cout << fmt::format("material   {}: psi = {}\n", M::name, M::formula);
+        std::cout << fmt::format("parameters {}{}\n", describe(used),
+                                 o.reparametrize ? fmt::format("  (reparametrized from linear {})", describe(given)) : "");
+        std::cout << "F\n" << matrix_text(F, "  ");
+        std::cout << fmt::format("J = {:.10g}   I_C = {:.10g}   sigma = ({:.10g}, {:.10g}, {:.10g})\n", J,
+                                 F.squaredNorm(), svd.sigma[0], svd.sigma[1], svd.sigma[2]);
+        if (!defined) {
+          std::cout << fmt::format("psi = +inf: {} is undefined for J <= 0 (J = {:g}); P and dP/dF do not exist here\n",
+                                   M::name, J);
+          return 0;
+        }
+        std::cout << fmt::format("psi = {:.12g}\n", m.psi(F));
+        std::cout << "P = dpsi/dF\n" << matrix_text(m.pk1(F), "  ");
+        std::cout << fmt::format("eigenvalues of dP/dF   {:>16} {:>16}\n", "value", "projected(" + o.projection + ")");
+        for (int i = 0; i < 9; ++i)
+          std::cout << fmt::format("  {:<20} {:>16.9g} {:>16.9g}\n", kEigenLabels[i], es.values[i],
+                                   project_eigenvalue(es.values[i], *projection));
+        return 0;
+      },
+      material);
+}
+
+std::string points_text(const StabilityRow& r) {
+  if (r.critical_points.empty()) return "none";
+  std::string out;
+  for (const auto& c : r.critical_points)
+    out += fmt::format("{}{} {:.4f}", out.empty() ? "" : ", ", c.minimum ? "min" : "max", c.s);
+  return out;
+}
+
+int run_stability(const Options& o) {
+  const Lame p = chosen_parameters(o);
+  const StabilityReport rep = measure_stability(p, o.reparametrize, o.samples, o.seed);
+  if (o.json) {
+    json j;
+    j["mu"] = p.mu;
+    j["lambda"] = p.lambda;
+    j["nu"] = poisson_ratio(p);
+    j["reparametrize"] = o.reparametrize;
+    j["samples"] = rep.samples;
+    j["seed"] = o.seed;
+    json rows = json::array();
+    for (const auto& r : rep.rows) {
+      json cps = json::array();
+      for (const auto& c : r.critical_points) cps.push_back({{"s", c.s}, {"kind", c.minimum ? "min" : "max"}});
+      auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+      rows.push_back({{"energy", r.name},
+                      {"reparametrized", r.parameters_reparametrized},
+                      {"inversion", {{"ok", r.inversion_ok}, {"samples", r.inverted_samples},
+                                     {"finite", r.inverted_finite}, {"fd_error", num(r.inverted_fd_error)}}},
+                      {"reflection", {{"ok", r.reflection_ok}, {"max_change", num(r.reflection_change)}}},
+                      {"rest", {{"ok", r.rest_ok}, {"norm_P", r.rest_stress}, {"psi", r.psi_at_rest}}},
+                      {"collapse", {{"critical_points", cps}, {"psi_at_zero", num(r.psi_at_zero)},
+                                    {"near_zero", r.near_zero}}}});
+    }
+    j["rows"] = rows;
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << fmt::format("Stability of every energy, measured: {}{}; {} sampled F with J <= 0 (seed {})\n\n",
+                           describe(p), o.reparametrize ? ", reparametrized where possible" : ", used as given",
+                           rep.samples, o.seed);
+  std::cout << fmt::format("{:<23} {:<24} {:<16} {:<15} {}\n", "energy", "1 inverted F (J<=0)", "2 reflection",
+                           "3 rest |P(I)|", "4 collapse F=sI: critical points in (0,1); F->0");
+  for (const auto& r : rep.rows) {
+    const std::string inv = r.inverted_finite == 0
+                                ? fmt::format("no: undefined {}/{}", r.inverted_samples - r.inverted_finite, r.inverted_samples)
+                                : fmt::format("{} {}/{} fd {:.0e}", r.inversion_ok ? "ok" : "NO", r.inverted_finite,
+                                              r.inverted_samples, r.inverted_fd_error);
+    const std::string refl = std::isnan(r.reflection_change)
+                                 ? "n/a (undefined)"
+                                 : fmt::format("{} {:.0e}", r.reflection_ok ? "ok" : "NO", r.reflection_change);
+    const std::string rest = fmt::format("{} {:.1e}", r.rest_ok ? "ok" : "NO", r.rest_stress);
+    std::cout << fmt::format("{:<23} {:<24} {:<16} {:<15} {}; {}\n",
+                             r.name + (o.reparametrize && !r.parameters_reparametrized ? "*" : ""), inv, refl, rest,
+                             points_text(r), r.near_zero);
+  }
+  std::cout << "\n1: psi, P and the clamped dP/dF finite at every sample, P matching finite differences of psi (<= 1e-6)\n"
+               "2: largest relative change of psi, P, clamped dP/dF when the SVD puts the reflection on another sigma (<= 1e-9)\n"
+               "3: rest stable when |P(I)| <= 1e-12 (mu + |lambda|)\n"
+               "4: s where d psi(sI)/ds = 0 (max = barrier, min = resting point), and whether F = 0 traps (local min)\n";
+  if (o.reparametrize) std::cout << "*: no Lame reparametrization exists; measured with the parameters as given\n";
+  return 0;
+}
+
+}  // namespace
+
+void add_material_command(CLI::App& app, int& exit_code) {
+  auto opts = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "material",
+      "Inspect an energy at one deformation gradient F: psi, P = dpsi/dF and the nine eigenvalues of dP/dF "
+      "(twist, flip, scaling) before and after PSD projection; or measure the stability table of every energy.");
+  std::string names;
+  for (auto n : material_names()) names += (names.empty() ? "" : ", ") + std::string(n);
+  cmd->add_option("name", opts->name, "Energy: " + names);
+  auto* mu = cmd->add_option("--mu", opts->mu, "Lame mu (default 1)");
+  auto* lambda = cmd->add_option("--lambda", opts->lambda, "Lame lambda (default 10, the paper's example)");
+  auto* E = cmd->add_option("--youngs", opts->youngs, "Young's modulus E (with --poisson, instead of --mu/--lambda)");
+  auto* nu = cmd->add_option("--poisson", opts->poisson, "Poisson's ratio nu, -1 < nu < 0.5");
+  E->excludes(mu)->excludes(lambda);
+  nu->excludes(mu)->excludes(lambda);
+  cmd->add_flag("--reparametrize", opts->reparametrize,
+                "Take the parameters as linear-elastic mu_L, lambda_L and map them so the energy matches linear "
+                "elasticity at rest (MATH.md section 2); without it they are used as given, as the paper's programs do");
+  auto* Fopt = cmd->add_option("--F", opts->F_text, "Deformation gradient: 9 numbers, vec(F) column by column");
+  auto* st = cmd->add_option("--stretch", opts->stretch, "Deformation gradient diag(sx, sy, sz)")->expected(3);
+  Fopt->excludes(st);
+  cmd->add_option("--projection", opts->projection, "PSD projection of dP/dF: none, clamp (default) or abs");
+  cmd->add_flag("--json", opts->json, "Machine-readable JSON output");
+  cmd->add_flag("--list", opts->list, "List the energies and their formulas");
+  cmd->add_flag("--stability", opts->stability,
+                "Measure, for every energy, the paper's four stability properties (inversion, reflection, rest, "
+                "collapse along F = sI)");
+  cmd->add_option("--samples", opts->samples, "Number of sampled F with J <= 0 for --stability (default 200)")
+      ->check(CLI::Range(1, 1000000));
+  cmd->add_option("--seed", opts->seed, "Seed of the samples for --stability (default 1)");
+  cmd->callback([opts, &exit_code]() {
+    const Options& o = *opts;
+    if (o.list) {
+      for (auto n : material_names()) {
+        std::visit([&](const auto& m) {
+          using M = std::decay_t<decltype(m)>;
+          std::cout << fmt::format("{:<24} {}{}\n", M::name, M::formula, M::inversion_safe ? "" : "   [undefined for J <= 0]");
+        }, make_material(n, Lame{}, false));
+      }
+      exit_code = 0;
+      return;
+    }
+    exit_code = o.stability ? run_stability(o) : run_inspect(o);
+  });
+}
+
+}  // namespace snh::cli

@@ -1,0 +1,66 @@
+#include "snh/material/eigensystem.hpp"
+
+#include <cmath>
+
+namespace snh {
+
+Eigensystem9 assemble_eigensystem(const Svd3& svd, const SigmaEigenvalues& s) {
+  Eigensystem9 es;
+  const Mat3& U = svd.U;
+  const Mat3& V = svd.V;
+  const double r = std::sqrt(0.5);
+  for (int k = 0; k < 3; ++k) {
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    const Mat3 ba = U.col(b) * V.col(a).transpose();
+    const Mat3 ab = U.col(a) * V.col(b).transpose();
+    es.values[k] = s.twist[k];
+    es.vectors.col(k) = vec(r * (ba - ab));
+    es.values[3 + k] = s.flip[k];
+    es.vectors.col(3 + k) = vec(r * (ba + ab));
+  }
+  const SymEigen3 scaling = symmetric_eigen3(s.A);
+  for (int k = 0; k < 3; ++k) {
+    es.values[6 + k] = scaling.values[k];
+    es.vectors.col(6 + k) = vec(U * scaling.vectors.col(k).asDiagonal() * V.transpose());
+  }
+  return es;
+}
+
+Mat9 rebuild(const Eigensystem9& es, PsdProjection p) {
+  Vec9 d;
+  for (int i = 0; i < 9; ++i) d[i] = project_eigenvalue(es.values[i], p);
+  return es.vectors * d.asDiagonal() * es.vectors.transpose();
+}
+
+Mat9 projected_from_sigma(const Svd3& svd, const SigmaEigenvalues& s, PsdProjection p) {
+  const Mat3& U = svd.U;
+  const Mat3& V = svd.V;
+  Mat9 basis;  // columns: twist 0..2, flip 0..2, then vec(u_i v_iᵀ) for i = 0..2
+  const double r = std::sqrt(0.5);
+  for (int k = 0; k < 3; ++k) {
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    const Mat3 ba = U.col(b) * V.col(a).transpose();
+    const Mat3 ab = U.col(a) * V.col(b).transpose();
+    basis.col(k) = vec(r * (ba - ab));
+    basis.col(3 + k) = vec(r * (ba + ab));
+    basis.col(6 + k) = vec(U.col(k) * V.col(k).transpose());
+  }
+  Mat9 core = Mat9::Zero();
+  for (int k = 0; k < 3; ++k) {
+    core(k, k) = project_eigenvalue(s.twist[k], p);
+    core(3 + k, 3 + k) = project_eigenvalue(s.flip[k], p);
+  }
+  const Mat3& A = s.A;
+  const bool positive_definite = A(0, 0) > 0.0 && A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1) > 0.0 && A.determinant() > 0.0;
+  if (p == PsdProjection::none || positive_definite) {
+    core.block<3, 3>(6, 6) = A;
+  } else {
+    const SymEigen3 e = symmetric_eigen3(A);
+    Vec3 d;
+    for (int k = 0; k < 3; ++k) d[k] = project_eigenvalue(e.values[k], p);
+    core.block<3, 3>(6, 6) = e.vectors * d.asDiagonal() * e.vectors.transpose();
+  }
+  return basis * core * basis.transpose();
+}
+
+}  // namespace snh
