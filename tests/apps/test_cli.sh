@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# End-to-end checks of `snh material`: outputs, JSON, and one-line errors with non-zero exit codes.
+# Usage: test_cli.sh PATH_TO_SNH
+set -u
+SNH="$1"
+pass=0
+fail=0
+
+check() {  # check NAME EXPECTED_EXIT PATTERN -- ARGS...: runs snh ARGS, checks exit code and output
+  local name="$1" want="$2" pattern="$3"
+  shift 4
+  local out code
+  out="$("$SNH" "$@" 2>&1)"
+  code=$?
+  if { [ "$want" = "nonzero" ] && [ "$code" -ne 0 ]; } || [ "$code" = "$want" ]; then
+    if printf '%s' "$out" | grep -Eq -- "$pattern"; then
+      pass=$((pass + 1))
+      return
+    fi
+  fi
+  fail=$((fail + 1))
+  echo "FAIL: $name (exit $code, wanted $want, pattern '$pattern')"
+  echo "$out" | head -20
+}
+
+# Inspecting energies.
+check "snh at rest" 0 "psi = (0|-?[0-9.]+e-1[5-9])$" -- material stable_neo_hookean --stretch 1 1 1
+check "snh eigen labels" 0 "flip_2" -- material stable_neo_hookean --mu 1 --lambda 10 --stretch 1.2 0.9 -0.5
+check "snh inverted projected" 0 "twist_0 +-18.68 +0$" -- material stable_neo_hookean --stretch 1.2 0.9 -0.5
+check "log J undefined" 0 "psi = \+inf: neo_hookean is undefined for J <= 0" -- material neo_hookean --stretch 1 1 -1
+check "F column major" 0 "J = -2 " -- material psi_d --F "2 0 0 0 1 0 0 0 -1"
+check "youngs/poisson" 0 "nu=0.3000" -- material stvk --youngs 1000 --poisson 0.3 --stretch 1 1 1
+check "reparametrize" 0 "reparametrized from linear" -- material stable_neo_hookean_log --reparametrize --stretch 1 1 1
+check "json" 0 '"label": "scaling_2"' -- material stable_neo_hookean --json --stretch 1.1 1 1
+check "json undefined" 0 '"psi": null' -- material neo_hookean_b --json --stretch 1 1 -1
+check "list" 0 "neo_hookean_b +mu/2 \(J\^\(-2/3\) I_C - 3\)" -- material --list
+check "stability table" 0 "stable_neo_hookean_log +ok 50/50" -- material --stability --samples 50
+check "stability json" 0 '"energy": "corotated"' -- material --stability --json --samples 10
+check "help" 0 "--reparametrize" -- material --help
+
+# Errors: one line, non-zero exit.
+check "unknown material" nonzero "unknown material 'stable_neohookean' \(known: stable_neo_hookean," -- material stable_neohookean --stretch 1 1 1
+check "mu zero" nonzero "mu must be a finite number > 0, got 0" -- material stable_neo_hookean --mu 0 --stretch 1 1 1
+check "nu 0.5" nonzero "Poisson's ratio must satisfy -1 < nu < 0.5, got 0.5" -- material stable_neo_hookean --youngs 1 --poisson 0.5 --stretch 1 1 1
+check "youngs alone" nonzero "--youngs and --poisson go together" -- material stable_neo_hookean --youngs 1 --stretch 1 1 1
+check "F short" nonzero "--F needs 9 numbers" -- material stable_neo_hookean --F "1 0 0 0 1 0 0 0"
+check "F nan" nonzero "--F entry 4 is not a finite number: 'nan'" -- material stable_neo_hookean --F "1 0 0 0 nan 0 0 0 1"
+check "F and stretch" nonzero "excludes" -- material stable_neo_hookean --F "1 0 0 0 1 0 0 0 1" --stretch 1 1 1
+check "no F" nonzero "give exactly one of --F" -- material stable_neo_hookean
+check "bad projection" nonzero "--projection must be none, clamp or abs" -- material stable_neo_hookean --stretch 1 1 1 --projection foo
+check "stretch inf" nonzero "--stretch value 2 is not a finite number" -- material stable_neo_hookean --stretch 1 1 inf
+check "no reparam psi_d" nonzero "psi_d cannot be reparametrized" -- material psi_d --reparametrize --stretch 1 1 1
+check "no subcommand" nonzero "subcommand" --
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
