@@ -35,32 +35,37 @@ Mat9 rebuild(const Eigensystem9& es, PsdProjection p) {
 Mat9 projected_from_sigma(const Svd3& svd, const SigmaEigenvalues& s, PsdProjection p) {
   const Mat3& U = svd.U;
   const Mat3& V = svd.V;
-  Mat9 basis;  // columns: twist 0..2, flip 0..2, then vec(u_i v_iᵀ) for i = 0..2
+  Eigen::Matrix<double, 9, 6> W;  // twist 0..2, flip 0..2
+  Eigen::Matrix<double, 9, 3> D;  // vec(u_i v_iᵀ)
+  Eigen::Matrix<double, 1, 6> d;
   const double r = std::sqrt(0.5);
   for (int k = 0; k < 3; ++k) {
     const int a = (k + 1) % 3, b = (k + 2) % 3;
     const Mat3 ba = U.col(b) * V.col(a).transpose();
     const Mat3 ab = U.col(a) * V.col(b).transpose();
-    basis.col(k) = vec(r * (ba - ab));
-    basis.col(3 + k) = vec(r * (ba + ab));
-    basis.col(6 + k) = vec(U.col(k) * V.col(k).transpose());
-  }
-  Mat9 core = Mat9::Zero();
-  for (int k = 0; k < 3; ++k) {
-    core(k, k) = project_eigenvalue(s.twist[k], p);
-    core(3 + k, 3 + k) = project_eigenvalue(s.flip[k], p);
+    W.col(k) = vec(r * (ba - ab));
+    W.col(3 + k) = vec(r * (ba + ab));
+    D.col(k) = vec(U.col(k) * V.col(k).transpose());
+    d[k] = project_eigenvalue(s.twist[k], p);
+    d[3 + k] = project_eigenvalue(s.flip[k], p);
   }
   const Mat3& A = s.A;
+  Mat3 Ap;
   const bool positive_definite = A(0, 0) > 0.0 && A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1) > 0.0 && A.determinant() > 0.0;
   if (p == PsdProjection::none || positive_definite) {
-    core.block<3, 3>(6, 6) = A;
+    Ap = A;
   } else {
     const SymEigen3 e = symmetric_eigen3(A);
-    Vec3 d;
-    for (int k = 0; k < 3; ++k) d[k] = project_eigenvalue(e.values[k], p);
-    core.block<3, 3>(6, 6) = e.vectors * d.asDiagonal() * e.vectors.transpose();
+    Vec3 ev;
+    for (int k = 0; k < 3; ++k) ev[k] = project_eigenvalue(e.values[k], p);
+    Ap = e.vectors * ev.asDiagonal() * e.vectors.transpose();
   }
-  return basis * core * basis.transpose();
+  const Eigen::Matrix<double, 9, 6> Wd = W * d.asDiagonal();
+  const Eigen::Matrix<double, 9, 3> DA = D * Ap;
+  // Coefficient-based products: measured faster than Eigen's blocked GEMM at these sizes (9x6, 9x3).
+  Mat9 H = Wd.lazyProduct(W.transpose());
+  H.noalias() += DA.lazyProduct(D.transpose());
+  return H;
 }
 
 }  // namespace snh

@@ -17,7 +17,7 @@ struct Svd3 {
 /// Rotation-variant SVD by one-sided (Hestenes) Jacobi on the columns of F, then a completion of U
 /// that stays orthonormal for rank-deficient F (zero, rank 1, rank 2). Accurate to a few ulps of ‖F‖
 /// in reconstruction; robust for repeated, zero, tiny and negative singular values.
-///   F  3x3 input, any finite matrix
+///   F  3x3 input; for a non-finite entry the result is U = V = I and σ = NaN (so callers see it)
 [[nodiscard]] Svd3 rotation_variant_svd(const Mat3& F);
 
 /// The same decomposition with the negative sign (when det F < 0) moved from σ2 to σ_k.
