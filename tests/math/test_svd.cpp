@@ -107,6 +107,16 @@ TEST(Svd, TinyAndHugeScales) {
   expect_valid_svd(F, rotation_variant_svd(F), 1e-3);
 }
 
+TEST(Svd, NonFiniteInputGivesNaNSigmaNotGarbage) {
+  for (double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    Mat3 F = Mat3::Identity();
+    F(1, 2) = bad;
+    const Svd3 s = rotation_variant_svd(F);
+    EXPECT_TRUE(s.sigma.array().isNaN().all());
+    EXPECT_TRUE(s.U.isIdentity() && s.V.isIdentity());
+  }
+}
+
 TEST(Svd, MoveReflectionKeepsTheDecomposition) {
   std::mt19937_64 rng(5);
   for (int rep = 0; rep < 200; ++rep) {

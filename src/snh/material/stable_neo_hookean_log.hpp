@@ -12,7 +12,7 @@ namespace snh {
 
 struct StableNeoHookeanLog : InvariantEnergy<StableNeoHookeanLog> {
   static constexpr std::string_view name = "stable_neo_hookean_log";
-  static constexpr std::string_view formula = "mu/2 (I_C - 3) + lambda/2 (J - alpha)^2 - mu/2 log(I_C + 1), alpha = 1 + 3mu/(4lambda)";
+  static constexpr std::string_view formula = "mu/2 (I_C - 3) + lambda/2 (J - alpha)^2 - mu/2 log(I_C + 1) - c, alpha = 1 + 3mu/(4lambda), c: psi(I) = 0";
   static constexpr bool uses_I1 = false;
   static constexpr bool inversion_safe = true;
 

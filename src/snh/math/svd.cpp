@@ -79,10 +79,11 @@ inline Mat3 orthonormal_start(const Mat3& S) {
 Svd3 rotation_variant_svd(const Mat3& F) {
   Svd3 out;
   const double max_abs = F.cwiseAbs().maxCoeff();
-  if (!(max_abs > 0.0) || !std::isfinite(max_abs)) {  // F = 0, or a non-finite entry
+  const bool finite = F.allFinite();
+  if (!finite || max_abs == 0.0) {  // a non-finite entry, or F = 0
     out.U.setIdentity();
     out.V.setIdentity();
-    out.sigma = Vec3::Constant(max_abs == 0.0 ? 0.0 : std::numeric_limits<double>::quiet_NaN());
+    out.sigma = Vec3::Constant(finite ? 0.0 : std::numeric_limits<double>::quiet_NaN());
     return out;
   }
   // Scale by a power of two so ‖F‖ ~ 1: exact, and no under/overflow in the squared norms below.
