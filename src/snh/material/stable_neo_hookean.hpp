@@ -8,6 +8,25 @@
 
 namespace snh {
 
+/// The closed-form σ-frame eigenvalues shared by both Stable Neo-Hookean forms (MATH.md §4):
+/// twist k τ + λ(J−α)σ_k, flip k τ − λ(J−α)σ_k, A_ii = τ + cσ_i² + λσ_j²σ_k²,
+/// A_ij = cσ_iσ_j + λσ_k(2J − α). Production form: τ = μ, c = 0;
+/// log form: τ = μ(1 − 1/(I_C+1)), c = 2μ/(I_C+1)².
+[[nodiscard]] inline SigmaEigenvalues snh_sigma_eigenvalues(const Vec3& s, double tau, double c, double lambda,
+                                                            double alpha) {
+  SigmaEigenvalues out;
+  const double J = s.prod();
+  const double t = lambda * (J - alpha);
+  out.twist = Vec3::Constant(tau) + t * s;
+  out.flip = Vec3::Constant(tau) - t * s;
+  for (int k = 0; k < 3; ++k) {
+    const int i = (k + 1) % 3, j = (k + 2) % 3;
+    out.A(k, k) = tau + c * s[k] * s[k] + lambda * s[i] * s[i] * s[j] * s[j];
+    out.A(i, j) = out.A(j, i) = c * s[i] * s[j] + lambda * s[k] * (2.0 * J - alpha);
+  }
+  return out;
+}
+
 struct StableNeoHookean : InvariantEnergy<StableNeoHookean> {
   static constexpr std::string_view name = "stable_neo_hookean";
   static constexpr std::string_view formula = "mu/2 (I_C - 3) + lambda/2 (J - alpha)^2 - mu^2/(2 lambda), alpha = 1 + mu/lambda";
@@ -38,17 +57,7 @@ struct StableNeoHookean : InvariantEnergy<StableNeoHookean> {
   /// Closed form (MATH.md §4): twist k μ + λ(J−α)σ_k, flip k μ − λ(J−α)σ_k,
   /// A_ii = μ + λσ_j²σ_k², A_ij = λσ_k(2J − α).
   [[nodiscard]] SigmaEigenvalues sigma_eigenvalues(const Vec3& s) const {
-    SigmaEigenvalues out;
-    const double J = s.prod();
-    const double c = lambda * (J - alpha);
-    out.twist = Vec3::Constant(mu) + c * s;
-    out.flip = Vec3::Constant(mu) - c * s;
-    for (int k = 0; k < 3; ++k) {
-      const int i = (k + 1) % 3, j = (k + 2) % 3;
-      out.A(k, k) = mu + lambda * s[i] * s[i] * s[j] * s[j];
-      out.A(i, j) = out.A(j, i) = lambda * s[k] * (2.0 * J - alpha);
-    }
-    return out;
+    return snh_sigma_eigenvalues(s, mu, 0.0, lambda, alpha);
   }
 };
 

@@ -7,6 +7,7 @@
 
 #include "snh/material/invariant_energy.hpp"
 #include "snh/material/lame.hpp"
+#include "snh/material/stable_neo_hookean.hpp"
 
 namespace snh {
 
@@ -44,20 +45,8 @@ struct StableNeoHookeanLog : InvariantEnergy<StableNeoHookeanLog> {
   /// Closed form (MATH.md §4), τ = μ(1 − 1/(I_C+1)), c = 2μ/(I_C+1)²: twist k τ + λ(J−α)σ_k,
   /// flip k τ − λ(J−α)σ_k, A_ii = τ + cσ_i² + λσ_j²σ_k², A_ij = cσ_iσ_j + λσ_k(2J − α).
   [[nodiscard]] SigmaEigenvalues sigma_eigenvalues(const Vec3& s) const {
-    SigmaEigenvalues out;
-    const double J = s.prod();
-    const double IC = s.squaredNorm();
-    const double tau = mu * (1.0 - 1.0 / (IC + 1.0));
-    const double c = 2.0 * mu / ((IC + 1.0) * (IC + 1.0));
-    const double t = lambda * (J - alpha);
-    out.twist = Vec3::Constant(tau) + t * s;
-    out.flip = Vec3::Constant(tau) - t * s;
-    for (int k = 0; k < 3; ++k) {
-      const int i = (k + 1) % 3, j = (k + 2) % 3;
-      out.A(k, k) = tau + c * s[k] * s[k] + lambda * s[i] * s[i] * s[j] * s[j];
-      out.A(i, j) = out.A(j, i) = c * s[i] * s[j] + lambda * s[k] * (2.0 * J - alpha);
-    }
-    return out;
+    const double q = 1.0 / (s.squaredNorm() + 1.0);
+    return snh_sigma_eigenvalues(s, mu * (1.0 - q), 2.0 * mu * q * q, lambda, alpha);
   }
 };
 

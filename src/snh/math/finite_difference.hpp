@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "snh/math/types.hpp"
 
@@ -13,35 +14,36 @@ namespace snh {
 /// The ε values swept by best_relative_error: 1e-2 … 1e-8.
 inline constexpr std::array<double, 7> kFiniteDifferenceSteps = {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
 
-/// Fourth-order central difference of a scalar f(F): entry (i, j) is
-/// (−f(F + 2εe_ij) + 8f(F + εe_ij) − 8f(F − εe_ij) + f(F − 2εe_ij)) / 12ε (truncation error O(ε⁴)).
+/// The fourth-order central stencil (−g(2ε) + 8g(ε) − 8g(−ε) + g(−2ε)) / 12ε, truncation error O(ε⁴),
+/// for g(h) = the function at F + h e_k.
+/// The result is evaluated (not an Eigen expression that would refer to the temporaries).
+template <class At>
+[[nodiscard]] auto fourth_order_difference(At&& at, double eps) -> std::decay_t<decltype(at(eps))> {
+  return (-at(2 * eps) + 8.0 * at(eps) - 8.0 * at(-eps) + at(-2 * eps)) / (12.0 * eps);
+}
+
+/// F with h added to its k-th entry (column-major).
+[[nodiscard]] inline Mat3 nudged(const Mat3& F, int k, double h) {
+  Mat3 Fh = F;
+  Fh.data()[k] += h;
+  return Fh;
+}
+
+/// Fourth-order central difference of a scalar f(F): entry k is ∂f/∂F_k.
 template <class Fn>
 [[nodiscard]] Mat3 fd_gradient(Fn&& f, const Mat3& F, double eps) {
   Mat3 G;
-  for (int k = 0; k < 9; ++k) {
-    auto at = [&](double h) {
-      Mat3 Fh = F;
-      Fh.data()[k] += h;
-      return f(Fh);
-    };
-    G.data()[k] = (-at(2 * eps) + 8.0 * at(eps) - 8.0 * at(-eps) + at(-2 * eps)) / (12.0 * eps);
-  }
+  for (int k = 0; k < 9; ++k)
+    G.data()[k] = fourth_order_difference([&](double h) { return f(nudged(F, k, h)); }, eps);
   return G;
 }
 
-/// Fourth-order central difference of a matrix-valued g(F): column k is the derivative of vec(g)
-/// along e_k, with the stencil of fd_gradient.
+/// Fourth-order central difference of a matrix-valued g(F): column k is ∂vec(g)/∂F_k.
 template <class Fn>
 [[nodiscard]] Mat9 fd_jacobian(Fn&& g, const Mat3& F, double eps) {
   Mat9 H;
-  for (int k = 0; k < 9; ++k) {
-    auto at = [&](double h) {
-      Mat3 Fh = F;
-      Fh.data()[k] += h;
-      return vec(Mat3(g(Fh)));
-    };
-    H.col(k) = (-at(2 * eps) + 8.0 * at(eps) - 8.0 * at(-eps) + at(-2 * eps)) / (12.0 * eps);
-  }
+  for (int k = 0; k < 9; ++k)
+    H.col(k) = fourth_order_difference([&](double h) -> Vec9 { return vec(Mat3(g(nudged(F, k, h)))); }, eps);
   return H;
 }
 
