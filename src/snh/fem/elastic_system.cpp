@@ -1,0 +1,242 @@
+#include "snh/fem/elastic_system.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace snh {
+namespace {
+
+/// Energy, gradient (3 by N) and stiffness (3N by 3N, DOF 3a+i) of one element at node positions X.
+template <class M, int N, int Q>
+double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix<double, 3, N>& X,
+                     Eigen::Matrix<double, 3, N>* grad, Eigen::Matrix<double, 3 * N, 3 * N>* K, PsdProjection p) {
+  double psi = 0.0;
+  if (grad) grad->setZero();
+  if (K) K->setZero();
+  for (int q = 0; q < Q; ++q) {
+    const Eigen::Matrix<double, N, 3>& G = r.G[q];
+    const double w = r.weight[q];
+    const Mat3 F = X * G;
+    psi += w * m.psi(F);
+    if (grad) grad->noalias() += (w * m.pk1(F)) * G.transpose();
+    if (K) {
+      // With vec(F)_{3j+i} = Σ_a x_{a,i} G_{a,j}: K_{(a,i),(b,k)} = w Σ_{j,l} G_{a,j} H_{3j+i,3l+k} G_{b,l}.
+      const Mat9 H = w * projected_hessian(m, F, p);
+      Eigen::Matrix<double, 9, 3 * N> HB;
+      for (int b = 0; b < N; ++b)
+        for (int k = 0; k < 3; ++k)
+          HB.col(3 * b + k) = G(b, 0) * H.col(k) + G(b, 1) * H.col(3 + k) + G(b, 2) * H.col(6 + k);
+      for (int a = 0; a < N; ++a)
+        K->template middleRows<3>(3 * a) +=
+            G(a, 0) * HB.template middleRows<3>(0) + G(a, 1) * HB.template middleRows<3>(3) + G(a, 2) * HB.template middleRows<3>(6);
+    }
+  }
+  return psi;
+}
+
+template <int N>
+Eigen::Matrix<double, 3, N> gather_nodes(const VolumeMesh& mesh, Eigen::Index c, const Eigen::VectorXd& x) {
+  Eigen::Matrix<double, 3, N> X;
+  for (int a = 0; a < N; ++a) X.col(a) = x.segment<3>(3 * mesh.cells(a, c));
+  return X;
+}
+
+}  // namespace
+
+ElasticSystem::ElasticSystem(VolumeMesh mesh, AnyMaterial material, std::vector<std::uint8_t> fixed)
+    : mesh_(std::move(mesh)), material_(std::move(material)), rest_(compute_rest_state(mesh_)) {
+  const Eigen::Index n = mesh_.vertex_count();
+  const int npc = nodes_per_cell(mesh_.type);
+  if (static_cast<Eigen::Index>(fixed.size()) != 3 * n)
+    throw std::invalid_argument(fmt::format("fixed flags: expected {} (3 per vertex), got {}", 3 * n, fixed.size()));
+  if (mesh_.cells.rows() != npc) throw std::invalid_argument("cells do not match the cell type");
+  for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
+    for (int a = 0; a < npc; ++a)
+      if (mesh_.cells(a, c) < 0 || mesh_.cells(a, c) >= n)
+        throw std::invalid_argument(fmt::format("cell {} refers to vertex {} (mesh has {})", c, mesh_.cells(a, c), n));
+
+  // Free DOF numbering, increasing with the DOF index.
+  free_index_.assign(3 * n, -1);
+  for (Eigen::Index d = 0; d < 3 * n; ++d)
+    if (!fixed[d]) free_index_[d] = static_cast<int>(free_count_++);
+
+  // Vertex -> cells adjacency (CSR).
+  std::vector<int> vc_start(n + 1, 0), vc_list;
+  for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
+    for (int a = 0; a < npc; ++a) ++vc_start[mesh_.cells(a, c) + 1];
+  for (Eigen::Index v = 0; v < n; ++v) vc_start[v + 1] += vc_start[v];
+  vc_list.resize(vc_start[n]);
+  {
+    std::vector<int> fill(vc_start.begin(), vc_start.end() - 1);
+    for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
+      for (int a = 0; a < npc; ++a) vc_list[fill[mesh_.cells(a, c)]++] = static_cast<int>(c);
+  }
+
+  // Vertex neighbours (sharing a cell, itself included), sorted.
+  std::vector<std::vector<int>> nbr(n);
+  for (Eigen::Index v = 0; v < n; ++v) {
+    auto& list = nbr[v];
+    for (int i = vc_start[v]; i < vc_start[v + 1]; ++i)
+      for (int a = 0; a < npc; ++a) list.push_back(mesh_.cells(a, vc_list[i]));
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+
+  // Lower-triangular CSC pattern over free DOFs: column c = free(3v+k) holds rows free(3u+l) >= c.
+  std::vector<int> outer(free_count_ + 1, 0), inner;
+  for (Eigen::Index v = 0; v < n; ++v)
+    for (int k = 0; k < 3; ++k) {
+      const int col = free_index_[3 * v + k];
+      if (col < 0) continue;
+      for (int u : nbr[v])
+        for (int l = 0; l < 3; ++l) {
+          const int row = free_index_[3 * u + l];
+          if (row >= col) inner.push_back(row);
+        }
+      outer[col + 1] = static_cast<int>(inner.size());
+    }
+  nbr.clear();
+  std::vector<double> zeros(inner.size(), 0.0);
+  pattern_ = Eigen::Map<const SparseLower>(free_count_, free_count_, static_cast<Eigen::Index>(inner.size()),
+                                           outer.data(), inner.data(), zeros.data());
+  pattern_.makeCompressed();
+
+  // Scatter map: for each element and local pair (A, B), the value index of (free(A), free(B)) when
+  // both are free and free(A) >= free(B); −1 otherwise (the symmetric partner is stored instead).
+  const int ld = 3 * npc;
+  scatter_.assign(static_cast<std::size_t>(mesh_.cell_count()) * ld * ld, -1);
+  const int* out_ptr = pattern_.outerIndexPtr();
+  const int* in_ptr = pattern_.innerIndexPtr();
+  for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
+    for (int A = 0; A < ld; ++A) {
+      const int rA = free_index_[3 * mesh_.cells(A / 3, c) + A % 3];
+      if (rA < 0) continue;
+      for (int B = 0; B < ld; ++B) {
+        const int rB = free_index_[3 * mesh_.cells(B / 3, c) + B % 3];
+        if (rB < 0 || rA < rB) continue;
+        const int* first = in_ptr + out_ptr[rB];
+        const int* last = in_ptr + out_ptr[rB + 1];
+        const int* it = std::lower_bound(first, last, rA);
+        scatter_[(static_cast<std::size_t>(c) * ld + A) * ld + B] = static_cast<int>(it - in_ptr);
+      }
+    }
+
+  // Greedy colouring: an element takes the smallest colour unused by elements sharing a vertex.
+  std::vector<int> colour(mesh_.cell_count(), -1), stamp;
+  int colours = 0;
+  for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c) {
+    for (int a = 0; a < npc; ++a) {
+      const int v = mesh_.cells(a, c);
+      for (int i = vc_start[v]; i < vc_start[v + 1]; ++i) {
+        const int other = colour[vc_list[i]];
+        if (other >= 0) {
+          if (other >= static_cast<int>(stamp.size())) stamp.resize(other + 1, -1);
+          stamp[other] = static_cast<int>(c);
+        }
+      }
+    }
+    int pick = 0;
+    while (pick < static_cast<int>(stamp.size()) && stamp[pick] == static_cast<int>(c)) ++pick;
+    colour[c] = pick;
+    colours = std::max(colours, pick + 1);
+  }
+  colour_start_.assign(colours + 1, 0);
+  for (int col : colour) ++colour_start_[col + 1];
+  for (int k = 0; k < colours; ++k) colour_start_[k + 1] += colour_start_[k];
+  colour_order_.resize(colour.size());
+  {
+    std::vector<int> fill(colour_start_.begin(), colour_start_.end() - 1);
+    for (std::size_t c = 0; c < colour.size(); ++c) colour_order_[fill[colour[c]]++] = static_cast<int>(c);
+  }
+}
+
+double ElasticSystem::energy(const Eigen::VectorXd& x) const {
+  std::vector<double> per(mesh_.cell_count());
+  std::visit(
+      [&](const auto& m, const auto& rest) {
+        using R = typename std::decay_t<decltype(rest)>::value_type;
+        const Eigen::Index count = mesh_.cell_count();
+#pragma omp parallel for schedule(static)
+        for (Eigen::Index c = 0; c < count; ++c)
+          per[c] = element_terms<std::decay_t<decltype(m)>, R::nodes, R::points>(
+              m, rest[c], gather_nodes<R::nodes>(mesh_, c, x), nullptr, nullptr, PsdProjection::none);
+      },
+      material_, rest_);
+  double total = 0.0;
+  for (double e : per) total += e;  // fixed order: deterministic
+  return total;
+}
+
+double ElasticSystem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, SparseLower* hessian,
+                               PsdProjection projection) const {
+  std::vector<double> per(mesh_.cell_count());
+  Eigen::VectorXd full = Eigen::VectorXd::Zero(x.size());
+  if (hessian) {
+    if (hessian->nonZeros() != pattern_.nonZeros() || hessian->rows() != pattern_.rows()) *hessian = pattern_;
+    std::fill(hessian->valuePtr(), hessian->valuePtr() + hessian->nonZeros(), 0.0);
+  }
+  double* values = hessian ? hessian->valuePtr() : nullptr;
+  std::visit(
+      [&](const auto& m, const auto& rest) {
+        using R = typename std::decay_t<decltype(rest)>::value_type;
+        constexpr int N = R::nodes;
+        constexpr int ld = 3 * N;
+        for (int k = 0; k + 1 < static_cast<int>(colour_start_.size()); ++k) {
+          const int begin = colour_start_[k], end = colour_start_[k + 1];
+#pragma omp parallel for schedule(static)
+          for (int i = begin; i < end; ++i) {
+            const int c = colour_order_[i];
+            Eigen::Matrix<double, 3, N> g;
+            Eigen::Matrix<double, ld, ld> K;
+            per[c] = element_terms(m, rest[c], gather_nodes<N>(mesh_, c, x), &g, values ? &K : nullptr, projection);
+            for (int a = 0; a < N; ++a) full.segment<3>(3 * mesh_.cells(a, c)) += g.col(a);
+            if (values) {
+              const int* map = scatter_.data() + static_cast<std::size_t>(c) * ld * ld;
+              for (int A = 0; A < ld; ++A)
+                for (int B = 0; B < ld; ++B) {
+                  const int idx = map[A * ld + B];
+                  if (idx >= 0) values[idx] += K(A, B);
+                }
+            }
+          }
+        }
+      },
+      material_, rest_);
+  gradient = gather_free(full);
+  double total = 0.0;
+  for (double e : per) total += e;
+  return total;
+}
+
+Eigen::VectorXd ElasticSystem::gather_free(const Eigen::VectorXd& full) const {
+  Eigen::VectorXd out(free_count_);
+  for (std::size_t d = 0; d < free_index_.size(); ++d)
+    if (free_index_[d] >= 0) out[free_index_[d]] = full[static_cast<Eigen::Index>(d)];
+  return out;
+}
+
+void ElasticSystem::scatter_add_free(const Eigen::VectorXd& free, double scale, Eigen::VectorXd& full) const {
+  for (std::size_t d = 0; d < free_index_.size(); ++d)
+    if (free_index_[d] >= 0) full[static_cast<Eigen::Index>(d)] += scale * free[free_index_[d]];
+}
+
+Eigen::VectorXd ElasticSystem::min_det_per_element(const Eigen::VectorXd& x) const {
+  Eigen::VectorXd out(mesh_.cell_count());
+  std::visit(
+      [&](const auto& rest) {
+        using R = typename std::decay_t<decltype(rest)>::value_type;
+        for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c) {
+          const auto X = gather_nodes<R::nodes>(mesh_, c, x);
+          double lo = std::numeric_limits<double>::infinity();
+          for (int q = 0; q < R::points; ++q) lo = std::min(lo, (X * rest[c].G[q]).determinant());
+          out[c] = lo;
+        }
+      },
+      rest_);
+  return out;
+}
+
+}  // namespace snh
