@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "material_command.hpp"
+#include "stretch_command.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"snh " SNH_VERSION ": Stable Neo-Hookean flesh simulation toolkit (Smith, de Goes & Kim 2018)"};
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "snh " SNH_VERSION);
   int exit_code = 0;
   snh::cli::add_material_command(app, exit_code);
+  snh::cli::add_stretch_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

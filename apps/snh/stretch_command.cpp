@@ -1,0 +1,88 @@
+#include "stretch_command.hpp"
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+#include <omp.h>
+
+#include "snh/material/registry.hpp"
+#include "snh/sim/stretch.hpp"
+
+namespace snh::cli {
+namespace {
+
+struct Options {
+  std::string element = "tet";
+  int res = 10;
+  std::string material = "stable_neo_hookean";
+  double mu = 1.0, lambda = 10.0;
+  double youngs = std::nan(""), poisson = std::nan("");
+  bool reparametrize = false;
+  int steps = 25;
+  double stretch = 3.5;
+  std::string out = "output";
+  int threads = 0;
+  std::string solver = "cholmod";
+  double tolerance = 1e-3;
+  std::string projection = "clamp";
+};
+
+}  // namespace
+
+void add_stretch_command(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "stretch",
+      "The paper's stretch test (tetcli/hexcli) with named options: a [-1,1]^3 box of tets or hexes whose y = -1 and "
+      "y = +1 layers are pulled apart in quasi-static steps; writes NNN.obj frames, stats.json and stats.csv.");
+  cmd->add_option("--element", o->element, "tet (6 tets per lattice cell, as tetcli) or hex (trilinear, as hexcli)")
+      ->check(CLI::IsMember({"tet", "hex"}));
+  cmd->add_option("--res", o->res, "Cells per side (default 10)");
+  std::string names;
+  for (auto n : material_names()) names += (names.empty() ? "" : ", ") + std::string(n);
+  cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + names);
+  auto* mu = cmd->add_option("--mu", o->mu, "Lame mu (default 1)");
+  auto* lambda = cmd->add_option("--lambda", o->lambda, "Lame lambda (default 10)");
+  auto* E = cmd->add_option("--youngs", o->youngs, "Young's modulus (with --poisson, instead of --mu/--lambda)");
+  auto* nu = cmd->add_option("--poisson", o->poisson, "Poisson's ratio, -1 < nu < 0.5");
+  E->excludes(mu)->excludes(lambda);
+  nu->excludes(mu)->excludes(lambda);
+  cmd->add_flag("--reparametrize", o->reparametrize, "Parameters are linear-elastic; map them (MATH.md section 2)");
+  cmd->add_option("--steps", o->steps, "Quasi-static steps (default 25)");
+  cmd->add_option("--stretch", o->stretch, "Final length / rest length along y (default 3.5)");
+  cmd->add_option("--out", o->out, "Output directory (default output)");
+  cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
+  cmd->add_option("--solver", o->solver, "Linear solver: cholmod (default), ldlt or pcg")
+      ->check(CLI::IsMember({"cholmod", "ldlt", "pcg"}));
+  cmd->add_option("--tolerance", o->tolerance, "Newton stops when |f| < tolerance (default 1e-3: |f|^2 < 1e-6 as the paper)");
+  cmd->add_option("--projection", o->projection, "PSD projection of element Hessians: clamp (default) or abs")
+      ->check(CLI::IsMember({"clamp", "abs"}));
+  cmd->callback([o, &exit_code]() {
+    StretchConfig c;
+    c.program = "snh stretch";
+    c.element = o->element == "hex" ? CellType::hex8 : CellType::tet4;
+    c.resolution = o->res;
+    c.material = o->material;
+    if (!std::isnan(o->youngs) || !std::isnan(o->poisson)) {
+      if (std::isnan(o->youngs) || std::isnan(o->poisson)) throw ParameterError("--youngs and --poisson go together");
+      c.params = lame_from_youngs(o->youngs, o->poisson);
+    } else {
+      c.params = {o->mu, o->lambda};
+    }
+    c.reparametrize = o->reparametrize;
+    c.steps = o->steps;
+    c.stretch = o->stretch;
+    c.out = o->out;
+    c.solver = *parse_linear_solver(o->solver);
+    c.newton.tolerance = o->tolerance;
+    c.newton.projection = *parse_projection(o->projection);
+    if (o->threads > 0) omp_set_num_threads(o->threads);
+    validate(c);
+    const StretchResult r = run_stretch(c, std::cout);
+    exit_code = r.all_converged ? 0 : 1;
+  });
+}
+
+}  // namespace snh::cli

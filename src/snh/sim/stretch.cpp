@@ -1,0 +1,205 @@
+#include "snh/sim/stretch.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "snh/fem/elastic_system.hpp"
+#include "snh/io/atomic_file.hpp"
+#include "snh/io/obj.hpp"
+#include "snh/material/registry.hpp"
+#include "snh/mesh/box.hpp"
+#include "snh/mesh/surface.hpp"
+
+namespace snh {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+/// Half-length along y of the box at step s.
+double half_length(const StretchConfig& c, int s) { return 1.0 + (c.stretch - 1.0) * s / c.steps; }
+
+/// Volume, min det F and inverted-element count of the state x.
+void measure_state(const ElasticSystem& sys, const Eigen::VectorXd& x, StepStats& st) {
+  const Eigen::VectorXd minJ = sys.min_det_per_element(x);
+  st.min_J = minJ.minCoeff();
+  st.inverted = static_cast<int>((minJ.array() <= 0.0).count());
+  double deformed = 0.0, rest = 0.0;
+  std::visit(
+      [&](const auto& elems) {
+        using R = typename std::decay_t<decltype(elems)>::value_type;
+        const auto& mesh = sys.mesh();
+        for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
+          Eigen::Matrix<double, 3, R::nodes> X;
+          for (int a = 0; a < R::nodes; ++a) X.col(a) = x.segment<3>(3 * mesh.cells(a, c));
+          for (int q = 0; q < R::points; ++q) {
+            deformed += elems[c].weight[q] * (X * elems[c].G[q]).determinant();
+            rest += elems[c].weight[q];
+          }
+        }
+      },
+      sys.rest());
+  st.volume_ratio = deformed / rest;
+}
+
+Eigen::Matrix3Xd as_positions(const Eigen::VectorXd& x) {
+  return Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3);
+}
+
+void write_stats(const StretchConfig& c, const StretchResult& r) {
+  nlohmann::json j;
+  j["program"] = c.program;
+  j["element"] = std::string(to_string(c.element));
+  j["resolution"] = c.resolution;
+  j["material"] = c.material;
+  j["mu"] = c.params.mu;
+  j["lambda"] = c.params.lambda;
+  j["reparametrize"] = c.reparametrize;
+  j["steps_requested"] = c.steps;
+  j["stretch"] = c.stretch;
+  j["solver"] = std::string(to_string(c.solver));
+  j["tolerance"] = c.newton.tolerance;
+  j["vertices"] = r.vertices;
+  j["cells"] = r.cells;
+  j["all_converged"] = r.all_converged;
+  j["total_seconds"] = r.total_seconds;
+  j["middle_width"] = r.middle_width;
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& s : r.steps)
+    steps.push_back({{"step", s.step}, {"converged", s.converged}, {"newton_iterations", s.newton_iterations},
+                     {"line_search_steps", s.line_search_steps}, {"linear_iterations", s.linear_iterations},
+                     {"residual", s.residual}, {"energy", s.energy}, {"wall_seconds", s.wall_seconds},
+                     {"assembly_seconds", s.assembly_seconds}, {"solve_seconds", s.solve_seconds},
+                     {"min_J", s.min_J}, {"inverted", s.inverted}, {"volume_ratio", s.volume_ratio},
+                     {"residual_history", s.residuals}, {"failure", s.failure}});
+  j["steps"] = steps;
+  write_atomically(c.out / "stats.json", [&](std::ostream& o) { o << j.dump(2) << "\n"; });
+  write_atomically(c.out / "stats.csv", [&](std::ostream& o) {
+    o << "step,converged,newton_iterations,line_search_steps,linear_iterations,residual,energy,wall_seconds,"
+         "assembly_seconds,solve_seconds,min_J,inverted,volume_ratio\n";
+    for (const auto& s : r.steps)
+      o << fmt::format("{},{},{},{},{},{:.6e},{:.12g},{:.6f},{:.6f},{:.6f},{:.9g},{},{:.9g}\n", s.step, s.converged ? 1 : 0,
+                       s.newton_iterations, s.line_search_steps, s.linear_iterations, s.residual, s.energy,
+                       s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.min_J, s.inverted, s.volume_ratio);
+  });
+}
+
+}  // namespace
+
+void validate(const StretchConfig& c) {
+  if (c.resolution < 1 || c.resolution > 400)
+    throw std::invalid_argument(fmt::format("resolution must be an integer from 1 to 400, got {}", c.resolution));
+  if (c.steps < 1 || c.steps > 100000) throw std::invalid_argument(fmt::format("steps must be from 1 to 100000, got {}", c.steps));
+  if (!std::isfinite(c.stretch) || c.stretch <= 0.0)
+    throw std::invalid_argument(fmt::format("stretch must be a finite number > 0, got {}", c.stretch));
+  if (!(c.newton.tolerance > 0.0)) throw std::invalid_argument("tolerance must be > 0");
+  (void)make_material(c.material, c.params, c.reparametrize);  // unknown name or bad parameters
+  ensure_writable_directory(c.out);
+}
+
+StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
+  validate(c);
+  const auto t_start = Clock::now();
+  const int res = c.resolution;
+  VolumeMesh mesh = c.element == CellType::tet4 ? box_tets(res) : box_hexes(res);
+  const Eigen::Matrix3Xi surface = boundary_triangles(mesh);
+
+  // Kinematic vertices: the j = 0 and j = res layers, all three coordinates.
+  std::vector<std::uint8_t> fixed(3 * mesh.vertex_count(), 0);
+  std::vector<int> bottom, top;
+  for (int k = 0; k <= res; ++k)
+    for (int i = 0; i <= res; ++i) {
+      bottom.push_back(lattice_index(res, i, 0, k));
+      top.push_back(lattice_index(res, i, res, k));
+    }
+  for (int v : bottom) fixed[3 * v] = fixed[3 * v + 1] = fixed[3 * v + 2] = 1;
+  for (int v : top) fixed[3 * v] = fixed[3 * v + 1] = fixed[3 * v + 2] = 1;
+
+  StretchResult result;
+  result.vertices = mesh.vertex_count();
+  result.cells = mesh.cell_count();
+  const ElasticSystem system(mesh, make_material(c.material, c.params, c.reparametrize), std::move(fixed));
+  auto solver = make_linear_solver(c.solver);
+
+  log << fmt::format("{}: resolution {}, material {}, mu {:g}, lambda {:g}{}\n", c.program, res, c.material, c.params.mu,
+                     c.params.lambda, c.reparametrize ? " (linear, reparametrized)" : "");
+  log << fmt::format("{} vertices, {} {}, {} steps to a {:g}x stretch, solver {}, output {}\n", mesh.vertex_count(),
+                     mesh.cell_count(), c.element == CellType::tet4 ? "tets" : "cubes", c.steps, c.stretch,
+                     to_string(c.solver), c.out.string());
+
+  Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
+  write_obj(c.out / fmt::format("{:03d}.obj", 0), as_positions(x), surface);
+  Eigen::VectorXd previous = x;  // the solution one step back, for extrapolation
+
+  for (int s = 1; s <= c.steps; ++s) {
+    const auto t_step = Clock::now();
+    // Initial guess: linear extrapolation from the last two solutions; at step 1, the rest state
+    // stretched affinely to the new boundary.
+    Eigen::VectorXd guess;
+    if (s == 1) {
+      guess = x;
+      for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) guess[3 * v + 1] *= half_length(c, 1);
+    } else {
+      guess = 2.0 * x - previous;
+    }
+    for (int v : bottom) guess.segment<3>(3 * v) = Eigen::Vector3d(mesh.vertices(0, v), -half_length(c, s), mesh.vertices(2, v));
+    for (int v : top) guess.segment<3>(3 * v) = Eigen::Vector3d(mesh.vertices(0, v), half_length(c, s), mesh.vertices(2, v));
+    // An extrapolated guess outside the energy's domain falls back to the last solution.
+    if (!std::isfinite(system.energy(guess))) {
+      guess = x;
+      for (int v : bottom) guess[3 * v + 1] = -half_length(c, s);
+      for (int v : top) guess[3 * v + 1] = half_length(c, s);
+    }
+    previous = x;
+    x = guess;
+    const NewtonReport rep = newton_solve(system, x, *solver, c.newton);
+
+    StepStats st;
+    st.step = s;
+    st.converged = rep.converged;
+    st.newton_iterations = rep.iterations;
+    st.line_search_steps = rep.line_search_steps;
+    st.linear_iterations = rep.linear_iterations;
+    st.residual = rep.residual;
+    st.energy = rep.energy;
+    st.assembly_seconds = rep.assembly_seconds;
+    st.solve_seconds = rep.solve_seconds;
+    st.residuals = rep.residuals;
+    st.failure = rep.failure;
+    measure_state(system, x, st);
+    write_obj(c.out / fmt::format("{:03d}.obj", s), as_positions(x), surface);
+    st.wall_seconds = std::chrono::duration<double>(Clock::now() - t_step).count();
+    result.steps.push_back(st);
+    log << fmt::format("step {:>3}/{}: {} Newton iterations, |f| = {:.2e}, energy {:.8g}, volume {:.4f}, min J {:.4f}, {:.3f} s{}\n",
+                       s, c.steps, st.newton_iterations, st.residual, st.energy, st.volume_ratio, st.min_J,
+                       st.wall_seconds, st.converged ? "" : "  NOT CONVERGED: " + st.failure);
+    log.flush();
+    if (!st.converged) {
+      result.all_converged = false;
+      break;
+    }
+  }
+
+  // Middle cross-section: the lattice layer j = res/2 (nearest to y = 0).
+  {
+    const int j = res / 2;
+    double lo = 1e300, hi = -1e300;
+    for (int k = 0; k <= res; ++k)
+      for (int i = 0; i <= res; ++i) {
+        const double xv = x[3 * lattice_index(res, i, j, k)];
+        lo = std::min(lo, xv);
+        hi = std::max(hi, xv);
+      }
+    result.middle_width = hi - lo;
+  }
+  result.total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+  write_stats(c, result);
+  log << fmt::format("{} in {:.3f} s; middle cross-section width {:.4f} (rest 2); frames, stats.json and stats.csv in {}\n",
+                     result.all_converged ? "converged every step" : "STOPPED: a step did not converge",
+                     result.total_seconds, result.middle_width, c.out.string());
+  return result;
+}
+
+}  // namespace snh

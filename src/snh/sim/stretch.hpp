@@ -1,0 +1,66 @@
+#pragma once
+// The paper's stretch test (PAPER_CODE.md): a [−1, 1]³ box whose y = −1 and y = +1 vertex layers are
+// pulled apart in equal quasi-static steps (y → ∓(1 + (stretch − 1) s/steps), x and z held), one
+// Newton solve per step, an OBJ frame per step, and per-step statistics.
+#include <filesystem>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "snh/material/lame.hpp"
+#include "snh/mesh/volume_mesh.hpp"
+#include "snh/solve/linear_solver.hpp"
+#include "snh/solve/newton.hpp"
+
+namespace snh {
+
+struct StretchConfig {
+  CellType element = CellType::tet4;
+  int resolution = 10;                    ///< cells per side
+  std::string material = "stable_neo_hookean";
+  Lame params{1.0, 10.0};
+  bool reparametrize = false;             ///< params are linear μ_L, λ_L (MATH.md §2)
+  int steps = 25;
+  double stretch = 3.5;                   ///< final length / rest length along y
+  std::filesystem::path out = "output";
+  LinearSolverKind solver = LinearSolverKind::cholmod;
+  NewtonOptions newton;
+  std::string program = "snh stretch";    ///< for the header and stats.json
+};
+
+struct StepStats {
+  int step = 0;
+  bool converged = false;
+  int newton_iterations = 0;
+  int line_search_steps = 0;
+  int linear_iterations = 0;
+  double residual = 0.0;
+  double energy = 0.0;
+  double wall_seconds = 0.0;
+  double assembly_seconds = 0.0;
+  double solve_seconds = 0.0;
+  double min_J = 0.0;         ///< smallest det F over all quadrature points
+  int inverted = 0;           ///< elements with det F ≤ 0 somewhere
+  double volume_ratio = 1.0;  ///< deformed / rest volume
+  std::vector<double> residuals;
+  std::string failure;
+};
+
+struct StretchResult {
+  std::vector<StepStats> steps;
+  bool all_converged = true;
+  double total_seconds = 0.0;
+  double middle_width = 0.0;  ///< x-extent of the lattice layer nearest y = 0 at the last step
+  Eigen::Index vertices = 0, cells = 0;
+};
+
+/// Checks the configuration (material, parameters, numbers, output directory) without running anything.
+/// Throws std::invalid_argument, ParameterError, UnknownMaterial or WriteError with a one-line message.
+void validate(const StretchConfig& config);
+
+/// Runs the test, printing a header and one line per step to log, writing 000.obj … NNN.obj,
+/// stats.json and stats.csv into config.out. Stops at the first step that fails to converge (its
+/// frame and stats are still written).
+[[nodiscard]] StretchResult run_stretch(const StretchConfig& config, std::ostream& log);
+
+}  // namespace snh

@@ -1,0 +1,108 @@
+#include "snh/solve/newton.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace snh {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+}  // namespace
+
+NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, LinearSolver& solver,
+                          const NewtonOptions& options) {
+  NewtonReport report;
+  Eigen::VectorXd g;
+  SparseLower H = system.pattern();
+  const bool try_true = options.try_true_hessian && solver.kind() != LinearSolverKind::pcg;
+  auto t = Clock::now();
+  double E = system.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
+  report.assembly_seconds += seconds_since(t);
+  if (!std::isfinite(E)) {
+    report.energy = E;
+    report.residual = std::numeric_limits<double>::infinity();
+    report.failure = "the starting state is outside the energy's domain (an element has J <= 0)";
+    return report;
+  }
+  for (;;) {
+    const double r = g.norm();
+    report.residuals.push_back(r);
+    report.residual = r;
+    report.energy = E;
+    if (r * r < options.tolerance * options.tolerance) {
+      report.converged = true;
+      return report;
+    }
+    if (report.iterations >= options.max_iterations) {
+      report.failure = fmt::format("no convergence in {} Newton iterations (|g| = {:.3e})", options.max_iterations, r);
+      return report;
+    }
+    ++report.iterations;
+
+    t = Clock::now();
+    bool factored = try_true && solver.try_factorize(H);
+    if (factored) {
+      ++report.true_hessian_steps;
+    } else {
+      if (try_true) {  // H is the true Hessian and is indefinite: assemble the projected one
+        report.solve_seconds += seconds_since(t);
+        t = Clock::now();
+        Eigen::VectorXd unused;
+        system.evaluate(x, unused, &H, options.projection);
+        report.assembly_seconds += seconds_since(t);
+        t = Clock::now();
+      }
+      solver.factorize(H);
+    }
+    Eigen::VectorXd d = solver.solve(-g);
+    report.linear_iterations += solver.last_iterations();
+    report.solve_seconds += seconds_since(t);
+    double slope = g.dot(d);
+    if (!d.allFinite() || !(slope < 0.0)) {  // not a descent direction: fall back to steepest descent
+      d = -g;
+      slope = -g.squaredNorm();
+    }
+
+    t = Clock::now();
+    Eigen::VectorXd trial = x;
+    double alpha = 1.0, E_trial = 0.0;
+    bool accepted = false;
+    for (int h = 0; h <= options.max_halvings; ++h) {
+      trial = x;
+      system.scatter_add_free(d, alpha, trial);
+      E_trial = system.energy(trial);
+      if (std::isfinite(E_trial) && E_trial <= E + 1e-4 * alpha * slope) {
+        accepted = true;
+        break;
+      }
+      // Within rounding of E: accept the full step if it reduces the residual.
+      if (h == 0 && std::isfinite(E_trial) && std::abs(E_trial - E) <= 1e-12 * std::max(1.0, std::abs(E))) {
+        Eigen::VectorXd g_trial;
+        system.evaluate(trial, g_trial, nullptr, options.projection);
+        if (g_trial.norm() < r) {
+          accepted = true;
+          break;
+        }
+      }
+      alpha *= 0.5;
+      ++report.line_search_steps;
+    }
+    report.assembly_seconds += seconds_since(t);
+    if (!accepted) {
+      report.failure = fmt::format("line search failed at Newton iteration {} (|g| = {:.3e}): no decrease of the energy "
+                                   "along the Newton direction",
+                                   report.iterations, r);
+      return report;
+    }
+    x = trial;
+    t = Clock::now();
+    E = system.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
+    report.assembly_seconds += seconds_since(t);
+  }
+}
+
+}  // namespace snh

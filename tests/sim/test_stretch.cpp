@@ -1,0 +1,201 @@
+// The paper's stretch test at res 4: convergence at every step, symmetry, thinning of the middle,
+// quadratic convergence of Newton near the solution, and the OBJ frames' structure.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "snh/mesh/box.hpp"
+#include "snh/sim/stretch.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("snh_test_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  return dir;
+}
+
+/// Vertex positions from an OBJ frame ("v x y z" lines), and the count of "f" lines.
+Eigen::Matrix3Xd read_obj_vertices(const fs::path& path, int* faces = nullptr) {
+  std::ifstream in(path);
+  std::vector<Eigen::Vector3d> v;
+  int f = 0;
+  std::string tag;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream s(line);
+    s >> tag;
+    if (tag == "v") {
+      Eigen::Vector3d p;
+      s >> p[0] >> p[1] >> p[2];
+      v.push_back(p);
+    } else if (tag == "f") {
+      ++f;
+    }
+  }
+  if (faces) *faces = f;
+  Eigen::Matrix3Xd out(3, v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) out.col(i) = v[i];
+  return out;
+}
+
+StretchResult run(CellType element, const fs::path& out, double tolerance, int steps = 25, double stretch = 3.5) {
+  StretchConfig c;
+  c.element = element;
+  c.resolution = 4;
+  c.steps = steps;
+  c.stretch = stretch;
+  c.out = out;
+  c.newton.tolerance = tolerance;
+  std::ostringstream log;
+  return run_stretch(c, log);
+}
+
+class Stretch : public ::testing::TestWithParam<CellType> {};
+
+TEST_P(Stretch, ConvergesEveryStepAndThinsInTheMiddle) {
+  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_paper");
+  const StretchResult r = run(GetParam(), out, 1e-3);
+  ASSERT_TRUE(r.all_converged);
+  ASSERT_EQ(r.steps.size(), 25u);
+  for (const auto& s : r.steps) {
+    EXPECT_TRUE(s.converged);
+    EXPECT_LT(s.residual * s.residual, 1e-6);  // the paper's ‖f‖² < 1e-6
+    EXPECT_GT(s.min_J, 0.0);
+    EXPECT_EQ(s.inverted, 0);
+  }
+  EXPECT_LT(r.middle_width, 1.5);  // from 2 at rest; ≈ 1.01 at res 4, ≈ 1.06 at res 10 (PAPER_CODE.md)
+  EXPECT_GT(r.middle_width, 0.5);
+  EXPECT_TRUE(fs::exists(out / "stats.json"));
+  EXPECT_TRUE(fs::exists(out / "stats.csv"));
+  fs::remove_all(out);
+}
+
+TEST_P(Stretch, SolutionIsSymmetric) {
+  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_sym");
+  const StretchResult r = run(GetParam(), out, 1e-10, 5, 2.0);
+  ASSERT_TRUE(r.all_converged);
+  const Eigen::Matrix3Xd X = read_obj_vertices(out / "005.obj");
+  const int res = 4;
+  double mirror_x = 0, mirror_z = 0, inversion = 0, swap_xz = 0;
+  for (int k = 0; k <= res; ++k)
+    for (int j = 0; j <= res; ++j)
+      for (int i = 0; i <= res; ++i) {
+        const Eigen::Vector3d p = X.col(lattice_index(res, i, j, k));
+        const Eigen::Vector3d mx = X.col(lattice_index(res, res - i, j, k));
+        const Eigen::Vector3d mz = X.col(lattice_index(res, i, j, res - k));
+        const Eigen::Vector3d inv = X.col(lattice_index(res, res - i, res - j, res - k));
+        const Eigen::Vector3d sw = X.col(lattice_index(res, k, j, i));
+        mirror_x = std::max(mirror_x, (p - Eigen::Vector3d(-mx[0], mx[1], mx[2])).norm());
+        mirror_z = std::max(mirror_z, (p - Eigen::Vector3d(mz[0], mz[1], -mz[2])).norm());
+        inversion = std::max(inversion, (p + inv).norm());
+        swap_xz = std::max(swap_xz, (p - Eigen::Vector3d(sw[2], sw[1], sw[0])).norm());
+      }
+  // OBJ values carry 10 significant digits.
+  if (GetParam() == CellType::hex8) {
+    EXPECT_LT(mirror_x, 1e-8);
+    EXPECT_LT(mirror_z, 1e-8);
+  } else {
+    // The 6-tet split around each cell's c0–c7 diagonal is not mirror symmetric, but it is symmetric
+    // under central inversion and under exchanging x and z: those hold exactly, the mirrors nearly.
+    // (The mirror asymmetry is a discretization effect of that split that shrinks with resolution:
+    // measured at step 25, 0.51 at res 4 and 0.14 at res 10, at the corners next to the pulled layers.)
+    EXPECT_LT(inversion, 1e-8);
+    EXPECT_LT(swap_xz, 1e-8);
+  }
+  fs::remove_all(out);
+}
+
+TEST_P(Stretch, NewtonConvergesQuadratically) {
+  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_quad");
+  const StretchResult r = run(GetParam(), out, 1e-11, 1, 2.5);  // one big step, solved tightly
+  ASSERT_TRUE(r.all_converged);
+  const std::vector<double>& h = r.steps[0].residuals;
+  std::ostringstream os;
+  os << std::scientific << std::setprecision(2);
+  for (double v : h) os << v << " ";
+  const std::string seq = os.str();
+  ASSERT_GE(h.size(), 4u) << seq;
+  // From |g| < 0.1 on: r_{k+1} <= 10 r_k² (quadratic), until the residual reaches rounding level.
+  int checked = 0;
+  for (std::size_t k = 0; k + 1 < h.size(); ++k) {
+    if (h[k] >= 0.1 || h[k + 1] < 1e-12) continue;
+    EXPECT_LE(h[k + 1], 10.0 * h[k] * h[k]) << "residuals: " << seq;
+    ++checked;
+  }
+  EXPECT_GE(checked, 2) << "residuals: " << seq;
+  std::cout << "residual sequence (" << to_string(GetParam()) << "): " << seq << "\n";
+  fs::remove_all(out);
+}
+
+TEST_P(Stretch, ObjFramesHaveThePaperStructure) {
+  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_obj");
+  const StretchResult r = run(GetParam(), out, 1e-3, 3, 1.3);
+  ASSERT_TRUE(r.all_converged);
+  const int res = 4;
+  for (int s = 0; s <= 3; ++s) {
+    char name[16];
+    std::snprintf(name, sizeof name, "%03d.obj", s);
+    ASSERT_TRUE(fs::exists(out / name)) << name;
+    // Lines: all "v" first, then all "f", 1-based indices within range.
+    std::ifstream in(out / name);
+    int v = 0, f = 0;
+    bool seen_f = false;
+    for (std::string line; std::getline(in, line);) {
+      std::istringstream ls(line);
+      std::string tag;
+      ls >> tag;
+      if (tag == "v") {
+        EXPECT_FALSE(seen_f) << "vertex after faces in " << name;
+        ++v;
+      } else {
+        ASSERT_EQ(tag, "f") << line;
+        seen_f = true;
+        int a, b, c;
+        ls >> a >> b >> c;
+        EXPECT_TRUE(a >= 1 && b >= 1 && c >= 1 && a <= v && b <= v && c <= v) << line;
+        ++f;
+      }
+    }
+    EXPECT_EQ(v, (res + 1) * (res + 1) * (res + 1));
+    EXPECT_EQ(f, 6 * 2 * res * res);  // two triangles per boundary quad
+  }
+  // Frame 000 is the rest lattice in index order; the pulled layers sit at y = ∓(1 + 0.1 s) for stretch 1.3, 3 steps.
+  const Eigen::Matrix3Xd rest = read_obj_vertices(out / "000.obj");
+  EXPECT_LT((rest - box_lattice(res)).cwiseAbs().maxCoeff(), 1e-9);
+  const Eigen::Matrix3Xd last = read_obj_vertices(out / "003.obj");
+  EXPECT_NEAR(last(1, lattice_index(res, 2, 0, 3)), -1.3, 1e-9);
+  EXPECT_NEAR(last(1, lattice_index(res, 1, res, 0)), 1.3, 1e-9);
+  EXPECT_NEAR(last(0, lattice_index(res, 1, res, 0)), -0.5, 1e-9);  // x held
+  fs::remove_all(out);
+}
+
+INSTANTIATE_TEST_SUITE_P(Elements, Stretch, ::testing::Values(CellType::tet4, CellType::hex8),
+                         [](const auto& info) { return std::string(to_string(info.param)); });
+
+TEST(StretchConfig, RejectsBadInputBeforeAnyWork) {
+  StretchConfig c;
+  c.out = fresh_dir("reject");
+  c.material = "stable_neohookean";
+  EXPECT_THROW(validate(c), std::invalid_argument);
+  c.material = "stable_neo_hookean";
+  c.resolution = 0;
+  EXPECT_THROW(validate(c), std::invalid_argument);
+  c.resolution = 4;
+  c.params = {-1.0, 10.0};
+  EXPECT_THROW(validate(c), ParameterError);
+  EXPECT_FALSE(fs::exists(c.out / "000.obj"));
+  fs::remove_all(c.out);
+}
+
+}  // namespace
+}  // namespace snh
