@@ -9,6 +9,7 @@
 namespace snh {
 namespace {
 
+
 /// Energy, gradient (3 by N) and stiffness (3N by 3N, DOF 3a+i) of one element at node positions X.
 template <class M, int N, int Q>
 double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix<double, 3, N>& X,
@@ -159,7 +160,7 @@ double ElasticSystem::energy(const Eigen::VectorXd& x) const {
       [&](const auto& m, const auto& rest) {
         using R = typename std::decay_t<decltype(rest)>::value_type;
         const Eigen::Index count = mesh_.cell_count();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (count * R::points >= parallel_threshold_)
         for (Eigen::Index c = 0; c < count; ++c)
           per[c] = element_terms<std::decay_t<decltype(m)>, R::nodes, R::points>(
               m, rest[c], gather_nodes<R::nodes>(mesh_, c, x), nullptr, nullptr, PsdProjection::none);
@@ -172,7 +173,8 @@ double ElasticSystem::energy(const Eigen::VectorXd& x) const {
 
 double ElasticSystem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, SparseLower* hessian,
                                PsdProjection projection) const {
-  std::vector<double> per(mesh_.cell_count());
+  const Eigen::Index count = mesh_.cell_count();
+  std::vector<double> per(count);
   Eigen::VectorXd full = Eigen::VectorXd::Zero(x.size());
   if (hessian) {
     if (hessian->nonZeros() != pattern_.nonZeros() || hessian->rows() != pattern_.rows()) *hessian = pattern_;
@@ -184,21 +186,34 @@ double ElasticSystem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradie
         using R = typename std::decay_t<decltype(rest)>::value_type;
         constexpr int N = R::nodes;
         constexpr int ld = 3 * N;
+        // 1. Element terms, in one parallel loop, into per-element buffers.
+        std::vector<double> grads(static_cast<std::size_t>(count) * ld);
+        std::vector<double> stiff(values ? static_cast<std::size_t>(count) * ld * ld : 0);
+#pragma omp parallel for schedule(static) if (count * R::points >= parallel_threshold_)
+        for (Eigen::Index c = 0; c < count; ++c) {
+          Eigen::Map<Eigen::Matrix<double, 3, N>> g(grads.data() + static_cast<std::size_t>(c) * ld);
+          Eigen::Matrix<double, ld, ld> K;
+          Eigen::Matrix<double, 3, N> gc;
+          per[c] = element_terms(m, rest[c], gather_nodes<N>(mesh_, c, x), &gc, values ? &K : nullptr, projection);
+          g = gc;
+          if (values) Eigen::Map<Eigen::Matrix<double, ld, ld>>(stiff.data() + static_cast<std::size_t>(c) * ld * ld) = K;
+        }
+        // 2. Scatter, colour by colour: elements of one colour share no vertex, so no two threads touch
+        //    the same entry, and each entry receives its terms in colour order for any thread count.
         for (int k = 0; k + 1 < static_cast<int>(colour_start_.size()); ++k) {
           const int begin = colour_start_[k], end = colour_start_[k + 1];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if ((end - begin) * N >= 4 * parallel_threshold_)
           for (int i = begin; i < end; ++i) {
             const int c = colour_order_[i];
-            Eigen::Matrix<double, 3, N> g;
-            Eigen::Matrix<double, ld, ld> K;
-            per[c] = element_terms(m, rest[c], gather_nodes<N>(mesh_, c, x), &g, values ? &K : nullptr, projection);
-            for (int a = 0; a < N; ++a) full.segment<3>(3 * mesh_.cells(a, c)) += g.col(a);
+            const double* g = grads.data() + static_cast<std::size_t>(c) * ld;
+            for (int a = 0; a < N; ++a) full.segment<3>(3 * mesh_.cells(a, c)) += Eigen::Map<const Eigen::Vector3d>(g + 3 * a);
             if (values) {
               const int* map = scatter_.data() + static_cast<std::size_t>(c) * ld * ld;
-              for (int A = 0; A < ld; ++A)
-                for (int B = 0; B < ld; ++B) {
+              const double* K = stiff.data() + static_cast<std::size_t>(c) * ld * ld;  // column-major ld x ld
+              for (int B = 0; B < ld; ++B)
+                for (int A = 0; A < ld; ++A) {
                   const int idx = map[A * ld + B];
-                  if (idx >= 0) values[idx] += K(A, B);
+                  if (idx >= 0) values[idx] += K[B * ld + A];
                 }
             }
           }

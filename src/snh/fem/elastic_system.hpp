@@ -53,6 +53,11 @@ class ElasticSystem {
   /// Adds a free-DOF vector into a full DOF vector: full[d] += scale · free[free_index[d]].
   void scatter_add_free(const Eigen::VectorXd& free, double scale, Eigen::VectorXd& full) const;
 
+  /// Loops with less work than this many quadrature points (element loops; scatters count 4 per
+  /// node) run on one thread: for small meshes waking threads (and, when other processes compete for
+  /// the cores, waiting at barriers) costs more than the work. Default 2048; 0 makes every loop parallel.
+  void set_parallel_threshold(Eigen::Index t) { parallel_threshold_ = t; }
+
   /// Per-element minimum det F over its quadrature points.
   [[nodiscard]] Eigen::VectorXd min_det_per_element(const Eigen::VectorXd& x) const;
 
@@ -66,6 +71,7 @@ class ElasticSystem {
   std::vector<int> scatter_;        ///< per element, (3N)² value indices into pattern_, −1 to skip
   std::vector<int> colour_order_;   ///< element ids grouped by colour
   std::vector<int> colour_start_;   ///< colour c owns colour_order_[colour_start_[c] .. colour_start_[c+1])
+  Eigen::Index parallel_threshold_ = 2048;
 };
 
 }  // namespace snh
