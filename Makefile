@@ -1,5 +1,5 @@
 # Thin wrapper over the CMake presets. The two commands the README names first:
-#   make demo   installs what is missing, builds, and runs the main job
+#   make demo   installs what is missing, builds, and runs the main job (the thesis' tetcli example)
 #   make test   installs what is missing, builds, and runs every test
 PRESET ?= release
 JOBS   ?= $(shell nproc)
@@ -19,7 +19,8 @@ build: configure
 	cmake --build --preset $(PRESET) -j $(JOBS)
 
 demo: build
-	$(BUILD)/apps/snh material --stability
+	$(BUILD)/apps/tetcli 10 stable_neo_hookean 1.0 10.0 output
+	@echo "demo output: $(CURDIR)/output (frames 000.obj ... 025.obj, stats.json, stats.csv)"
 
 test: build
 	ctest --preset $(PRESET)

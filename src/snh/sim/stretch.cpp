@@ -1,6 +1,8 @@
 #include "snh/sim/stretch.hpp"
 
 #include <chrono>
+#include <fstream>
+#include <string>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -17,6 +19,14 @@ namespace snh {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// Peak resident memory of this process in MiB (VmHWM from /proc/self/status; 0 where unavailable).
+double peak_memory_mib() {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // reported in kB
+  return 0.0;
+}
 
 /// Half-length along y of the box at step s.
 double half_length(const StretchConfig& c, int s) { return 1.0 + (c.stretch - 1.0) * s / c.steps; }
@@ -66,6 +76,19 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   j["all_converged"] = r.all_converged;
   j["total_seconds"] = r.total_seconds;
   j["middle_width"] = r.middle_width;
+  j["peak_memory_mib"] = r.peak_memory_mib;
+  int newton = 0, linear = 0;
+  double assembly = 0, solve = 0;
+  for (const auto& s : r.steps) {
+    newton += s.newton_iterations;
+    linear += s.linear_iterations;
+    assembly += s.assembly_seconds;
+    solve += s.solve_seconds;
+  }
+  j["newton_iterations"] = newton;
+  j["linear_iterations"] = linear;
+  j["assembly_seconds"] = assembly;
+  j["solve_seconds"] = solve;
   nlohmann::json steps = nlohmann::json::array();
   for (const auto& s : r.steps)
     steps.push_back({{"step", s.step}, {"converged", s.converged}, {"newton_iterations", s.newton_iterations},
@@ -195,10 +218,12 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     result.middle_width = hi - lo;
   }
   result.total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+  result.peak_memory_mib = peak_memory_mib();
   write_stats(c, result);
-  log << fmt::format("{} in {:.3f} s; middle cross-section width {:.4f} (rest 2); frames, stats.json and stats.csv in {}\n",
+  log << fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); middle cross-section width {:.4f} (rest 2); frames, "
+                     "stats.json and stats.csv in {}\n",
                      result.all_converged ? "converged every step" : "STOPPED: a step did not converge",
-                     result.total_seconds, result.middle_width, c.out.string());
+                     result.total_seconds, result.peak_memory_mib, result.middle_width, c.out.string());
   return result;
 }
 

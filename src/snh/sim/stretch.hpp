@@ -51,6 +51,7 @@ struct StretchResult {
   bool all_converged = true;
   double total_seconds = 0.0;
   double middle_width = 0.0;  ///< x-extent of the lattice layer nearest y = 0 at the last step
+  double peak_memory_mib = 0.0;  ///< peak resident memory of the process (VmHWM)
   Eigen::Index vertices = 0, cells = 0;
 };
 

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# End-to-end checks of tetcli / tetccli / hexcli and `snh stretch`: the paper's arguments, the 26 frames,
+# and one-line errors with a non-zero exit code before any work is done.
+# Usage: test_paper_cli.sh TETCLI TETCCLI HEXCLI SNH
+set -u
+TETCLI="$1" TETCCLI="$2" HEXCLI="$3" SNH="$4"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+pass=0
+fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+
+expect_error() {  # expect_error NAME PATTERN -- COMMAND...
+  local name="$1" pattern="$2"
+  shift 3
+  local out code
+  out="$("$@" 2>&1)"
+  code=$?
+  if [ "$code" -ne 0 ] && printf '%s' "$out" | grep -Eq -- "$pattern"; then ok; else bad "$name (exit $code): $out"; fi
+}
+
+# A small run of each program: 26 frames 000..025 with (res+1)^3 vertices and 12 res^2 triangles.
+for prog in "$TETCLI" "$TETCCLI" "$HEXCLI"; do
+  dir="$work/$(basename "$prog")"
+  if out="$("$prog" 2 stable_neo_hookean 1.0 10.0 "$dir" 2>&1)"; then ok; else bad "$prog run: $out"; fi
+  n=$(ls "$dir"/*.obj 2>/dev/null | wc -l)
+  [ "$n" -eq 26 ] && ok || bad "$prog wrote $n frames"
+  [ -f "$dir/000.obj" ] && [ -f "$dir/025.obj" ] && [ -f "$dir/stats.json" ] && [ -f "$dir/stats.csv" ] && ok || bad "$prog files"
+  v=$(grep -c '^v ' "$dir/025.obj"); f=$(grep -c '^f ' "$dir/025.obj")
+  [ "$v" -eq 27 ] && [ "$f" -eq 48 ] && ok || bad "$prog 025.obj has $v vertices, $f faces"
+  printf '%s' "$out" | grep -Eq "resolution 2, material stable_neo_hookean, mu 1, lambda 10" && ok || bad "$prog header: $out"
+  printf '%s' "$out" | grep -Eq "^27 vertices, (48 tets|8 cubes)" && ok || bad "$prog counts: $out"
+  [ "$(printf '%s\n' "$out" | grep -c '^step ')" -eq 25 ] && ok || bad "$prog step lines"
+done
+# tetccli is tetcli under the thesis' name: identical frames.
+cmp -s "$work/$(basename "$TETCLI")/025.obj" "$work/$(basename "$TETCCLI")/025.obj" && ok || bad "tetccli differs from tetcli"
+
+# Errors, before any work (no frame written).
+expect_error "usage" "expected 4 or 5 arguments" -- "$TETCLI" 10 stable_neo_hookean 1.0
+expect_error "resolution" "resolution must be an integer from 1 to 400, got 'ten'" -- "$TETCLI" ten stable_neo_hookean 1 10 "$work/e1"
+expect_error "resolution 0" "resolution must be an integer from 1 to 400, got '0'" -- "$HEXCLI" 0 stable_neo_hookean 1 10 "$work/e1"
+expect_error "material" "unknown material 'stable_neohookean'" -- "$TETCLI" 2 stable_neohookean 1 10 "$work/e1"
+expect_error "mu" "mu must be a finite number, got 'abc'" -- "$TETCLI" 2 stable_neo_hookean abc 10 "$work/e1"
+expect_error "mu negative" "mu must be a finite number > 0, got -1" -- "$TETCLI" 2 stable_neo_hookean -1 10 "$work/e1"
+expect_error "lambda nan" "lambda must be a finite number, got 'nan'" -- "$TETCLI" 2 stable_neo_hookean 1 nan "$work/e1"
+[ ! -e "$work/e1" ] || [ -z "$(ls -A "$work/e1")" ] && ok || bad "an error left files behind"
+touch "$work/file"
+expect_error "output is a file" "exists and is not a directory" -- "$TETCLI" 2 stable_neo_hookean 1 10 "$work/file"
+expect_error "unwritable" "cannot create output directory|not writable" -- "$TETCLI" 2 stable_neo_hookean 1 10 /proc/snh-not-here
+"$TETCLI" --help | grep -q "usage: tetcli resolution material_model mu lambda" && ok || bad "tetcli --help"
+
+# snh stretch: named options, any material.
+if "$SNH" stretch --element hex --res 2 --steps 3 --stretch 1.5 --material stable_neo_hookean_log --solver ldlt --out "$work/s" > "$work/s.log" 2>&1; then ok; else bad "snh stretch: $(cat "$work/s.log")"; fi
+[ "$(ls "$work/s"/*.obj | wc -l)" -eq 4 ] && ok || bad "snh stretch frames"
+grep -q '"solver": "ldlt"' "$work/s/stats.json" && ok || bad "stats.json solver"
+head -1 "$work/s/stats.csv" | grep -q "^step,converged,newton_iterations,line_search_steps,linear_iterations,residual,energy" && ok || bad "stats.csv header"
+expect_error "stretch solver" "solver" -- "$SNH" stretch --solver umfpack --out "$work/s2"
+expect_error "stretch poisson" "Poisson's ratio must satisfy" -- "$SNH" stretch --youngs 100 --poisson 0.5 --out "$work/s3"
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
