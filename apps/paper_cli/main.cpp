@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "../common/omp_env.hpp"
 #include "snh/sim/stretch.hpp"
 
 namespace {
@@ -41,6 +42,7 @@ double parse_double(const std::string& program, const char* what, const char* te
 }  // namespace
 
 int main(int argc, char** argv) {
+  snh::cli::ensure_passive_omp_wait(argv);
   std::string program = argv[0];
   if (const auto slash = program.find_last_of('/'); slash != std::string::npos) program = program.substr(slash + 1);
   const std::string usage = fmt::format(

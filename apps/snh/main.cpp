@@ -4,10 +4,12 @@
 
 #include <CLI/CLI.hpp>
 
+#include "../common/omp_env.hpp"
 #include "material_command.hpp"
 #include "stretch_command.hpp"
 
 int main(int argc, char** argv) {
+  snh::cli::ensure_passive_omp_wait(argv);
   CLI::App app{"snh " SNH_VERSION ": Stable Neo-Hookean flesh simulation toolkit (Smith, de Goes & Kim 2018)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "snh " SNH_VERSION);

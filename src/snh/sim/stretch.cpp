@@ -77,23 +77,25 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   j["total_seconds"] = r.total_seconds;
   j["middle_width"] = r.middle_width;
   j["peak_memory_mib"] = r.peak_memory_mib;
-  int newton = 0, linear = 0;
+  int newton = 0, linear = 0, true_steps = 0;
   double assembly = 0, solve = 0;
   for (const auto& s : r.steps) {
     newton += s.newton_iterations;
     linear += s.linear_iterations;
+    true_steps += s.true_hessian_steps;
     assembly += s.assembly_seconds;
     solve += s.solve_seconds;
   }
   j["newton_iterations"] = newton;
   j["linear_iterations"] = linear;
+  j["true_hessian_steps"] = true_steps;
   j["assembly_seconds"] = assembly;
   j["solve_seconds"] = solve;
   nlohmann::json steps = nlohmann::json::array();
   for (const auto& s : r.steps)
     steps.push_back({{"step", s.step}, {"converged", s.converged}, {"newton_iterations", s.newton_iterations},
                      {"line_search_steps", s.line_search_steps}, {"linear_iterations", s.linear_iterations},
-                     {"residual", s.residual}, {"energy", s.energy}, {"wall_seconds", s.wall_seconds},
+                     {"true_hessian_steps", s.true_hessian_steps}, {"residual", s.residual}, {"energy", s.energy}, {"wall_seconds", s.wall_seconds},
                      {"assembly_seconds", s.assembly_seconds}, {"solve_seconds", s.solve_seconds},
                      {"min_J", s.min_J}, {"inverted", s.inverted}, {"volume_ratio", s.volume_ratio},
                      {"residual_history", s.residuals}, {"failure", s.failure}});
@@ -185,6 +187,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     st.newton_iterations = rep.iterations;
     st.line_search_steps = rep.line_search_steps;
     st.linear_iterations = rep.linear_iterations;
+    st.true_hessian_steps = rep.true_hessian_steps;
     st.residual = rep.residual;
     st.energy = rep.energy;
     st.assembly_seconds = rep.assembly_seconds;

@@ -34,6 +34,7 @@ struct StepStats {
   int newton_iterations = 0;
   int line_search_steps = 0;
   int linear_iterations = 0;
+  int true_hessian_steps = 0;  ///< Newton iterations that used the unprojected Hessian
   double residual = 0.0;
   double energy = 0.0;
   double wall_seconds = 0.0;
