@@ -186,9 +186,12 @@ double ElasticSystem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradie
         using R = typename std::decay_t<decltype(rest)>::value_type;
         constexpr int N = R::nodes;
         constexpr int ld = 3 * N;
-        // 1. Element terms, in one parallel loop, into per-element buffers.
-        std::vector<double> grads(static_cast<std::size_t>(count) * ld);
-        std::vector<double> stiff(values ? static_cast<std::size_t>(count) * ld * ld : 0);
+        // 1. Element terms, in one parallel loop, into per-element buffers (kept between calls: a fresh
+        //    allocation of this size costs page faults every time).
+        std::vector<double>& grads = grad_buffer_;
+        std::vector<double>& stiff = stiffness_buffer_;
+        grads.resize(static_cast<std::size_t>(count) * ld);
+        if (values) stiff.resize(static_cast<std::size_t>(count) * ld * ld);
 #pragma omp parallel for schedule(static) if (count * R::points >= parallel_threshold_)
         for (Eigen::Index c = 0; c < count; ++c) {
           Eigen::Map<Eigen::Matrix<double, 3, N>> g(grads.data() + static_cast<std::size_t>(c) * ld);
@@ -202,7 +205,7 @@ double ElasticSystem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradie
         //    the same entry, and each entry receives its terms in colour order for any thread count.
         for (int k = 0; k + 1 < static_cast<int>(colour_start_.size()); ++k) {
           const int begin = colour_start_[k], end = colour_start_[k + 1];
-#pragma omp parallel for schedule(static) if ((end - begin) * N >= 4 * parallel_threshold_)
+#pragma omp parallel for schedule(static) if ((end - begin) * N >= parallel_threshold_)
           for (int i = begin; i < end; ++i) {
             const int c = colour_order_[i];
             const double* g = grads.data() + static_cast<std::size_t>(c) * ld;

@@ -31,6 +31,7 @@ class ElasticSystem {
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const;
 
   /// Energy, gradient on the free DOFs and (optionally) the projected Hessian on the free DOFs.
+  /// Uses internal buffers: do not call evaluate() concurrently on the same system.
   ///   gradient  resized to free_count(); entries of fixed DOFs are left out
   ///   hessian   nullptr to skip; otherwise overwritten in the fixed pattern (pattern() layout)
   /// Returns the energy (+∞ if undefined anywhere; gradient and Hessian are then not meaningful).
@@ -53,7 +54,7 @@ class ElasticSystem {
   /// Adds a free-DOF vector into a full DOF vector: full[d] += scale · free[free_index[d]].
   void scatter_add_free(const Eigen::VectorXd& free, double scale, Eigen::VectorXd& full) const;
 
-  /// Loops with less work than this many quadrature points (element loops; scatters count 4 per
+  /// Loops with less work than this many quadrature points (element loops; scatters count one per
   /// node) run on one thread: for small meshes waking threads (and, when other processes compete for
   /// the cores, waiting at barriers) costs more than the work. Default 2048; 0 makes every loop parallel.
   void set_parallel_threshold(Eigen::Index t) { parallel_threshold_ = t; }
@@ -72,6 +73,8 @@ class ElasticSystem {
   std::vector<int> colour_order_;   ///< element ids grouped by colour
   std::vector<int> colour_start_;   ///< colour c owns colour_order_[colour_start_[c] .. colour_start_[c+1])
   Eigen::Index parallel_threshold_ = 2048;
+  // Per-element gradient and stiffness buffers reused by evaluate() (not thread-safe across calls).
+  mutable std::vector<double> grad_buffer_, stiffness_buffer_;
 };
 
 }  // namespace snh
