@@ -27,6 +27,7 @@ struct Options {
   std::string solver = "cholmod";
   double tolerance = 1e-3;
   std::string projection = "clamp";
+  bool projected_only = false;
 };
 
 }  // namespace
@@ -59,6 +60,9 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--tolerance", o->tolerance, "Newton stops when |f| < tolerance (default 1e-3: |f|^2 < 1e-6 as the paper)");
   cmd->add_option("--projection", o->projection, "PSD projection of element Hessians: clamp (default) or abs")
       ->check(CLI::IsMember({"clamp", "abs"}));
+  cmd->add_flag("--projected-only", o->projected_only,
+                "Always use the projected Hessian (by default a direct solver first tries the true one, for quadratic "
+                "convergence near the solution)");
   cmd->callback([o, &exit_code]() {
     StretchConfig c;
     c.program = "snh stretch";
@@ -78,6 +82,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     c.solver = *parse_linear_solver(o->solver);
     c.newton.tolerance = o->tolerance;
     c.newton.projection = *parse_projection(o->projection);
+    c.newton.try_true_hessian = !o->projected_only;
     if (o->threads > 0) omp_set_num_threads(o->threads);
     validate(c);
     const StretchResult r = run_stretch(c, std::cout);

@@ -1,8 +1,10 @@
 // Box generators (PAPER_CODE.md) and boundary-surface extraction.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
 
+#include "snh/fem/quality.hpp"
 #include "snh/fem/rest_state.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/surface.hpp"
@@ -46,6 +48,23 @@ TEST(Box, HexesUseTheCornerOrder) {
   EXPECT_EQ(m.cells(7, c), lattice_index(res, i + 1, j + 1, k + 1));
   const Eigen::VectorXd vol = rest_volumes(compute_rest_state(m));
   EXPECT_NEAR(vol.sum(), 8.0, 1e-12);
+}
+
+TEST(Quality, BoxSummary) {
+  const VolumeMesh t = box_tets(5);
+  const MeshQuality qt = mesh_quality(t, compute_rest_state(t));
+  EXPECT_EQ(qt.cells, 750);
+  EXPECT_NEAR(qt.min_volume, 0.4 * 0.4 * 0.4 / 6, 1e-15);
+  EXPECT_NEAR(qt.max_volume, 0.4 * 0.4 * 0.4 / 6, 1e-15);
+  EXPECT_NEAR(qt.worst_edge_ratio, std::sqrt(3.0), 1e-12);  // the c0-c7 diagonal against a cell edge
+  VolumeMesh h = box_hexes(2);
+  h.vertices(0, lattice_index(2, 2, 2, 2)) = 1.5;  // stretch one corner hex
+  const MeshQuality qh = mesh_quality(h, compute_rest_state(h));
+  EXPECT_EQ(qh.worst_cell, 7);
+  EXPECT_NEAR(qh.worst_edge_ratio, 1.5, 1e-12);  // the edge from (1,2,2) now 1.5 long, the shortest 1
+  EXPECT_NEAR(qh.min_volume, 1.0, 1e-12);
+  EXPECT_GT(qh.max_volume, 1.0);
+  EXPECT_NE(describe(qt, CellType::tet4).find("750 tets"), std::string::npos);
 }
 
 TEST(Box, RejectsBadResolution) {

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "snh/fem/elastic_system.hpp"
+#include "snh/fem/quality.hpp"
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/obj.hpp"
 #include "snh/material/registry.hpp"
@@ -153,6 +154,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   log << fmt::format("{} vertices, {} {}, {} steps to a {:g}x stretch, solver {}, output {}\n", mesh.vertex_count(),
                      mesh.cell_count(), c.element == CellType::tet4 ? "tets" : "cubes", c.steps, c.stretch,
                      to_string(c.solver), c.out.string());
+  log << "mesh: " << describe(mesh_quality(system.mesh(), system.rest()), mesh.type) << "\n";
 
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
   write_obj(c.out / fmt::format("{:03d}.obj", 0), as_positions(x), surface);
