@@ -12,6 +12,7 @@
 #include "snh/fem/quality.hpp"
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/obj.hpp"
+#include "snh/io/vtu.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/surface.hpp"
@@ -57,6 +58,18 @@ void measure_state(const ElasticSystem& sys, const Eigen::VectorXd& x, StepStats
 
 Eigen::Matrix3Xd as_positions(const Eigen::VectorXd& x) {
   return Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3);
+}
+
+/// Writes frame s as NNN.obj and NNN.vtu (displacement, per-cell min J) and rewrites the .pvd series.
+void write_frame(const StretchConfig& c, const ElasticSystem& sys, const Eigen::Matrix3Xi& surface, const Eigen::VectorXd& x,
+                 int s, std::vector<std::pair<double, std::string>>& series) {
+  const Eigen::Matrix3Xd X = as_positions(x);
+  write_obj(c.out / fmt::format("{:03d}.obj", s), X, surface);
+  if (!c.write_vtu) return;
+  const std::string vtu = fmt::format("{:03d}.vtu", s);
+  write_vtu(c.out / vtu, sys.mesh(), X, {{"displacement", X - sys.mesh().vertices}}, {{"J", sys.min_det_per_element(x)}});
+  series.emplace_back(static_cast<double>(s), vtu);
+  write_pvd(c.out / "frames.pvd", series);
 }
 
 void write_stats(const StretchConfig& c, const StretchResult& r) {
@@ -157,7 +170,8 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   log << "mesh: " << describe(mesh_quality(system.mesh(), system.rest()), mesh.type) << "\n";
 
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
-  write_obj(c.out / fmt::format("{:03d}.obj", 0), as_positions(x), surface);
+  std::vector<std::pair<double, std::string>> series;
+  write_frame(c, system, surface, x, 0, series);
   Eigen::VectorXd previous = x;  // the solution one step back, for extrapolation
 
   for (int s = 1; s <= c.steps; ++s) {
@@ -197,7 +211,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     st.residuals = rep.residuals;
     st.failure = rep.failure;
     measure_state(system, x, st);
-    write_obj(c.out / fmt::format("{:03d}.obj", s), as_positions(x), surface);
+    write_frame(c, system, surface, x, s, series);
     st.wall_seconds = std::chrono::duration<double>(Clock::now() - t_step).count();
     result.steps.push_back(st);
     log << fmt::format("step {:>3}/{}: {} Newton iterations, |f| = {:.2e}, energy {:.8g}, volume {:.4f}, min J {:.4f}, {:.3f} s{}\n",
@@ -225,10 +239,11 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   result.total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
   result.peak_memory_mib = peak_memory_mib();
   write_stats(c, result);
-  log << fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); middle cross-section width {:.4f} (rest 2); frames, "
-                     "stats.json and stats.csv in {}\n",
+  log << fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); middle cross-section width {:.4f} (rest 2); frames ("
+                     "NNN.obj{}), stats.json and stats.csv in {}\n",
                      result.all_converged ? "converged every step" : "STOPPED: a step did not converge",
-                     result.total_seconds, result.peak_memory_mib, result.middle_width, c.out.string());
+                     result.total_seconds, result.peak_memory_mib, result.middle_width,
+                     c.write_vtu ? ", NNN.vtu, frames.pvd" : "", c.out.string());
   return result;
 }
 

@@ -26,6 +26,7 @@ struct StretchConfig {
   LinearSolverKind solver = LinearSolverKind::cholmod;
   NewtonOptions newton;
   std::string program = "snh stretch";    ///< for the header and stats.json
+  bool write_vtu = true;                  ///< also NNN.vtu frames and frames.pvd for ParaView
 };
 
 struct StepStats {
@@ -60,8 +61,8 @@ struct StretchResult {
 /// Throws std::invalid_argument, ParameterError, UnknownMaterial or WriteError with a one-line message.
 void validate(const StretchConfig& config);
 
-/// Runs the test, printing a header and one line per step to log, writing 000.obj … NNN.obj,
-/// stats.json and stats.csv into config.out. Stops at the first step that fails to converge (its
+/// Runs the test, printing a header and one line per step to log, writing 000.obj … NNN.obj (and
+/// NNN.vtu with frames.pvd), stats.json and stats.csv into config.out. Stops at the first step that fails to converge (its
 /// frame and stats are still written).
 [[nodiscard]] StretchResult run_stretch(const StretchConfig& config, std::ostream& log);
 

@@ -1,0 +1,64 @@
+#include "snh/io/vtu.hpp"
+
+#include <iterator>
+
+#include <fmt/format.h>
+
+#include "snh/io/atomic_file.hpp"
+
+namespace snh {
+
+void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const Eigen::Matrix3Xd& positions,
+               const std::vector<std::pair<std::string, Eigen::Matrix3Xd>>& point_data,
+               const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data) {
+  // VTK_HEXAHEDRON walks the bottom face around; VolumeMesh has c2 = c0 + ŷ, c3 = c0 + x̂ + ŷ.
+  static constexpr int kHexToVtk[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+  const int npc = nodes_per_cell(mesh.type);
+  const int vtk_type = mesh.type == CellType::tet4 ? 10 : 12;
+  write_atomically(path, [&](std::ostream& out) {
+    fmt::memory_buffer b;
+    auto o = std::back_inserter(b);
+    fmt::format_to(o, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+                      "<UnstructuredGrid>\n<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
+                   positions.cols(), mesh.cell_count());
+    fmt::format_to(o, "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+    for (Eigen::Index v = 0; v < positions.cols(); ++v)
+      fmt::format_to(o, "{:.10g} {:.10g} {:.10g}\n", positions(0, v), positions(1, v), positions(2, v));
+    fmt::format_to(o, "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
+    for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
+      for (int a = 0; a < npc; ++a)
+        fmt::format_to(o, "{}{}", a ? " " : "", mesh.cells(mesh.type == CellType::hex8 ? kHexToVtk[a] : a, c));
+      fmt::format_to(o, "\n");
+    }
+    fmt::format_to(o, "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
+    for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) fmt::format_to(o, "{}\n", (c + 1) * npc);
+    fmt::format_to(o, "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
+    for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) fmt::format_to(o, "{}\n", vtk_type);
+    fmt::format_to(o, "</DataArray>\n</Cells>\n<PointData>\n");
+    for (const auto& [name, field] : point_data) {
+      fmt::format_to(o, "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">\n", name);
+      for (Eigen::Index v = 0; v < field.cols(); ++v)
+        fmt::format_to(o, "{:.10g} {:.10g} {:.10g}\n", field(0, v), field(1, v), field(2, v));
+      fmt::format_to(o, "</DataArray>\n");
+    }
+    fmt::format_to(o, "</PointData>\n<CellData>\n");
+    for (const auto& [name, field] : cell_data) {
+      fmt::format_to(o, "<DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">\n", name);
+      for (Eigen::Index c = 0; c < field.size(); ++c) fmt::format_to(o, "{:.10g}\n", field[c]);
+      fmt::format_to(o, "</DataArray>\n");
+    }
+    fmt::format_to(o, "</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    out.write(b.data(), static_cast<std::streamsize>(b.size()));
+  });
+}
+
+void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& frames) {
+  write_atomically(path, [&](std::ostream& out) {
+    out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n<Collection>\n";
+    for (const auto& [t, file] : frames)
+      out << fmt::format("<DataSet timestep=\"{:g}\" group=\"\" part=\"0\" file=\"{}\"/>\n", t, file);
+    out << "</Collection>\n</VTKFile>\n";
+  });
+}
+
+}  // namespace snh

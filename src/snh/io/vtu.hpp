@@ -1,0 +1,27 @@
+#pragma once
+// VTK XML unstructured grids (.vtu, ASCII) and ParaView series (.pvd) for frames of a volume mesh.
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "snh/mesh/volume_mesh.hpp"
+
+namespace snh {
+
+/// Writes one frame atomically.
+///   path         output file (.vtu)
+///   mesh         cells (tet4 or hex8, VolumeMesh corner order; written in VTK's order)
+///   positions    3 by #V deformed positions
+///   point_data   named 3-vector fields, each 3 by #V (e.g. "displacement")
+///   cell_data    named scalar fields, each #C (e.g. "J")
+void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const Eigen::Matrix3Xd& positions,
+               const std::vector<std::pair<std::string, Eigen::Matrix3Xd>>& point_data,
+               const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data);
+
+/// Writes a ParaView collection listing (time, file) pairs; files relative to the .pvd's directory.
+void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& frames);
+
+}  // namespace snh
