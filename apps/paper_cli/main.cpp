@@ -8,6 +8,7 @@
 #include <string>
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include "../common/omp_env.hpp"
 #include "snh/sim/stretch.hpp"
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
   config.params = {parse_double(program, "mu", argv[3]), parse_double(program, "lambda", argv[4])};
   config.out = argc == 6 ? argv[5] : "output";
   try {
+    config.live_progress = ::isatty(STDOUT_FILENO) != 0;
     snh::validate(config);
     const snh::StretchResult result = snh::run_stretch(config, std::cout);
     return result.all_converged ? 0 : 1;

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include <fmt/format.h>
+#include <unistd.h>
 #include <omp.h>
 
 #include "snh/material/registry.hpp"
@@ -84,6 +85,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     c.newton.projection = *parse_projection(o->projection);
     c.newton.try_true_hessian = !o->projected_only;
     if (o->threads > 0) omp_set_num_threads(o->threads);
+    c.live_progress = ::isatty(STDOUT_FILENO) != 0;
     validate(c);
     const StretchResult r = run_stretch(c, std::cout);
     exit_code = r.all_converged ? 0 : 1;

@@ -195,7 +195,14 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     }
     previous = x;
     x = guess;
-    const NewtonReport rep = newton_solve(system, x, *solver, c.newton);
+    NewtonOptions newton = c.newton;
+    if (c.live_progress)
+      newton.on_iteration = [&](int it, double r) {
+        log << fmt::format("\r\x1b[2Kstep {:>3}/{}: Newton iteration {}, |f| = {:.2e} ...", s, c.steps, it, r);
+        log.flush();
+      };
+    const NewtonReport rep = newton_solve(system, x, *solver, newton);
+    if (c.live_progress) log << "\r\x1b[2K";
 
     StepStats st;
     st.step = s;

@@ -27,6 +27,7 @@ struct StretchConfig {
   NewtonOptions newton;
   std::string program = "snh stretch";    ///< for the header and stats.json
   bool write_vtu = true;                  ///< also NNN.vtu frames and frames.pvd for ParaView
+  bool live_progress = false;             ///< log is a terminal: update the step's line at every Newton iteration
 };
 
 struct StepStats {

@@ -32,6 +32,7 @@ NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, Linea
     const double r = g.norm();
     report.residuals.push_back(r);
     report.residual = r;
+    if (options.on_iteration) options.on_iteration(report.iterations, r);
     report.energy = E;
     if (r * r < options.tolerance * options.tolerance) {
       report.converged = true;

@@ -10,6 +10,7 @@
 // until E(x + αd) ≤ E(x) + 1e-4 α gᵀd. A state where the energy is undefined (+∞) counts as a failed
 // trial, so the step gets shorter; no NaN enters x. Near convergence, where the energy decrease is
 // below its rounding error, a full step that reduces ‖g‖ is accepted.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,8 @@ struct NewtonOptions {
   PsdProjection projection = PsdProjection::clamp;
   bool try_true_hessian = true;   ///< first try the unprojected Hessian (direct solvers only)
   int max_halvings = 60;
+  /// Called at the start of every iteration with its number (0 = the starting state) and ‖g‖.
+  std::function<void(int iteration, double residual)> on_iteration;
 };
 
 struct NewtonReport {
