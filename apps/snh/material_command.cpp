@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "parameter_options.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/material/stability.hpp"
 #include "snh/math/svd.hpp"
@@ -23,9 +24,7 @@ using nlohmann::json;
 
 struct Options {
   std::string name;
-  double mu = 1.0, lambda = 10.0;
-  double youngs = std::nan(""), poisson = std::nan("");
-  bool reparametrize = false;
+  ParameterOptions params;
   std::string F_text;
   std::vector<double> stretch;
   std::string projection = "clamp";
@@ -70,17 +69,6 @@ std::string matrix_text(const Mat3& A, const std::string& indent) {
   return out;
 }
 
-Lame chosen_parameters(const Options& o) {
-  if (!std::isnan(o.youngs) || !std::isnan(o.poisson)) {
-    if (std::isnan(o.youngs) || std::isnan(o.poisson))
-      throw ParameterError("--youngs and --poisson go together");
-    return lame_from_youngs(o.youngs, o.poisson);
-  }
-  const Lame p{o.mu, o.lambda};
-  validate(p);
-  return p;
-}
-
 int run_inspect(const Options& o) {
   if (o.name.empty()) throw std::invalid_argument("give a material NAME (see --list), or --stability");
   if (o.F_text.empty() == o.stretch.empty())
@@ -96,8 +84,8 @@ int run_inspect(const Options& o) {
         throw std::invalid_argument(fmt::format("--stretch value {} is not a finite number", i));
     F = Vec3(o.stretch[0], o.stretch[1], o.stretch[2]).asDiagonal();
   }
-  const Lame given = chosen_parameters(o);
-  const AnyMaterial material = make_material(o.name, given, o.reparametrize);
+  const Lame given = o.params.lame();
+  const AnyMaterial material = make_material(o.name, given, o.params.reparametrize);
 
   return std::visit(
       [&](const auto& m) {
@@ -115,8 +103,8 @@ int run_inspect(const Options& o) {
           j["mu"] = used.mu;
           j["lambda"] = used.lambda;
           j["nu"] = poisson_ratio(used);
-          j["reparametrized"] = o.reparametrize;
-          if (o.reparametrize) j["linear"] = {{"mu", given.mu}, {"lambda", given.lambda}};
+          j["reparametrized"] = o.params.reparametrize;
+          if (o.params.reparametrize) j["linear"] = {{"mu", given.mu}, {"lambda", given.lambda}};
           j["F"] = matrix_json(F);
           j["J"] = J;
           j["I_C"] = F.squaredNorm();
@@ -141,7 +129,7 @@ int run_inspect(const Options& o) {
         }
         std::cout << fmt::format("material   {}: psi = {}\n", M::name, M::formula);
         std::cout << fmt::format("parameters {}{}\n", describe(used),
-                                 o.reparametrize ? fmt::format("  (reparametrized from linear {})", describe(given)) : "");
+                                 o.params.reparametrize ? fmt::format("  (reparametrized from linear {})", describe(given)) : "");
         std::cout << "F\n" << matrix_text(F, "  ");
         std::cout << fmt::format("J = {:.10g}   I_C = {:.10g}   sigma = ({:.10g}, {:.10g}, {:.10g})\n", J,
                                  F.squaredNorm(), svd.sigma[0], svd.sigma[1], svd.sigma[2]);
@@ -170,14 +158,14 @@ std::string points_text(const StabilityRow& r) {
 }
 
 int run_stability(const Options& o) {
-  const Lame p = chosen_parameters(o);
-  const StabilityReport rep = measure_stability(p, o.reparametrize, o.samples, o.seed);
+  const Lame p = o.params.lame();
+  const StabilityReport rep = measure_stability(p, o.params.reparametrize, o.samples, o.seed);
   if (o.json) {
     json j;
     j["mu"] = p.mu;
     j["lambda"] = p.lambda;
     j["nu"] = poisson_ratio(p);
-    j["reparametrize"] = o.reparametrize;
+    j["reparametrize"] = o.params.reparametrize;
     j["samples"] = rep.samples;
     j["seed"] = o.seed;
     json rows = json::array();
@@ -199,7 +187,7 @@ int run_stability(const Options& o) {
     return 0;
   }
   std::cout << fmt::format("Stability of every energy, measured: {}{}; {} sampled F with J <= 0 (seed {})\n\n",
-                           describe(p), o.reparametrize ? ", reparametrized where possible" : ", used as given",
+                           describe(p), o.params.reparametrize ? ", reparametrized where possible" : ", used as given",
                            rep.samples, o.seed);
   std::cout << fmt::format("{:<23} {:<24} {:<16} {:<15} {}\n", "energy", "1 inverted F (J<=0)", "2 reflection",
                            "3 rest |P(I)|", "4 collapse F=sI: critical points in (0,1); F->0");
@@ -213,14 +201,14 @@ int run_stability(const Options& o) {
                                  : fmt::format("{} {:.0e}", r.reflection_ok ? "ok" : "NO", r.reflection_change);
     const std::string rest = fmt::format("{} {:.1e}", r.rest_ok ? "ok" : "NO", r.rest_stress);
     std::cout << fmt::format("{:<23} {:<24} {:<16} {:<15} {}; {}\n",
-                             r.name + (o.reparametrize && !r.parameters_reparametrized ? "*" : ""), inv, refl, rest,
+                             r.name + (o.params.reparametrize && !r.parameters_reparametrized ? "*" : ""), inv, refl, rest,
                              points_text(r), r.near_zero);
   }
   std::cout << "\n1: psi, P and the clamped dP/dF finite at every sample, P matching finite differences of psi (<= 1e-6)\n"
                "2: largest relative change of psi, P, clamped dP/dF when the SVD puts the reflection on another sigma (<= 1e-9)\n"
                "3: rest stable when |P(I)| <= 1e-12 (mu + |lambda|)\n"
                "4: s where d psi(sI)/ds = 0 (max = barrier, min = resting point), and whether F = 0 traps (local min)\n";
-  if (o.reparametrize) std::cout << "*: no Lame reparametrization exists; measured with the parameters as given\n";
+  if (o.params.reparametrize) std::cout << "*: no Lame reparametrization exists; measured with the parameters as given\n";
   return 0;
 }
 
@@ -232,18 +220,8 @@ void add_material_command(CLI::App& app, int& exit_code) {
       "material",
       "Inspect an energy at one deformation gradient F: psi, P = dpsi/dF and the nine eigenvalues of dP/dF "
       "(twist, flip, scaling) before and after PSD projection; or measure the stability table of every energy.");
-  std::string names;
-  for (auto n : material_names()) names += (names.empty() ? "" : ", ") + std::string(n);
-  cmd->add_option("name", opts->name, "Energy: " + names);
-  auto* mu = cmd->add_option("--mu", opts->mu, "Lame mu (default 1)");
-  auto* lambda = cmd->add_option("--lambda", opts->lambda, "Lame lambda (default 10, the paper's example)");
-  auto* E = cmd->add_option("--youngs", opts->youngs, "Young's modulus E (with --poisson, instead of --mu/--lambda)");
-  auto* nu = cmd->add_option("--poisson", opts->poisson, "Poisson's ratio nu, -1 < nu < 0.5");
-  E->excludes(mu)->excludes(lambda);
-  nu->excludes(mu)->excludes(lambda);
-  cmd->add_flag("--reparametrize", opts->reparametrize,
-                "Take the parameters as linear-elastic mu_L, lambda_L and map them so the energy matches linear "
-                "elasticity at rest (MATH.md section 2); without it they are used as given, as the paper's programs do");
+  cmd->add_option("name", opts->name, "Energy: " + material_name_list());
+  add_parameter_options(cmd, opts->params);
   auto* Fopt = cmd->add_option("--F", opts->F_text, "Deformation gradient: 9 numbers, vec(F) column by column");
   auto* st = cmd->add_option("--stretch", opts->stretch, "Deformation gradient diag(sx, sy, sz)")->expected(3);
   Fopt->excludes(st);

@@ -8,6 +8,7 @@
 #include <unistd.h>
 #include <omp.h>
 
+#include "parameter_options.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/sim/stretch.hpp"
 
@@ -18,9 +19,7 @@ struct Options {
   std::string element = "tet";
   int res = 10;
   std::string material = "stable_neo_hookean";
-  double mu = 1.0, lambda = 10.0;
-  double youngs = std::nan(""), poisson = std::nan("");
-  bool reparametrize = false;
+  ParameterOptions params;
   int steps = 25;
   double stretch = 3.5;
   std::string out = "output";
@@ -38,20 +37,13 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "stretch",
       "The paper's stretch test (tetcli/hexcli) with named options: a [-1,1]^3 box of tets or hexes whose y = -1 and "
-      "y = +1 layers are pulled apart in quasi-static steps; writes NNN.obj frames, stats.json and stats.csv.");
+      "y = +1 layers are pulled apart in quasi-static steps; writes NNN.obj and NNN.vtu frames, frames.pvd, stats.json "
+      "and stats.csv.");
   cmd->add_option("--element", o->element, "tet (6 tets per lattice cell, as tetcli) or hex (trilinear, as hexcli)")
       ->check(CLI::IsMember({"tet", "hex"}));
   cmd->add_option("--res", o->res, "Cells per side (default 10)");
-  std::string names;
-  for (auto n : material_names()) names += (names.empty() ? "" : ", ") + std::string(n);
-  cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + names);
-  auto* mu = cmd->add_option("--mu", o->mu, "Lame mu (default 1)");
-  auto* lambda = cmd->add_option("--lambda", o->lambda, "Lame lambda (default 10)");
-  auto* E = cmd->add_option("--youngs", o->youngs, "Young's modulus (with --poisson, instead of --mu/--lambda)");
-  auto* nu = cmd->add_option("--poisson", o->poisson, "Poisson's ratio, -1 < nu < 0.5");
-  E->excludes(mu)->excludes(lambda);
-  nu->excludes(mu)->excludes(lambda);
-  cmd->add_flag("--reparametrize", o->reparametrize, "Parameters are linear-elastic; map them (MATH.md section 2)");
+  cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
+  add_parameter_options(cmd, o->params);
   cmd->add_option("--steps", o->steps, "Quasi-static steps (default 25)");
   cmd->add_option("--stretch", o->stretch, "Final length / rest length along y (default 3.5)");
   cmd->add_option("--out", o->out, "Output directory (default output)");
@@ -70,13 +62,8 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     c.element = o->element == "hex" ? CellType::hex8 : CellType::tet4;
     c.resolution = o->res;
     c.material = o->material;
-    if (!std::isnan(o->youngs) || !std::isnan(o->poisson)) {
-      if (std::isnan(o->youngs) || std::isnan(o->poisson)) throw ParameterError("--youngs and --poisson go together");
-      c.params = lame_from_youngs(o->youngs, o->poisson);
-    } else {
-      c.params = {o->mu, o->lambda};
-    }
-    c.reparametrize = o->reparametrize;
+    c.params = o->params.lame();
+    c.reparametrize = o->params.reparametrize;
     c.steps = o->steps;
     c.stretch = o->stretch;
     c.out = o->out;
