@@ -20,7 +20,7 @@ build: configure
 
 demo: build
 	$(BUILD)/apps/tetcli 10 stable_neo_hookean 1.0 10.0 output
-	@echo "demo output: $(CURDIR)/output (frames 000.obj ... 025.obj, stats.json, stats.csv)"
+	@echo "demo output: $(CURDIR)/output (frames 000.obj ... 025.obj, 000.vtu ... 025.vtu + frames.pvd for ParaView, stats.json, stats.csv)"
 
 test: build
 	ctest --preset $(PRESET)

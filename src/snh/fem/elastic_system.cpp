@@ -30,9 +30,12 @@ double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix
       for (int b = 0; b < N; ++b)
         for (int k = 0; k < 3; ++k)
           HB.col(3 * b + k) = G(b, 0) * H.col(k) + G(b, 1) * H.col(3 + k) + G(b, 2) * H.col(6 + k);
-      for (int a = 0; a < N; ++a)
-        K->template middleRows<3>(3 * a) +=
-            G(a, 0) * HB.template middleRows<3>(0) + G(a, 1) * HB.template middleRows<3>(3) + G(a, 2) * HB.template middleRows<3>(6);
+      // Column c of K, read as a 3 by N matrix (i, a), is M_c Gᵀ with M_c the 3x3 matrix whose vec is
+      // column c of HB: small dense products, contiguous in memory (measured faster than row blocks).
+      const Eigen::Matrix<double, 3, N> Gt = G.transpose();
+      for (int c = 0; c < 3 * N; ++c)
+        Eigen::Map<Eigen::Matrix<double, 3, N>>(K->col(c).data()).noalias() +=
+            Eigen::Map<const Mat3>(HB.col(c).data()) * Gt;
     }
   }
   return psi;
