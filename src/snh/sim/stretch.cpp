@@ -187,11 +187,12 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     }
     for (int v : bottom) guess.segment<3>(3 * v) = Eigen::Vector3d(mesh.vertices(0, v), -half_length(c, s), mesh.vertices(2, v));
     for (int v : top) guess.segment<3>(3 * v) = Eigen::Vector3d(mesh.vertices(0, v), half_length(c, s), mesh.vertices(2, v));
-    // An extrapolated guess outside the energy's domain falls back to the last solution.
+    // An extrapolated guess outside the energy's domain falls back to the last solution scaled along y
+    // to the new boundary (a positive scaling keeps every det F > 0 that was).
     if (!std::isfinite(system.energy(guess))) {
       guess = x;
-      for (int v : bottom) guess[3 * v + 1] = -half_length(c, s);
-      for (int v : top) guess[3 * v + 1] = half_length(c, s);
+      const double ratio = half_length(c, s) / half_length(c, s - 1);
+      for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) guess[3 * v + 1] *= ratio;
     }
     previous = x;
     x = guess;
