@@ -18,7 +18,7 @@ NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, Linea
   NewtonReport report;
   Eigen::VectorXd g;
   SparseLower H = system.pattern();
-  const bool try_true = options.try_true_hessian && solver.kind() != LinearSolverKind::pcg;
+  const bool try_true = options.try_true_hessian;
   auto t = Clock::now();
   double E = system.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
   report.assembly_seconds += seconds_since(t);
@@ -45,11 +45,18 @@ NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, Linea
     ++report.iterations;
 
     t = Clock::now();
-    bool factored = try_true && solver.try_factorize(H);
-    if (factored) {
-      ++report.true_hessian_steps;
-    } else {
-      if (try_true) {  // H is the true Hessian and is indefinite: assemble the projected one
+    // The true Hessian when it is positive definite (a direct solver's Cholesky succeeds, or PCG meets
+    // no non-positive curvature) and gives a descent direction; otherwise the projected Hessian.
+    Eigen::VectorXd d;
+    bool have_step = false;
+    if (try_true && solver.try_factorize(H)) {
+      d = solver.solve(-g);
+      report.linear_iterations += solver.last_iterations();
+      have_step = d.allFinite() && g.dot(d) < 0.0;
+      if (have_step) ++report.true_hessian_steps;
+    }
+    if (!have_step) {
+      if (try_true) {  // H held the true Hessian: assemble the projected one
         report.solve_seconds += seconds_since(t);
         t = Clock::now();
         Eigen::VectorXd unused;
@@ -58,9 +65,9 @@ NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, Linea
         t = Clock::now();
       }
       solver.factorize(H);
+      d = solver.solve(-g);
+      report.linear_iterations += solver.last_iterations();
     }
-    Eigen::VectorXd d = solver.solve(-g);
-    report.linear_iterations += solver.last_iterations();
     report.solve_seconds += seconds_since(t);
     double slope = g.dot(d);
     if (!d.allFinite() || !(slope < 0.0)) {  // not a descent direction: fall back to steepest descent
