@@ -4,25 +4,40 @@
 
 namespace snh {
 
-Eigensystem9 assemble_eigensystem(const Svd3& svd, const SigmaEigenvalues& s) {
-  Eigensystem9 es;
+namespace {
+
+/// The SVD frame's basis of 9-vectors: columns 0..2 twist k = (u_b v_aᵀ − u_a v_bᵀ)/√2, 3..5 flip k
+/// (the same with +), 6..8 vec(u_k v_kᵀ), with (a, b) the two axes other than k (MATH.md §4).
+Mat9 frame_basis(const Svd3& svd) {
   const Mat3& U = svd.U;
   const Mat3& V = svd.V;
   const double r = std::sqrt(0.5);
+  Mat9 basis;
   for (int k = 0; k < 3; ++k) {
     const int a = (k + 1) % 3, b = (k + 2) % 3;
     const Mat3 ba = U.col(b) * V.col(a).transpose();
     const Mat3 ab = U.col(a) * V.col(b).transpose();
-    es.values[k] = s.twist[k];
-    es.vectors.col(k) = vec(r * (ba - ab));
-    es.values[3 + k] = s.flip[k];
-    es.vectors.col(3 + k) = vec(r * (ba + ab));
+    basis.col(k) = vec(r * (ba - ab));
+    basis.col(3 + k) = vec(r * (ba + ab));
+    basis.col(6 + k) = vec(U.col(k) * V.col(k).transpose());
   }
-  const SymEigen3 scaling = symmetric_eigen3(s.A);
+  return basis;
+}
+
+}  // namespace
+
+Eigensystem9 assemble_eigensystem(const Svd3& svd, const SigmaEigenvalues& s) {
+  Eigensystem9 es;
+  const Mat9 basis = frame_basis(svd);
+  es.vectors.leftCols<6>() = basis.leftCols<6>();
   for (int k = 0; k < 3; ++k) {
-    es.values[6 + k] = scaling.values[k];
-    es.vectors.col(6 + k) = vec(U * scaling.vectors.col(k).asDiagonal() * V.transpose());
+    es.values[k] = s.twist[k];
+    es.values[3 + k] = s.flip[k];
   }
+  // Scaling eigenvector U diag(e) Vᵀ = Σ_i e_i vec(u_i v_iᵀ).
+  const SymEigen3 scaling = symmetric_eigen3(s.A);
+  es.vectors.rightCols<3>() = basis.rightCols<3>() * scaling.vectors;
+  for (int k = 0; k < 3; ++k) es.values[6 + k] = scaling.values[k];
   return es;
 }
 
@@ -33,19 +48,11 @@ Mat9 rebuild(const Eigensystem9& es, PsdProjection p) {
 }
 
 Mat9 projected_from_sigma(const Svd3& svd, const SigmaEigenvalues& s, PsdProjection p) {
-  const Mat3& U = svd.U;
-  const Mat3& V = svd.V;
-  Eigen::Matrix<double, 9, 6> W;  // twist 0..2, flip 0..2
-  Eigen::Matrix<double, 9, 3> D;  // vec(u_i v_iᵀ)
+  const Mat9 basis = frame_basis(svd);
+  const auto W = basis.leftCols<6>();   // twist 0..2, flip 0..2
+  const auto D = basis.rightCols<3>();  // vec(u_i v_iᵀ)
   Eigen::Matrix<double, 1, 6> d;
-  const double r = std::sqrt(0.5);
   for (int k = 0; k < 3; ++k) {
-    const int a = (k + 1) % 3, b = (k + 2) % 3;
-    const Mat3 ba = U.col(b) * V.col(a).transpose();
-    const Mat3 ab = U.col(a) * V.col(b).transpose();
-    W.col(k) = vec(r * (ba - ab));
-    W.col(3 + k) = vec(r * (ba + ab));
-    D.col(k) = vec(U.col(k) * V.col(k).transpose());
     d[k] = project_eigenvalue(s.twist[k], p);
     d[3 + k] = project_eigenvalue(s.flip[k], p);
   }

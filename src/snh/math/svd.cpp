@@ -96,9 +96,8 @@ Svd3 rotation_variant_svd(const Mat3& F) {
   for (int k = 0; k < 9; ++k) B.data()[k] = plain ? F.data()[k] * down : std::ldexp(F.data()[k], -exponent);
   // Starting rotation: eigenvectors of BᵀB from Eigen's closed-form 3x3 solver, made exactly
   // orthonormal. The Jacobi sweeps below then only polish: a few small-angle rotations and a check.
-  const Mat3 V0 = orthonormal_start(B.transpose() * B);
-  Mat3 V = V0;
-  B = (B * V0).eval();
+  Mat3 V = orthonormal_start(B.transpose() * B);
+  B = (B * V).eval();
 
   // One-sided Jacobi: rotate pairs of columns of B = F V until they are mutually orthogonal.
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
