@@ -153,6 +153,10 @@ TEST(Assembly, RejectsDegenerateAndBadInput) {
                DegenerateElement);
   EXPECT_THROW(ElasticSystem(box_tets(1), make_material("stable_neo_hookean", {1, 10}), std::vector<std::uint8_t>(5, 0)),
                std::invalid_argument);
+  VolumeMesh bad_index = box_tets(1);
+  bad_index.cells(2, 3) = 999;  // checked before the rest state reads vertex 999
+  EXPECT_THROW(ElasticSystem(bad_index, make_material("stable_neo_hookean", {1, 10}), std::vector<std::uint8_t>(24, 0)),
+               std::invalid_argument);
 }
 
 }  // namespace

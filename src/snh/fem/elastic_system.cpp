@@ -9,6 +9,34 @@
 namespace snh {
 namespace {
 
+/// The mesh, after checking that every cell refers to existing vertices (before anything indexes by them).
+VolumeMesh checked(VolumeMesh mesh) {
+  const Eigen::Index n = mesh.vertex_count();
+  if (mesh.cells.rows() != nodes_per_cell(mesh.type)) throw std::invalid_argument("cells do not match the cell type");
+  for (Eigen::Index c = 0; c < mesh.cell_count(); ++c)
+    for (Eigen::Index a = 0; a < mesh.cells.rows(); ++a)
+      if (mesh.cells(a, c) < 0 || mesh.cells(a, c) >= n)
+        throw std::invalid_argument(fmt::format("cell {} refers to vertex {} (mesh has {})", c, mesh.cells(a, c), n));
+  return mesh;
+}
+
+/// Items grouped by an integer key in [0, keys), by counting sort: items[start[k] .. start[k+1]) have
+/// key k, in the order emitted. for_each_pair(emit) must call emit(key, item) for every pair, the same
+/// way each time (it is called twice: to count, then to fill).
+struct Buckets {
+  std::vector<int> start, items;
+};
+template <class ForEachPair>
+Buckets bucket(int keys, ForEachPair&& for_each_pair) {
+  Buckets b;
+  b.start.assign(keys + 1, 0);
+  for_each_pair([&](int key, int) { ++b.start[key + 1]; });
+  for (int k = 0; k < keys; ++k) b.start[k + 1] += b.start[k];
+  b.items.resize(b.start[keys]);
+  std::vector<int> fill(b.start.begin(), b.start.end() - 1);
+  for_each_pair([&](int key, int item) { b.items[fill[key]++] = item; });
+  return b;
+}
 
 /// Energy, gradient (3 by N) and stiffness (3N by 3N, DOF 3a+i) of one element at node positions X.
 template <class M, int N, int Q>
@@ -51,33 +79,24 @@ Eigen::Matrix<double, 3, N> gather_nodes(const VolumeMesh& mesh, Eigen::Index c,
 }  // namespace
 
 ElasticSystem::ElasticSystem(VolumeMesh mesh, AnyMaterial material, std::vector<std::uint8_t> fixed)
-    : mesh_(std::move(mesh)), material_(std::move(material)), rest_(compute_rest_state(mesh_)) {
+    : mesh_(checked(std::move(mesh))), material_(std::move(material)), rest_(compute_rest_state(mesh_)) {
   const Eigen::Index n = mesh_.vertex_count();
   const int npc = nodes_per_cell(mesh_.type);
   if (static_cast<Eigen::Index>(fixed.size()) != 3 * n)
     throw std::invalid_argument(fmt::format("fixed flags: expected {} (3 per vertex), got {}", 3 * n, fixed.size()));
-  if (mesh_.cells.rows() != npc) throw std::invalid_argument("cells do not match the cell type");
-  for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
-    for (int a = 0; a < npc; ++a)
-      if (mesh_.cells(a, c) < 0 || mesh_.cells(a, c) >= n)
-        throw std::invalid_argument(fmt::format("cell {} refers to vertex {} (mesh has {})", c, mesh_.cells(a, c), n));
 
   // Free DOF numbering, increasing with the DOF index.
   free_index_.assign(3 * n, -1);
   for (Eigen::Index d = 0; d < 3 * n; ++d)
     if (!fixed[d]) free_index_[d] = static_cast<int>(free_count_++);
 
-  // Vertex -> cells adjacency (CSR).
-  std::vector<int> vc_start(n + 1, 0), vc_list;
-  for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
-    for (int a = 0; a < npc; ++a) ++vc_start[mesh_.cells(a, c) + 1];
-  for (Eigen::Index v = 0; v < n; ++v) vc_start[v + 1] += vc_start[v];
-  vc_list.resize(vc_start[n]);
-  {
-    std::vector<int> fill(vc_start.begin(), vc_start.end() - 1);
+  // Vertex -> cells adjacency.
+  const Buckets vertex_cells = bucket(static_cast<int>(n), [&](auto&& emit) {
     for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
-      for (int a = 0; a < npc; ++a) vc_list[fill[mesh_.cells(a, c)]++] = static_cast<int>(c);
-  }
+      for (int a = 0; a < npc; ++a) emit(mesh_.cells(a, c), static_cast<int>(c));
+  });
+  const std::vector<int>& vc_start = vertex_cells.start;
+  const std::vector<int>& vc_list = vertex_cells.items;
 
   // Vertex neighbours (sharing a cell, itself included), sorted.
   std::vector<std::vector<int>> nbr(n);
@@ -108,8 +127,9 @@ ElasticSystem::ElasticSystem(VolumeMesh mesh, AnyMaterial material, std::vector<
                                            outer.data(), inner.data(), zeros.data());
   pattern_.makeCompressed();
 
-  // Scatter map: for each element and local pair (A, B), the value index of (free(A), free(B)) when
-  // both are free and free(A) >= free(B); −1 otherwise (the symmetric partner is stored instead).
+  // Scatter map: for each element and local pair (A, B), at B·ld + A (the column-major layout of the
+  // element stiffness), the value index of (free(A), free(B)) when both are free and free(A) >= free(B);
+  // −1 otherwise (the symmetric partner is stored instead).
   const int ld = 3 * npc;
   scatter_.assign(static_cast<std::size_t>(mesh_.cell_count()) * ld * ld, -1);
   const int* out_ptr = pattern_.outerIndexPtr();
@@ -124,7 +144,7 @@ ElasticSystem::ElasticSystem(VolumeMesh mesh, AnyMaterial material, std::vector<
         const int* first = in_ptr + out_ptr[rB];
         const int* last = in_ptr + out_ptr[rB + 1];
         const int* it = std::lower_bound(first, last, rA);
-        scatter_[(static_cast<std::size_t>(c) * ld + A) * ld + B] = static_cast<int>(it - in_ptr);
+        scatter_[(static_cast<std::size_t>(c) * ld + B) * ld + A] = static_cast<int>(it - in_ptr);
       }
     }
 
@@ -147,14 +167,11 @@ ElasticSystem::ElasticSystem(VolumeMesh mesh, AnyMaterial material, std::vector<
     colour[c] = pick;
     colours = std::max(colours, pick + 1);
   }
-  colour_start_.assign(colours + 1, 0);
-  for (int col : colour) ++colour_start_[col + 1];
-  for (int k = 0; k < colours; ++k) colour_start_[k + 1] += colour_start_[k];
-  colour_order_.resize(colour.size());
-  {
-    std::vector<int> fill(colour_start_.begin(), colour_start_.end() - 1);
-    for (std::size_t c = 0; c < colour.size(); ++c) colour_order_[fill[colour[c]]++] = static_cast<int>(c);
-  }
+  Buckets by_colour = bucket(colours, [&](auto&& emit) {
+    for (std::size_t c = 0; c < colour.size(); ++c) emit(colour[c], static_cast<int>(c));
+  });
+  colour_start_ = std::move(by_colour.start);
+  colour_order_ = std::move(by_colour.items);
 }
 
 double ElasticSystem::energy(const Eigen::VectorXd& x) const {
@@ -215,12 +232,9 @@ double ElasticSystem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradie
             for (int a = 0; a < N; ++a) full.segment<3>(3 * mesh_.cells(a, c)) += Eigen::Map<const Eigen::Vector3d>(g + 3 * a);
             if (values) {
               const int* map = scatter_.data() + static_cast<std::size_t>(c) * ld * ld;
-              const double* K = stiff.data() + static_cast<std::size_t>(c) * ld * ld;  // column-major ld x ld
-              for (int B = 0; B < ld; ++B)
-                for (int A = 0; A < ld; ++A) {
-                  const int idx = map[A * ld + B];
-                  if (idx >= 0) values[idx] += K[B * ld + A];
-                }
+              const double* K = stiff.data() + static_cast<std::size_t>(c) * ld * ld;  // same layout as map
+              for (int e = 0; e < ld * ld; ++e)
+                if (map[e] >= 0) values[map[e]] += K[e];
             }
           }
         }

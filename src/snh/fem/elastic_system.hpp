@@ -69,7 +69,7 @@ class ElasticSystem {
   std::vector<int> free_index_;
   Eigen::Index free_count_ = 0;
   SparseLower pattern_;
-  std::vector<int> scatter_;        ///< per element, (3N)² value indices into pattern_, −1 to skip
+  std::vector<int> scatter_;        ///< per element, (3N)² value indices into pattern_ (column-major), −1 to skip
   std::vector<int> colour_order_;   ///< element ids grouped by colour
   std::vector<int> colour_start_;   ///< colour c owns colour_order_[colour_start_[c] .. colour_start_[c+1])
   Eigen::Index parallel_threshold_ = 2048;
