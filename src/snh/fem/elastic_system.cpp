@@ -258,16 +258,21 @@ void ElasticSystem::scatter_add_free(const Eigen::VectorXd& free, double scale, 
     if (free_index_[d] >= 0) full[static_cast<Eigen::Index>(d)] += scale * free[free_index_[d]];
 }
 
-Eigen::VectorXd ElasticSystem::min_det_per_element(const Eigen::VectorXd& x) const {
-  Eigen::VectorXd out(mesh_.cell_count());
+ElasticSystem::Deformation ElasticSystem::deformation(const Eigen::VectorXd& x) const {
+  Deformation out;
+  out.min_J.resize(mesh_.cell_count());
   std::visit(
       [&](const auto& rest) {
         using R = typename std::decay_t<decltype(rest)>::value_type;
         for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c) {
           const auto X = gather_nodes<R::nodes>(mesh_, c, x);
           double lo = std::numeric_limits<double>::infinity();
-          for (int q = 0; q < R::points; ++q) lo = std::min(lo, (X * rest[c].G[q]).determinant());
-          out[c] = lo;
+          for (int q = 0; q < R::points; ++q) {
+            const double J = (X * rest[c].G[q]).determinant();
+            lo = std::min(lo, J);
+            out.volume += rest[c].weight[q] * J;
+          }
+          out.min_J[c] = lo;
         }
       },
       rest_);

@@ -59,8 +59,12 @@ class ElasticSystem {
   /// the cores, waiting at barriers) costs more than the work. Default 2048; 0 makes every loop parallel.
   void set_parallel_threshold(Eigen::Index t) { parallel_threshold_ = t; }
 
-  /// Per-element minimum det F over its quadrature points.
-  [[nodiscard]] Eigen::VectorXd min_det_per_element(const Eigen::VectorXd& x) const;
+  /// det F at every quadrature point, in one pass: each element's minimum and the deformed volume.
+  struct Deformation {
+    Eigen::VectorXd min_J;  ///< per element, the smallest det F over its quadrature points
+    double volume = 0.0;    ///< Σ_e Σ_q w_q det F_q (signed)
+  };
+  [[nodiscard]] Deformation deformation(const Eigen::VectorXd& x) const;
 
  private:
   VolumeMesh mesh_;

@@ -1,9 +1,9 @@
 #include "snh/sim/stretch.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <string>
-#include <cmath>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -33,27 +33,11 @@ double peak_memory_mib() {
 /// Half-length along y of the box at step s.
 double half_length(const StretchConfig& c, int s) { return 1.0 + (c.stretch - 1.0) * s / c.steps; }
 
-/// Volume, min det F and inverted-element count of the state x.
-void measure_state(const ElasticSystem& sys, const Eigen::VectorXd& x, StepStats& st) {
-  const Eigen::VectorXd minJ = sys.min_det_per_element(x);
-  st.min_J = minJ.minCoeff();
-  st.inverted = static_cast<int>((minJ.array() <= 0.0).count());
-  double deformed = 0.0, rest = 0.0;
-  std::visit(
-      [&](const auto& elems) {
-        using R = typename std::decay_t<decltype(elems)>::value_type;
-        const auto& mesh = sys.mesh();
-        for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
-          Eigen::Matrix<double, 3, R::nodes> X;
-          for (int a = 0; a < R::nodes; ++a) X.col(a) = x.segment<3>(3 * mesh.cells(a, c));
-          for (int q = 0; q < R::points; ++q) {
-            deformed += elems[c].weight[q] * (X * elems[c].G[q]).determinant();
-            rest += elems[c].weight[q];
-          }
-        }
-      },
-      sys.rest());
-  st.volume_ratio = deformed / rest;
+/// Min det F, inverted-element count and volume ratio of a deformation.
+void record_deformation(const ElasticSystem::Deformation& d, double rest_volume, StepStats& st) {
+  st.min_J = d.min_J.minCoeff();
+  st.inverted = static_cast<int>((d.min_J.array() <= 0.0).count());
+  st.volume_ratio = d.volume / rest_volume;
 }
 
 Eigen::Matrix3Xd as_positions(const Eigen::VectorXd& x) {
@@ -62,12 +46,12 @@ Eigen::Matrix3Xd as_positions(const Eigen::VectorXd& x) {
 
 /// Writes frame s as NNN.obj and NNN.vtu (displacement, per-cell min J) and rewrites the .pvd series.
 void write_frame(const StretchConfig& c, const ElasticSystem& sys, const Eigen::Matrix3Xi& surface, const Eigen::VectorXd& x,
-                 int s, std::vector<std::pair<double, std::string>>& series) {
+                 const Eigen::VectorXd& min_J, int s, std::vector<std::pair<double, std::string>>& series) {
   const Eigen::Matrix3Xd X = as_positions(x);
   write_obj(c.out / fmt::format("{:03d}.obj", s), X, surface);
   if (!c.write_vtu) return;
   const std::string vtu = fmt::format("{:03d}.vtu", s);
-  write_vtu(c.out / vtu, sys.mesh(), X, {{"displacement", X - sys.mesh().vertices}}, {{"J", sys.min_det_per_element(x)}});
+  write_vtu(c.out / vtu, sys.mesh(), X, {{"displacement", X - sys.mesh().vertices}}, {{"J", min_J}});
   series.emplace_back(static_cast<double>(s), vtu);
   write_pvd(c.out / "frames.pvd", series);
 }
@@ -171,7 +155,8 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
 
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
   std::vector<std::pair<double, std::string>> series;
-  write_frame(c, system, surface, x, 0, series);
+  const double rest_volume = rest_volumes(system.rest()).sum();
+  write_frame(c, system, surface, x, Eigen::VectorXd::Ones(mesh.cell_count()), 0, series);
   Eigen::VectorXd previous = x;  // the solution one step back, for extrapolation
 
   for (int s = 1; s <= c.steps; ++s) {
@@ -218,8 +203,9 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     st.solve_seconds = rep.solve_seconds;
     st.residuals = rep.residuals;
     st.failure = rep.failure;
-    measure_state(system, x, st);
-    write_frame(c, system, surface, x, s, series);
+    const ElasticSystem::Deformation deformed = system.deformation(x);
+    record_deformation(deformed, rest_volume, st);
+    write_frame(c, system, surface, x, deformed.min_J, s, series);
     st.wall_seconds = std::chrono::duration<double>(Clock::now() - t_step).count();
     result.steps.push_back(st);
     log << fmt::format("step {:>3}/{}: {} Newton iterations, |f| = {:.2e}, energy {:.8g}, volume {:.4f}, min J {:.4f}, {:.3f} s{}\n",
