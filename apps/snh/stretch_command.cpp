@@ -1,10 +1,8 @@
 #include "stretch_command.hpp"
 
-#include <cmath>
 #include <iostream>
 #include <memory>
 
-#include <fmt/format.h>
 #include <unistd.h>
 #include <omp.h>
 

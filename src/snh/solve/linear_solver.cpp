@@ -5,7 +5,6 @@
 #include <stdexcept>
 
 #include <Eigen/CholmodSupport>
-#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 #include <fmt/format.h>
 
@@ -42,7 +41,7 @@ class DirectSolver final : public LinearSolver {
       analysed_ = true;
     }
     factor_.factorize(A);
-    return factor_.info() == Eigen::Success && positive_pivots();
+    return factor_ok();
   }
   double factorize(const SparseLower& A) override {
     if (try_factorize(A)) return 0.0;
@@ -62,7 +61,7 @@ class DirectSolver final : public LinearSolver {
       add_to_diagonal(shifted, shift - applied);
       applied = shift;
       factor_.factorize(shifted);
-      if (factor_.info() == Eigen::Success && positive_pivots()) return applied;
+      if (factor_ok()) return applied;
       shift *= 2.0;
     }
     throw std::runtime_error(fmt::format("{}: the Newton matrix could not be factorized even with a diagonal shift "
@@ -73,6 +72,8 @@ class DirectSolver final : public LinearSolver {
   LinearSolverKind kind() const override { return K; }
 
  private:
+  /// The last factorization succeeded and (for LDLᵀ) every pivot is positive.
+  bool factor_ok() const { return factor_.info() == Eigen::Success && positive_pivots(); }
   bool positive_pivots() const {
     if constexpr (requires(const Factor& f) { f.vectorD(); }) return (factor_.vectorD().array() > 0.0).all();
     else return true;  // LLᵀ fails by itself when not positive definite
