@@ -26,6 +26,7 @@ struct Options {
   double tolerance = 1e-3;
   std::string projection = "clamp";
   bool projected_only = false;
+  bool refactorize = false;
 };
 
 }  // namespace
@@ -48,6 +49,9 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
   cmd->add_option("--solver", o->solver, "Linear solver: cholmod (default), ldlt or pcg")
       ->check(CLI::IsMember({"cholmod", "ldlt", "pcg"}));
+  cmd->add_flag("--refactorize", o->refactorize,
+                "Direct solvers: factorize every Newton matrix (by default the last factor preconditions conjugate "
+                "gradients on the next matrix, and a new factorization is made only when that converges slowly)");
   cmd->add_option("--tolerance", o->tolerance, "Newton stops when |f| < tolerance (default 1e-3: |f|^2 < 1e-6 as the paper)");
   cmd->add_option("--projection", o->projection, "PSD projection of element Hessians: clamp (default) or abs")
       ->check(CLI::IsMember({"clamp", "abs"}));
@@ -66,6 +70,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     c.stretch = o->stretch;
     c.out = o->out;
     c.solver = *parse_linear_solver(o->solver);
+    c.reuse_factor = !o->refactorize;
     c.newton.tolerance = o->tolerance;
     c.newton.projection = *parse_projection(o->projection);
     c.newton.try_true_hessian = !o->projected_only;

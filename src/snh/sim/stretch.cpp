@@ -68,6 +68,7 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   j["steps_requested"] = c.steps;
   j["stretch"] = c.stretch;
   j["solver"] = std::string(to_string(c.solver));
+  j["reuse_factor"] = c.reuse_factor;
   j["tolerance"] = c.newton.tolerance;
   j["vertices"] = r.vertices;
   j["cells"] = r.cells;
@@ -75,17 +76,19 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   j["total_seconds"] = r.total_seconds;
   j["middle_width"] = r.middle_width;
   j["peak_memory_mib"] = r.peak_memory_mib;
-  int newton = 0, linear = 0, true_steps = 0;
+  int newton = 0, linear = 0, factorizations = 0, true_steps = 0;
   double assembly = 0, solve = 0;
   for (const auto& s : r.steps) {
     newton += s.newton_iterations;
     linear += s.linear_iterations;
+    factorizations += s.factorizations;
     true_steps += s.true_hessian_steps;
     assembly += s.assembly_seconds;
     solve += s.solve_seconds;
   }
   j["newton_iterations"] = newton;
   j["linear_iterations"] = linear;
+  j["factorizations"] = factorizations;
   j["true_hessian_steps"] = true_steps;
   j["assembly_seconds"] = assembly;
   j["solve_seconds"] = solve;
@@ -93,6 +96,7 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   for (const auto& s : r.steps)
     steps.push_back({{"step", s.step}, {"converged", s.converged}, {"newton_iterations", s.newton_iterations},
                      {"line_search_steps", s.line_search_steps}, {"linear_iterations", s.linear_iterations},
+                     {"factorizations", s.factorizations},
                      {"true_hessian_steps", s.true_hessian_steps}, {"residual", s.residual}, {"energy", s.energy}, {"wall_seconds", s.wall_seconds},
                      {"assembly_seconds", s.assembly_seconds}, {"solve_seconds", s.solve_seconds},
                      {"min_J", s.min_J}, {"inverted", s.inverted}, {"volume_ratio", s.volume_ratio},
@@ -100,11 +104,11 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   j["steps"] = steps;
   write_atomically(c.out / "stats.json", [&](std::ostream& o) { o << j.dump(2) << "\n"; });
   write_atomically(c.out / "stats.csv", [&](std::ostream& o) {
-    o << "step,converged,newton_iterations,line_search_steps,linear_iterations,residual,energy,wall_seconds,"
-         "assembly_seconds,solve_seconds,min_J,inverted,volume_ratio\n";
+    o << "step,converged,newton_iterations,line_search_steps,linear_iterations,factorizations,residual,energy,"
+         "wall_seconds,assembly_seconds,solve_seconds,min_J,inverted,volume_ratio\n";
     for (const auto& s : r.steps)
-      o << fmt::format("{},{},{},{},{},{:.6e},{:.12g},{:.6f},{:.6f},{:.6f},{:.9g},{},{:.9g}\n", s.step, s.converged ? 1 : 0,
-                       s.newton_iterations, s.line_search_steps, s.linear_iterations, s.residual, s.energy,
+      o << fmt::format("{},{},{},{},{},{},{:.6e},{:.12g},{:.6f},{:.6f},{:.6f},{:.9g},{},{:.9g}\n", s.step, s.converged ? 1 : 0,
+                       s.newton_iterations, s.line_search_steps, s.linear_iterations, s.factorizations, s.residual, s.energy,
                        s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.min_J, s.inverted, s.volume_ratio);
   });
 }
@@ -144,7 +148,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   result.vertices = mesh.vertex_count();
   result.cells = mesh.cell_count();
   const ElasticSystem system(mesh, make_material(c.material, c.params, c.reparametrize), std::move(fixed));
-  auto solver = make_linear_solver(c.solver);
+  auto solver = make_linear_solver({.kind = c.solver, .reuse_factor = c.reuse_factor});
 
   log << fmt::format("{}: resolution {}, material {}, mu {:g}, lambda {:g}{}\n", c.program, res, c.material, c.params.mu,
                      c.params.lambda, c.reparametrize ? " (linear, reparametrized)" : "");
@@ -196,6 +200,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     st.newton_iterations = rep.iterations;
     st.line_search_steps = rep.line_search_steps;
     st.linear_iterations = rep.linear_iterations;
+    st.factorizations = rep.factorizations;
     st.true_hessian_steps = rep.true_hessian_steps;
     st.residual = rep.residual;
     st.energy = rep.energy;

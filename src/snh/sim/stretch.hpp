@@ -24,6 +24,7 @@ struct StretchConfig {
   double stretch = 3.5;                   ///< final length / rest length along y
   std::filesystem::path out = "output";
   LinearSolverKind solver = LinearSolverKind::cholmod;
+  bool reuse_factor = true;               ///< direct solvers: precondition with the last factor (linear_solver.hpp)
   NewtonOptions newton;
   std::string program = "snh stretch";    ///< for the header and stats.json
   bool write_vtu = true;                  ///< also NNN.vtu frames and frames.pvd for ParaView
@@ -35,7 +36,8 @@ struct StepStats {
   bool converged = false;
   int newton_iterations = 0;
   int line_search_steps = 0;
-  int linear_iterations = 0;
+  int linear_iterations = 0;  ///< conjugate-gradient iterations
+  int factorizations = 0;     ///< numeric factorizations (direct solvers)
   int true_hessian_steps = 0;  ///< Newton iterations that used the unprojected Hessian
   double residual = 0.0;
   double energy = 0.0;

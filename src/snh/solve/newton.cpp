@@ -11,14 +11,14 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-}  // namespace
-
-NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, LinearSolver& solver,
-                          const NewtonOptions& options) {
+NewtonReport newton_iterations(const ElasticSystem& system, Eigen::VectorXd& x, LinearSolver& solver,
+                               const NewtonOptions& options) {
   NewtonReport report;
   Eigen::VectorXd g;
   SparseLower H = system.pattern();
   const bool try_true = options.try_true_hessian;
+  // An iterative linear solve may stop at a residual that cannot decide convergence: a tenth of the tolerance.
+  const double linear_enough = 0.1 * options.tolerance;
   auto t = Clock::now();
   double E = system.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
   report.assembly_seconds += seconds_since(t);
@@ -50,7 +50,7 @@ NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, Linea
     Eigen::VectorXd d;
     bool have_step = false;
     if (try_true && solver.try_factorize(H)) {
-      d = solver.solve(-g);
+      d = solver.solve(-g, linear_enough);
       report.linear_iterations += solver.last_iterations();
       have_step = d.allFinite() && g.dot(d) < 0.0;
       if (have_step) ++report.true_hessian_steps;
@@ -65,7 +65,7 @@ NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, Linea
         t = Clock::now();
       }
       solver.factorize(H);
-      d = solver.solve(-g);
+      d = solver.solve(-g, linear_enough);
       report.linear_iterations += solver.last_iterations();
     }
     report.solve_seconds += seconds_since(t);
@@ -111,6 +111,16 @@ NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, Linea
     E = system.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
     report.assembly_seconds += seconds_since(t);
   }
+}
+
+}  // namespace
+
+NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, LinearSolver& solver,
+                          const NewtonOptions& options) {
+  const int factorizations = solver.factorizations();
+  NewtonReport report = newton_iterations(system, x, solver, options);
+  report.factorizations = solver.factorizations() - factorizations;
+  return report;
 }
 
 }  // namespace snh

@@ -3,13 +3,14 @@
 //
 // Stopping rule: converged when ‖g‖² < tolerance² on the free DOFs (g = ∂E/∂x, the negative of the
 // elastic forces): with the default tolerance 1e-3 this is the paper programs' ‖f‖² < 1e-6, absolute.
-// Each iteration uses the true Hessian when a direct solver finds it positive definite (so Newton
+// Each iteration uses the true Hessian when the linear solver finds it positive definite (so Newton
 // converges quadratically near a stable equilibrium, where element-wise projection would make it
 // linear), and otherwise the Hessian assembled from PSD-projected element Hessians, which always
 // gives a descent direction. It steps along d = −H⁻¹g and halves the step
 // until E(x + αd) ≤ E(x) + 1e-4 α gᵀd. A state where the energy is undefined (+∞) counts as a failed
 // trial, so the step gets shorter; no NaN enters x. Near convergence, where the energy decrease is
-// below its rounding error, a full step that reduces ‖g‖ is accepted.
+// below its rounding error, a full step that reduces ‖g‖ is accepted. Iterative linear solves may stop
+// once ‖Hd + g‖ is below a tenth of the tolerance, which cannot decide convergence.
 #include <functional>
 #include <string>
 #include <vector>
@@ -25,7 +26,7 @@ struct NewtonOptions {
   int max_iterations = 50;        ///< the paper programs' limit
   double tolerance = 1e-3;        ///< on ‖g‖ (free DOFs)
   PsdProjection projection = PsdProjection::clamp;
-  bool try_true_hessian = true;   ///< first try the unprojected Hessian (direct solvers only)
+  bool try_true_hessian = true;   ///< first try the unprojected Hessian
   int max_halvings = 60;
   /// Called at the start of every iteration with its number (0 = the starting state) and ‖g‖.
   std::function<void(int iteration, double residual)> on_iteration;
@@ -35,7 +36,8 @@ struct NewtonReport {
   bool converged = false;
   int iterations = 0;             ///< Newton steps taken
   int line_search_steps = 0;      ///< step halvings, in total
-  int linear_iterations = 0;      ///< PCG iterations, in total (0 for direct solvers)
+  int linear_iterations = 0;      ///< conjugate-gradient iterations, in total (0 for plain direct solves)
+  int factorizations = 0;         ///< numeric factorizations by the linear solver (0 for PCG)
   int true_hessian_steps = 0;     ///< iterations that used the unprojected Hessian
   double residual = 0.0;          ///< final ‖g‖
   double energy = 0.0;            ///< final energy
