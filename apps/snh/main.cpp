@@ -1,6 +1,7 @@
 // snh: command-line entry point. Subcommands live in one file each.
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -13,13 +14,17 @@ int main(int argc, char** argv) {
   CLI::App app{"snh " SNH_VERSION ": Stable Neo-Hookean flesh simulation toolkit (Smith, de Goes & Kim 2018)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "snh " SNH_VERSION);
+  // Usage errors: one line and exit code 2, like every other bad input.
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return std::string("snh: error: ") + e.what() + " (see snh --help)\n";
+  });
   int exit_code = 0;
   snh::cli::add_material_command(app, exit_code);
   snh::cli::add_stretch_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return app.exit(e) == 0 ? 0 : 2;  // --help and --version succeed
   } catch (const std::exception& e) {
     std::cerr << "snh: error: " << e.what() << "\n";
     return 2;

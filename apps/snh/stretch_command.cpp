@@ -27,6 +27,7 @@ struct Options {
   std::string projection = "clamp";
   bool projected_only = false;
   bool refactorize = false;
+  std::string tet_split = "paper";
 };
 
 }  // namespace
@@ -41,6 +42,10 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--element", o->element, "tet (6 tets per lattice cell, as tetcli) or hex (trilinear, as hexcli)")
       ->check(CLI::IsMember({"tet", "hex"}));
   cmd->add_option("--res", o->res, "Cells per side (default 10)");
+  cmd->add_option("--tet-split", o->tet_split,
+                  "paper (default: every cell cut around its c0-c7 diagonal, as tetcli) or mirrored (the cut mirrored "
+                  "in the upper half of each axis, so that for even res the mesh is mirror symmetric)")
+      ->check(CLI::IsMember({"paper", "mirrored"}));
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params);
   cmd->add_option("--steps", o->steps, "Quasi-static steps (default 25)");
@@ -63,6 +68,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     c.program = "snh stretch";
     c.element = o->element == "hex" ? CellType::hex8 : CellType::tet4;
     c.resolution = o->res;
+    c.tet_split = o->tet_split == "mirrored" ? TetSplit::mirrored : TetSplit::paper;
     c.material = o->material;
     c.params = o->params.lame();
     c.reparametrize = o->params.reparametrize;

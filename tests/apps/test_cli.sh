@@ -50,7 +50,10 @@ check "no F" nonzero "give exactly one of --F" -- material stable_neo_hookean
 check "bad projection" nonzero "--projection must be none, clamp or abs" -- material stable_neo_hookean --stretch 1 1 1 --projection foo
 check "stretch inf" nonzero "--stretch value 2 is not a finite number" -- material stable_neo_hookean --stretch 1 1 inf
 check "no reparam psi_d" nonzero "psi_d cannot be reparametrized" -- material psi_d --reparametrize --stretch 1 1 1
-check "no subcommand" nonzero "subcommand" --
+check "no subcommand" 2 "subcommand" --
+check "bad option value: one line, exit 2" 2 "^snh: error: --tet-split: bogus not in \{paper,mirrored\} \(see snh --help\)$" -- stretch --tet-split bogus
+check "missing option value" 2 "^snh: error: --res: 1 required INT missing" -- stretch --res
+check "version" 0 "^snh [0-9]+\.[0-9]+\.[0-9]+$" -- --version
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -1,8 +1,12 @@
 // Box generators (PAPER_CODE.md) and boundary-surface extraction.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
 #include <map>
+#include <set>
 
 #include "snh/fem/quality.hpp"
 #include "snh/fem/rest_state.hpp"
@@ -93,6 +97,40 @@ void check_surface(const VolumeMesh& m, int res) {
 }
 
 TEST(Surface, TetBoxIsClosedAndOutward) { check_surface(box_tets(3), 3); }
+// A non-conforming split would leave interior faces unmatched, which boundary_triangles would report.
+TEST(Surface, MirroredTetBoxIsClosedAndOutward) {
+  check_surface(box_tets(4, TetSplit::mirrored), 4);
+  check_surface(box_tets(3, TetSplit::mirrored), 3);
+}
+
+/// The tets of m as sorted vertex sets, after mapping every lattice vertex through `map`.
+std::set<std::array<int, 4>> tet_set(const VolumeMesh& m, const std::function<int(int)>& map) {
+  std::set<std::array<int, 4>> out;
+  for (Eigen::Index c = 0; c < m.cell_count(); ++c) {
+    std::array<int, 4> t{map(m.cells(0, c)), map(m.cells(1, c)), map(m.cells(2, c)), map(m.cells(3, c))};
+    std::sort(t.begin(), t.end());
+    out.insert(t);
+  }
+  return out;
+}
+
+TEST(Box, MirroredTetSplitIsMirrorSymmetricInEachAxis) {
+  const int res = 4, n = res + 1;
+  for (TetSplit split : {TetSplit::paper, TetSplit::mirrored}) {
+    const VolumeMesh m = box_tets(res, split);
+    EXPECT_GT(rest_volumes(compute_rest_state(m)).minCoeff(), 0.0);
+    const auto original = tet_set(m, [](int v) { return v; });
+    for (int axis = 0; axis < 3; ++axis) {
+      const auto mirrored = tet_set(m, [&](int v) {
+        int ijk[3] = {v % n, (v / n) % n, v / (n * n)};
+        ijk[axis] = res - ijk[axis];
+        return lattice_index(res, ijk[0], ijk[1], ijk[2]);
+      });
+      if (split == TetSplit::mirrored) EXPECT_EQ(mirrored, original) << "axis " << axis;
+      else EXPECT_NE(mirrored, original) << "the paper's split is not mirror symmetric (axis " << axis << ")";
+    }
+  }
+}
 TEST(Surface, HexBoxIsClosedAndOutward) { check_surface(box_hexes(3), 3); }
 
 }  // namespace

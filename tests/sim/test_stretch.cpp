@@ -48,9 +48,11 @@ Eigen::Matrix3Xd read_obj_vertices(const fs::path& path, int* faces = nullptr) {
   return out;
 }
 
-StretchResult run(CellType element, const fs::path& out, double tolerance, int steps = 25, double stretch = 3.5) {
+StretchResult run(CellType element, const fs::path& out, double tolerance, int steps = 25, double stretch = 3.5,
+                  TetSplit split = TetSplit::paper) {
   StretchConfig c;
   c.element = element;
+  c.tet_split = split;
   c.resolution = 4;
   c.steps = steps;
   c.stretch = stretch;
@@ -60,33 +62,12 @@ StretchResult run(CellType element, const fs::path& out, double tolerance, int s
   return run_stretch(c, log);
 }
 
-class Stretch : public ::testing::TestWithParam<CellType> {};
-
-TEST_P(Stretch, ConvergesEveryStepAndThinsInTheMiddle) {
-  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_paper");
-  const StretchResult r = run(GetParam(), out, 1e-3);
-  ASSERT_TRUE(r.all_converged);
-  ASSERT_EQ(r.steps.size(), 25u);
-  for (const auto& s : r.steps) {
-    EXPECT_TRUE(s.converged);
-    EXPECT_LT(s.residual * s.residual, 1e-6);  // the paper's ‖f‖² < 1e-6
-    EXPECT_GT(s.min_J, 0.0);
-    EXPECT_EQ(s.inverted, 0);
-  }
-  EXPECT_LT(r.middle_width, 1.5);  // from 2 at rest; ≈ 1.01 at res 4, ≈ 1.06 at res 10 (PAPER_CODE.md)
-  EXPECT_GT(r.middle_width, 0.5);
-  EXPECT_TRUE(fs::exists(out / "stats.json"));
-  EXPECT_TRUE(fs::exists(out / "stats.csv"));
-  fs::remove_all(out);
-}
-
-TEST_P(Stretch, SolutionIsSymmetric) {
-  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_sym");
-  const StretchResult r = run(GetParam(), out, 1e-10, 5, 2.0);
-  ASSERT_TRUE(r.all_converged);
-  const Eigen::Matrix3Xd X = read_obj_vertices(out / "005.obj");
-  const int res = 4;
+/// Largest mismatch of the lattice positions X under each symmetry of the stretch test.
+struct Symmetry {
   double mirror_x = 0, mirror_z = 0, inversion = 0, swap_xz = 0;
+};
+Symmetry measure_symmetry(const Eigen::Matrix3Xd& X, int res) {
+  Symmetry m;
   for (int k = 0; k <= res; ++k)
     for (int j = 0; j <= res; ++j)
       for (int i = 0; i <= res; ++i) {
@@ -95,23 +76,66 @@ TEST_P(Stretch, SolutionIsSymmetric) {
         const Eigen::Vector3d mz = X.col(lattice_index(res, i, j, res - k));
         const Eigen::Vector3d inv = X.col(lattice_index(res, res - i, res - j, res - k));
         const Eigen::Vector3d sw = X.col(lattice_index(res, k, j, i));
-        mirror_x = std::max(mirror_x, (p - Eigen::Vector3d(-mx[0], mx[1], mx[2])).norm());
-        mirror_z = std::max(mirror_z, (p - Eigen::Vector3d(mz[0], mz[1], -mz[2])).norm());
-        inversion = std::max(inversion, (p + inv).norm());
-        swap_xz = std::max(swap_xz, (p - Eigen::Vector3d(sw[2], sw[1], sw[0])).norm());
+        m.mirror_x = std::max(m.mirror_x, (p - Eigen::Vector3d(-mx[0], mx[1], mx[2])).norm());
+        m.mirror_z = std::max(m.mirror_z, (p - Eigen::Vector3d(mz[0], mz[1], -mz[2])).norm());
+        m.inversion = std::max(m.inversion, (p + inv).norm());
+        m.swap_xz = std::max(m.swap_xz, (p - Eigen::Vector3d(sw[2], sw[1], sw[0])).norm());
       }
-  // OBJ values carry 10 significant digits.
-  if (GetParam() == CellType::hex8) {
-    EXPECT_LT(mirror_x, 1e-8);
-    EXPECT_LT(mirror_z, 1e-8);
-  } else {
-    // The 6-tet split around each cell's c0–c7 diagonal is not mirror symmetric, but it is symmetric
-    // under central inversion and under exchanging x and z: those hold exactly, the mirrors nearly.
-    // (The mirror asymmetry is a discretization effect of that split that shrinks with resolution:
-    // measured at step 25, 0.51 at res 4 and 0.14 at res 10, at the corners next to the pulled layers.)
-    EXPECT_LT(inversion, 1e-8);
-    EXPECT_LT(swap_xz, 1e-8);
+  return m;
+}
+
+/// Every step converged to the paper's ‖f‖² < 1e-6 with no inverted element.
+void expect_every_step_converged(const StretchResult& r) {
+  ASSERT_TRUE(r.all_converged);
+  ASSERT_EQ(r.steps.size(), 25u);
+  for (const auto& s : r.steps) {
+    EXPECT_TRUE(s.converged);
+    EXPECT_LT(s.residual * s.residual, 1e-6);  // the paper's ‖f‖² < 1e-6
+    EXPECT_GT(s.min_J, 0.0);
+    EXPECT_EQ(s.inverted, 0);
   }
+}
+
+class Stretch : public ::testing::TestWithParam<CellType> {};
+
+// The paper's test at res 4: every step converges, the middle thins, and the solution has the
+// symmetries of the mesh. Symmetric vertices agree to 1e-6 (OBJ values carry 10 significant digits;
+// Newton stops at ‖f‖ < 1e-3, so rounding differences between symmetric vertices are not corrected and
+// the extrapolated guesses carry them on for 25 steps: about 1e-8 measured). A mesh that lacks a
+// symmetry is off by about 0.5.
+TEST_P(Stretch, ConvergesEveryStepThinsInTheMiddleAndIsSymmetric) {
+  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_paper");
+  const StretchResult r = run(GetParam(), out, 1e-3);
+  expect_every_step_converged(r);
+  EXPECT_LT(r.middle_width, 1.5);  // from 2 at rest; ≈ 1.01 at res 4, ≈ 1.06 at res 10 (PAPER_CODE.md)
+  EXPECT_GT(r.middle_width, 0.5);
+  EXPECT_TRUE(fs::exists(out / "stats.json"));
+  EXPECT_TRUE(fs::exists(out / "stats.csv"));
+  const Symmetry m = measure_symmetry(read_obj_vertices(out / "025.obj"), 4);
+  if (GetParam() == CellType::hex8) {
+    EXPECT_LT(m.mirror_x, 1e-6);
+    EXPECT_LT(m.mirror_z, 1e-6);
+  } else {
+    // The paper's 6-tet split around each cell's c0–c7 diagonal is not mirror symmetric, but it is
+    // symmetric under central inversion and under exchanging x and z: those hold exactly. The mirror
+    // mismatch is a discretization effect of that split (0.51 at res 4, 0.14 at res 10); with the
+    // mirrored split (next test) the mirrors hold exactly.
+    EXPECT_LT(m.inversion, 1e-6);
+    EXPECT_LT(m.swap_xz, 1e-6);
+    EXPECT_GT(m.mirror_x, 1e-2);
+    std::cout << "tet mirror mismatch " << m.mirror_x << ", inversion " << m.inversion << ", x-z swap " << m.swap_xz << "\n";
+  }
+  fs::remove_all(out);
+}
+
+TEST(StretchMirroredTets, ConvergesEveryStepAndIsMirrorSymmetricInXAndZ) {
+  const fs::path out = fresh_dir("tet_mirrored");
+  const StretchResult r = run(CellType::tet4, out, 1e-3, 25, 3.5, TetSplit::mirrored);
+  expect_every_step_converged(r);
+  EXPECT_LT(r.middle_width, 1.5);
+  const Symmetry m = measure_symmetry(read_obj_vertices(out / "025.obj"), 4);
+  EXPECT_LT(m.mirror_x, 1e-6);
+  EXPECT_LT(m.mirror_z, 1e-6);
   fs::remove_all(out);
 }
 

@@ -49,7 +49,7 @@ VolumeMesh box_hexes(int res) {
   return m;
 }
 
-VolumeMesh box_tets(int res) {
+VolumeMesh box_tets(int res, TetSplit split) {
   static constexpr int kTemplates[6][4] = {{7, 4, 0, 5}, {7, 6, 0, 4}, {7, 5, 0, 1},
                                            {7, 2, 0, 6}, {7, 1, 0, 3}, {7, 3, 0, 2}};
   VolumeMesh m;
@@ -61,8 +61,11 @@ VolumeMesh box_tets(int res) {
     for (int j = 0; j < res; ++j)
       for (int i = 0; i < res; ++i) {
         const auto corners = cell_corners(res, i, j, k);
+        const int flip = split == TetSplit::mirrored
+                             ? (2 * i >= res ? 1 : 0) | (2 * j >= res ? 2 : 0) | (2 * k >= res ? 4 : 0)
+                             : 0;
         for (const auto& t : kTemplates) {
-          Eigen::Vector4i tet(corners[t[0]], corners[t[1]], corners[t[2]], corners[t[3]]);
+          Eigen::Vector4i tet(corners[t[0] ^ flip], corners[t[1] ^ flip], corners[t[2] ^ flip], corners[t[3] ^ flip]);
           Eigen::Matrix3d Dm;
           for (int a = 0; a < 3; ++a) Dm.col(a) = m.vertices.col(tet[a + 1]) - m.vertices.col(tet[0]);
           if (Dm.determinant() < 0.0) std::swap(tet[2], tet[3]);

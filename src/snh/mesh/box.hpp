@@ -16,9 +16,19 @@ namespace snh {
 ///   res  cells per side, ≥ 1
 [[nodiscard]] VolumeMesh box_hexes(int res);
 
+/// How box_tets cuts each lattice cell into six tets.
+enum class TetSplit {
+  paper,     ///< every cell around its c0–c7 diagonal (tetcli's mesh): symmetric under central
+             ///< inversion and x↔z exchange, but not under a mirror in one axis
+  mirrored,  ///< cells in the upper half along an axis use the template mirrored in that axis: for even
+             ///< res the mesh is mirror symmetric in x, y and z (still conforming)
+};
+
 /// 6 res³ tetrahedra: each lattice cell cut around its c0–c7 diagonal with the corner templates
 /// {7,4,0,5} {7,6,0,4} {7,5,0,1} {7,2,0,6} {7,1,0,3} {7,3,0,2}; a tet with negative rest volume gets its
 /// last two vertices swapped (tetcli's mesh). Cells in lattice order, six per cell in template order.
-[[nodiscard]] VolumeMesh box_tets(int res);
+/// With TetSplit::mirrored, a cell (i, j, k) with 2i ≥ res (likewise j, k) exchanges its corners
+/// across the x mid-plane (c ↦ c xor 1; y: xor 2, z: xor 4) before the templates apply.
+[[nodiscard]] VolumeMesh box_tets(int res, TetSplit split = TetSplit::paper);
 
 }  // namespace snh

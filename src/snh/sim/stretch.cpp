@@ -69,6 +69,7 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   j["stretch"] = c.stretch;
   j["solver"] = std::string(to_string(c.solver));
   j["reuse_factor"] = c.reuse_factor;
+  if (c.element == CellType::tet4) j["tet_split"] = c.tet_split == TetSplit::paper ? "paper" : "mirrored";
   j["tolerance"] = c.newton.tolerance;
   j["vertices"] = r.vertices;
   j["cells"] = r.cells;
@@ -130,7 +131,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   validate(c);
   const auto t_start = Clock::now();
   const int res = c.resolution;
-  VolumeMesh mesh = c.element == CellType::tet4 ? box_tets(res) : box_hexes(res);
+  VolumeMesh mesh = c.element == CellType::tet4 ? box_tets(res, c.tet_split) : box_hexes(res);
   const Eigen::Matrix3Xi surface = boundary_triangles(mesh);
 
   // Kinematic vertices: the j = 0 and j = res layers, all three coordinates.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "snh/material/lame.hpp"
+#include "snh/mesh/box.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 #include "snh/solve/linear_solver.hpp"
 #include "snh/solve/newton.hpp"
@@ -17,6 +18,7 @@ namespace snh {
 struct StretchConfig {
   CellType element = CellType::tet4;
   int resolution = 10;                    ///< cells per side
+  TetSplit tet_split = TetSplit::paper;   ///< how tets cut the lattice cells (box.hpp)
   std::string material = "stable_neo_hookean";
   Lame params{1.0, 10.0};
   bool reparametrize = false;             ///< params are linear μ_L, λ_L (MATH.md §2)
