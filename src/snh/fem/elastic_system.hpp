@@ -10,16 +10,14 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
+#include "snh/fem/objective.hpp"
 #include "snh/fem/rest_state.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 
 namespace snh {
 
-/// The lower triangle of the symmetric free-DOF Hessian, column-major (the form CHOLMOD takes).
-using SparseLower = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
-
-class ElasticSystem {
+class ElasticSystem final : public Objective {
  public:
   /// mesh      the rest mesh (copied)
   /// material  the energy density (copied)
@@ -28,7 +26,7 @@ class ElasticSystem {
 
   /// Total energy Σ_e Σ_q w_q ψ(F_q); +∞ if any element is outside its energy's domain.
   ///   x  deformed positions, 3 #V (x y z per vertex)
-  [[nodiscard]] double energy(const Eigen::VectorXd& x) const;
+  [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
 
   /// Energy, gradient on the free DOFs and (optionally) the projected Hessian on the free DOFs.
   /// Uses internal buffers: do not call evaluate() concurrently on the same system.
@@ -36,10 +34,10 @@ class ElasticSystem {
   ///   hessian   nullptr to skip; otherwise overwritten in the fixed pattern (pattern() layout)
   /// Returns the energy (+∞ if undefined anywhere; gradient and Hessian are then not meaningful).
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, SparseLower* hessian,
-                  PsdProjection projection = PsdProjection::clamp) const;
+                  PsdProjection projection = PsdProjection::clamp) const override;
 
   /// An empty matrix with the fixed sparsity pattern of the free-DOF Hessian.
-  [[nodiscard]] const SparseLower& pattern() const { return pattern_; }
+  [[nodiscard]] const SparseLower& pattern() const override { return pattern_; }
 
   [[nodiscard]] Eigen::Index free_count() const { return free_count_; }
   /// Free index of each DOF, −1 where fixed.
@@ -52,7 +50,7 @@ class ElasticSystem {
   /// Gathers the free entries of a full DOF vector.
   [[nodiscard]] Eigen::VectorXd gather_free(const Eigen::VectorXd& full) const;
   /// Adds a free-DOF vector into a full DOF vector: full[d] += scale · free[free_index[d]].
-  void scatter_add_free(const Eigen::VectorXd& free, double scale, Eigen::VectorXd& full) const;
+  void scatter_add_free(const Eigen::VectorXd& free, double scale, Eigen::VectorXd& full) const override;
 
   /// Loops with less work than this many quadrature points (element loops; scatters count one per
   /// node) run on one thread: for small meshes waking threads (and, when other processes compete for

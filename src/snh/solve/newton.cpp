@@ -11,7 +11,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-NewtonReport newton_iterations(const ElasticSystem& system, Eigen::VectorXd& x, LinearSolver& solver,
+NewtonReport newton_iterations(const Objective& system, Eigen::VectorXd& x, LinearSolver& solver,
                                const NewtonOptions& options) {
   NewtonReport report;
   Eigen::VectorXd g;
@@ -115,7 +115,7 @@ NewtonReport newton_iterations(const ElasticSystem& system, Eigen::VectorXd& x, 
 
 }  // namespace
 
-NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, LinearSolver& solver,
+NewtonReport newton_solve(const Objective& system, Eigen::VectorXd& x, LinearSolver& solver,
                           const NewtonOptions& options) {
   const int factorizations = solver.factorizations();
   NewtonReport report = newton_iterations(system, x, solver, options);

@@ -17,7 +17,7 @@
 
 #include <Eigen/Core>
 
-#include "snh/fem/elastic_system.hpp"
+#include "snh/fem/objective.hpp"
 #include "snh/solve/linear_solver.hpp"
 
 namespace snh {
@@ -47,9 +47,10 @@ struct NewtonReport {
   std::string failure;            ///< why it stopped without converging (empty when converged)
 };
 
-/// Minimises the elastic energy over the free DOFs of x (fixed DOFs keep their values).
+/// Minimises the objective (the elastic energy, or a time step's incremental potential) over the free
+/// DOFs of x (fixed DOFs keep their values).
 ///   x  full DOF vector (3 #V); on return, the last accepted iterate
-[[nodiscard]] NewtonReport newton_solve(const ElasticSystem& system, Eigen::VectorXd& x, LinearSolver& solver,
+[[nodiscard]] NewtonReport newton_solve(const Objective& system, Eigen::VectorXd& x, LinearSolver& solver,
                                         const NewtonOptions& options = {});
 
 }  // namespace snh
