@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <string>
 
 #include <fmt/format.h>
@@ -11,24 +10,14 @@
 #include "snh/fem/elastic_system.hpp"
 #include "snh/fem/quality.hpp"
 #include "snh/io/atomic_file.hpp"
-#include "snh/io/obj.hpp"
-#include "snh/io/vtu.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/box.hpp"
-#include "snh/mesh/surface.hpp"
+#include "snh/sim/output.hpp"
 
 namespace snh {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-/// Peak resident memory of this process in MiB (VmHWM from /proc/self/status; 0 where unavailable).
-double peak_memory_mib() {
-  std::ifstream in("/proc/self/status");
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // reported in kB
-  return 0.0;
-}
 
 /// Half-length along y of the box at step s.
 double half_length(const StretchConfig& c, int s) { return 1.0 + (c.stretch - 1.0) * s / c.steps; }
@@ -38,22 +27,6 @@ void record_deformation(const ElasticSystem::Deformation& d, double rest_volume,
   st.min_J = d.min_J.minCoeff();
   st.inverted = static_cast<int>((d.min_J.array() <= 0.0).count());
   st.volume_ratio = d.volume / rest_volume;
-}
-
-Eigen::Matrix3Xd as_positions(const Eigen::VectorXd& x) {
-  return Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3);
-}
-
-/// Writes frame s as NNN.obj and NNN.vtu (displacement, per-cell min J) and rewrites the .pvd series.
-void write_frame(const StretchConfig& c, const ElasticSystem& sys, const Eigen::Matrix3Xi& surface, const Eigen::VectorXd& x,
-                 const Eigen::VectorXd& min_J, int s, std::vector<std::pair<double, std::string>>& series) {
-  const Eigen::Matrix3Xd X = as_positions(x);
-  write_obj(c.out / fmt::format("{:03d}.obj", s), X, surface);
-  if (!c.write_vtu) return;
-  const std::string vtu = fmt::format("{:03d}.vtu", s);
-  write_vtu(c.out / vtu, sys.mesh(), X, {{"displacement", X - sys.mesh().vertices}}, {{"J", min_J}});
-  series.emplace_back(static_cast<double>(s), vtu);
-  write_pvd(c.out / "frames.pvd", series);
 }
 
 void write_stats(const StretchConfig& c, const StretchResult& r) {
@@ -132,7 +105,6 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   const auto t_start = Clock::now();
   const int res = c.resolution;
   VolumeMesh mesh = c.element == CellType::tet4 ? box_tets(res, c.tet_split) : box_hexes(res);
-  const Eigen::Matrix3Xi surface = boundary_triangles(mesh);
 
   // Kinematic vertices: the j = 0 and j = res layers, all three coordinates.
   std::vector<std::uint8_t> fixed(3 * mesh.vertex_count(), 0);
@@ -159,9 +131,9 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   log << "mesh: " << describe(mesh_quality(system.mesh(), system.rest()), mesh.type) << "\n";
 
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
-  std::vector<std::pair<double, std::string>> series;
+  FrameWriter frames(c.out, mesh, c.write_vtu);
   const double rest_volume = rest_volumes(system.rest()).sum();
-  write_frame(c, system, surface, x, Eigen::VectorXd::Ones(mesh.cell_count()), 0, series);
+  frames.write(0, 0.0, x, Eigen::VectorXd::Ones(mesh.cell_count()));
   Eigen::VectorXd previous = x;  // the solution one step back, for extrapolation
 
   for (int s = 1; s <= c.steps; ++s) {
@@ -211,7 +183,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     st.failure = rep.failure;
     const ElasticSystem::Deformation deformed = system.deformation(x);
     record_deformation(deformed, rest_volume, st);
-    write_frame(c, system, surface, x, deformed.min_J, s, series);
+    frames.write(s, s, x, deformed.min_J);
     st.wall_seconds = std::chrono::duration<double>(Clock::now() - t_step).count();
     result.steps.push_back(st);
     log << fmt::format("step {:>3}/{}: {} Newton iterations, |f| = {:.2e}, energy {:.8g}, volume {:.4f}, min J {:.4f}, {:.3f} s{}\n",

@@ -1,0 +1,38 @@
+#pragma once
+// What every run writes (DESIGN.md sim/): frames as NNN.obj (the paper's format: lattice vertices and
+// the boundary triangles) and NNN.vtu with a frames.pvd series for ParaView, each file written
+// atomically; and the process' peak memory for the stats.
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "snh/mesh/volume_mesh.hpp"
+
+namespace snh {
+
+/// Peak resident memory of this process in MiB (VmHWM from /proc/self/status; 0 where unavailable).
+[[nodiscard]] double peak_memory_mib();
+
+class FrameWriter {
+ public:
+  /// mesh: the rest mesh (copied); write_vtu: also NNN.vtu frames and frames.pvd.
+  FrameWriter(std::filesystem::path out, const VolumeMesh& mesh, bool write_vtu);
+  /// Writes frame `index` at `time`: NNN.obj, and NNN.vtu (displacement; per-cell min det F as "J")
+  /// with the .pvd series rewritten to include it.
+  ///   x      deformed positions, 3 #V
+  ///   min_J  per cell
+  void write(int index, double time, const Eigen::VectorXd& x, const Eigen::VectorXd& min_J);
+  [[nodiscard]] const Eigen::Matrix3Xi& surface() const { return surface_; }
+
+ private:
+  std::filesystem::path out_;
+  VolumeMesh mesh_;
+  Eigen::Matrix3Xi surface_;
+  bool write_vtu_;
+  std::vector<std::pair<double, std::string>> series_;
+};
+
+}  // namespace snh
