@@ -7,6 +7,7 @@
 
 #include "../common/omp_env.hpp"
 #include "material_command.hpp"
+#include "run_command.hpp"
 #include "stretch_command.hpp"
 
 int main(int argc, char** argv) {
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   snh::cli::add_material_command(app, exit_code);
   snh::cli::add_stretch_command(app, exit_code);
+  snh::cli::add_run_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
