@@ -1,0 +1,161 @@
+// Time stepping: the incremental potential's derivatives (finite differences), lumped masses, that
+// backward Euler never gains energy without forcing, that damping dissipates, and that a pinned bar under
+// gravity comes to rest at the quasi-static solution.
+#include <gtest/gtest.h>
+
+#include <iostream>
+#include <random>
+#include <sstream>
+
+#include "snh/mesh/box.hpp"
+#include "snh/sim/dynamics.hpp"
+#include "snh/sim/scene.hpp"
+#include "snh/solve/newton.hpp"
+
+namespace snh {
+namespace {
+
+Eigen::VectorXd flatten(const Eigen::Matrix3Xd& X) { return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()); }
+
+TEST(Dynamics, LumpedMassSumsToDensityTimesVolume) {
+  for (CellType type : {CellType::tet4, CellType::hex8}) {
+    const VolumeMesh m = type == CellType::tet4 ? box_tets(3) : box_hexes(3);
+    const ElasticSystem sys(m, make_material("stable_neo_hookean", {1, 10}), std::vector<std::uint8_t>(3 * m.vertex_count(), 0));
+    const Eigen::VectorXd mass = lumped_mass(sys, 2.5);
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(mass(Eigen::seqN(a, m.vertex_count(), 3)).sum(), 2.5 * 8.0, 1e-12);
+    EXPECT_GT(mass.minCoeff(), 0.0);
+  }
+  const VolumeMesh m = box_hexes(1);
+  const ElasticSystem sys(m, make_material("stable_neo_hookean", {1, 10}), std::vector<std::uint8_t>(24, 0));
+  EXPECT_THROW((void)lumped_mass(sys, 0.0), std::invalid_argument);
+}
+
+TEST(Dynamics, IncrementalPotentialMatchesFiniteDifferences) {
+  for (CellType type : {CellType::tet4, CellType::hex8}) {
+    const VolumeMesh m = type == CellType::tet4 ? box_tets(2) : box_hexes(2);
+    std::vector<std::uint8_t> fixed(3 * m.vertex_count(), 0);
+    for (int d = 0; d < 6; ++d) fixed[d] = 1;
+    const ElasticSystem sys(m, make_material("stable_neo_hookean", {1.0, 10.0}), fixed);
+    StepTerms terms{.dt = 0.05, .gravity = Eigen::Vector3d(0.3, -9.8, 1.0), .mass_damping = 0.7, .stiffness_damping = 0.02};
+    TimeStepPotential pot(sys, lumped_mass(sys, 3.0), terms);
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> n(0.0, 0.05);
+    Eigen::VectorXd x_n = flatten(m.vertices), v_n(x_n.size()), x(x_n.size());
+    for (Eigen::Index i = 0; i < x_n.size(); ++i) {
+      x_n[i] = 1.05 * x_n[i] + n(rng);
+      v_n[i] = 10 * n(rng);
+      x[i] = x_n[i] + n(rng);
+    }
+    pot.begin_step(x_n, v_n);
+    Eigen::VectorXd g;
+    SparseLower H;
+    pot.evaluate(x, g, &H, PsdProjection::none);
+    EXPECT_DOUBLE_EQ(pot.energy(x), pot.evaluate(x, g, nullptr, PsdProjection::none));
+    const Eigen::MatrixXd Hfull = Eigen::MatrixXd(H).selfadjointView<Eigen::Lower>();
+    double best_g = 1e300, best_H = 1e300;
+    for (double eps : {1e-3, 1e-4, 1e-5}) {
+      Eigen::VectorXd fd_g(g.size());
+      Eigen::MatrixXd fd_H(g.size(), g.size());
+      for (Eigen::Index d = 0, f = 0; d < x.size(); ++d) {
+        if (fixed[d]) continue;
+        Eigen::VectorXd xp = x, xm = x, gp, gm;
+        xp[d] += eps;
+        xm[d] -= eps;
+        fd_g[f] = (pot.energy(xp) - pot.energy(xm)) / (2 * eps);
+        pot.evaluate(xp, gp, nullptr, PsdProjection::none);
+        pot.evaluate(xm, gm, nullptr, PsdProjection::none);
+        fd_H.col(f++) = (gp - gm) / (2 * eps);
+      }
+      best_g = std::min(best_g, (fd_g - g).norm() / g.norm());
+      best_H = std::min(best_H, (fd_H - Hfull).norm() / Hfull.norm());
+    }
+    EXPECT_LE(best_g, 1e-7);
+    EXPECT_LE(best_H, 1e-7);
+  }
+}
+
+/// A scene in memory, run quietly into a temporary directory.
+SceneResult run_quietly(Scene s, const std::string& name) {
+  s.out = std::filesystem::temp_directory_path() / ("snh_test_dyn_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(s.out);
+  std::ostringstream log;
+  SceneResult r = run_scene(s, log);
+  std::filesystem::remove_all(s.out);
+  return r;
+}
+
+Scene free_cube(const std::string& material) {
+  Scene s;
+  s.source = "free_cube";
+  s.element = CellType::hex8;
+  s.resolution = 3;
+  s.material = material;
+  s.params = {1.0, 10.0};
+  s.dt = 0.02;
+  s.end_time = 2.0;
+  s.frames = 40;
+  s.initial.push_back({.kind = InitialOp::Kind::scale, .vector = Eigen::Vector3d(1.3, 0.9, 1.1)});
+  s.write_vtu = false;
+  return s;
+}
+
+TEST(Dynamics, BackwardEulerNeverGainsEnergyWithoutForcing) {
+  for (const char* material : {"stable_neo_hookean", "neo_hookean", "corotated"}) {
+    const SceneResult r = run_quietly(free_cube(material), material);
+    ASSERT_TRUE(r.all_converged) << material << ": " << r.failure;
+    ASSERT_EQ(r.frames.size(), 41u);
+    for (std::size_t f = 1; f < r.frames.size(); ++f)
+      EXPECT_LE(r.frames[f].total_energy, r.frames[f - 1].total_energy + 1e-9) << material << " frame " << f;
+    // It moves (kinetic energy appears) and dissipates part of its starting energy, but not all at once.
+    double peak_kinetic = 0.0;
+    for (const auto& f : r.frames) peak_kinetic = std::max(peak_kinetic, f.kinetic_energy);
+    EXPECT_GT(peak_kinetic, 0.05 * r.frames[0].total_energy) << material;
+    EXPECT_LT(r.frames.back().total_energy, r.frames[0].total_energy) << material;
+  }
+}
+
+TEST(Dynamics, DampingDissipatesFaster) {
+  Scene plain = free_cube("stable_neo_hookean"), damped = plain;
+  damped.mass_damping = 2.0;
+  damped.stiffness_damping = 0.05;
+  const SceneResult a = run_quietly(plain, "plain"), b = run_quietly(damped, "damped");
+  ASSERT_TRUE(a.all_converged && b.all_converged);
+  EXPECT_LT(b.frames.back().total_energy, 0.5 * a.frames.back().total_energy);
+  // The free cube comes to rest at its rest volume (stable Neo-Hookean: rest stable).
+  EXPECT_NEAR(b.frames.back().volume_ratio, 1.0, 1e-3);
+}
+
+TEST(Dynamics, PinnedBarUnderGravitySettlesAtTheQuasiStaticSolution) {
+  Scene s;
+  s.source = "bar";
+  s.element = CellType::hex8;
+  s.resolution = 3;
+  s.box_min = Eigen::Vector3d(0, -0.25, -0.25);
+  s.box_max = Eigen::Vector3d(2, 0.25, 0.25);
+  s.params = {300.0, 1200.0};
+  s.density = 1.0;
+  s.gravity = Eigen::Vector3d(0, -9.81, 0);
+  s.pins.push_back({.select = {.region = Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, -1), Eigen::Vector3d(0, 1, 1))}});
+  s.write_vtu = false;
+  s.newton.tolerance = 1e-8;
+  Scene statics = s;
+  statics.integrator = Integrator::quasi_static;
+  statics.frames = 1;
+  Scene dynamics = s;
+  dynamics.dt = 0.02;
+  dynamics.end_time = 8.0;
+  dynamics.frames = 40;
+  dynamics.mass_damping = 4.0;
+  const SceneResult a = run_quietly(statics, "static"), b = run_quietly(dynamics, "dynamic");
+  ASSERT_TRUE(a.all_converged) << a.failure;
+  ASSERT_TRUE(b.all_converged) << b.failure;
+  const double sag = (a.final_positions - flatten(scene_mesh(s).vertices)).cwiseAbs().maxCoeff();
+  EXPECT_GT(sag, 0.05) << "the bar bends under gravity";
+  std::cout << "bar: sag " << sag << ", dynamic vs static " << (b.final_positions - a.final_positions).cwiseAbs().maxCoeff() << ", kinetic " << b.frames.back().kinetic_energy << "\n";
+  EXPECT_LT((b.final_positions - a.final_positions).cwiseAbs().maxCoeff(), 1e-5 * sag)
+      << "the damped motion settles where the quasi-static solve puts it";
+  EXPECT_LT(b.frames.back().kinetic_energy, 1e-8);
+}
+
+}  // namespace
+}  // namespace snh
