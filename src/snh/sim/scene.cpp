@@ -365,6 +365,12 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
       Keys p((*pins)[i], path, file);
       PinSet pin;
       pin.select = parse_selection(p, file);
+      if (const json* axes = p.get("axes")) {
+        if (!axes->is_string() || axes->get<std::string>().empty() ||
+            axes->get<std::string>().find_first_not_of("xyz") != std::string::npos)
+          p.fail("expected the held coordinates as letters, e.g. \"xyz\" or \"x\", got " + axes->dump(), "axes");
+        for (int a = 0; a < 3; ++a) pin.axes[a] = axes->get<std::string>().find(char('x' + a)) != std::string::npos;
+      }
       if (const json* motions = p.get("motion")) {
         if (!motions->is_array()) p.fail("expected an array of motions", "motion");
         for (std::size_t k = 0; k < motions->size(); ++k)
@@ -381,6 +387,9 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
       s.initial.push_back(parse_initial((*initial)[i], fmt::format("initial[{}]", i), file));
   }
 
+  // Dynamics resolves small forces (a perturbed, crushed mesh starts with forces near 1e-6): a stricter
+  // default than the stretch test's 1e-3.
+  s.newton.tolerance = 1e-6;
   if (const json* solver = top.get("solver")) {
     Keys k(*solver, "solver", file);
     s.solver = *parse_linear_solver(k.choice("linear", "cholmod", {"cholmod", "ldlt", "pcg"}));
@@ -477,7 +486,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
     for (std::size_t k = 0; k < pin_vertices.back().size(); ++k) {
       const int v = pin_vertices.back()[k];
       base.col(static_cast<Eigen::Index>(k)) = X0.col(v);
-      fixed[3 * v] = fixed[3 * v + 1] = fixed[3 * v + 2] = 1;
+      for (int a = 0; a < 3; ++a)
+        if (s.pins[i].axes[a]) fixed[3 * v + a] = 1;
     }
     pin_base.push_back(std::move(base));
   }
@@ -485,7 +495,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
     for (std::size_t i = 0; i < s.pins.size(); ++i) {
       const Eigen::Matrix3Xd P = pin_targets(s.pins[i], pin_base[i], t);
       for (std::size_t k = 0; k < pin_vertices[i].size(); ++k)
-        state.segment<3>(3 * pin_vertices[i][k]) = P.col(static_cast<Eigen::Index>(k));
+        for (int a = 0; a < 3; ++a)
+          if (s.pins[i].axes[a]) state[3 * pin_vertices[i][k] + a] = P(a, static_cast<Eigen::Index>(k));
     }
   };
 

@@ -2,6 +2,7 @@
 // Scenes (DESIGN.md sim/): a JSON file describing a mesh, a material, an integrator, pins with scripted
 // motion and an initial deformation, run by `snh run SCENE.json`. The format is in the README
 // ("Scene files"); every key is checked, and an unknown key or a bad value is an error that names it.
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -44,6 +45,7 @@ struct Motion {
 
 struct PinSet {
   Selection select;
+  std::array<bool, 3> axes{true, true, true};  ///< the coordinates held (x, y, z); the others slide freely
   std::vector<Motion> motions;  ///< composed in order
 };
 
@@ -85,7 +87,7 @@ struct Scene {
   // Solver.
   LinearSolverKind solver = LinearSolverKind::cholmod;
   bool reuse_factor = true;
-  NewtonOptions newton;
+  NewtonOptions newton;  ///< tolerance 1e-6 on ‖g‖ unless the file says otherwise
   // Output.
   std::filesystem::path out;  ///< default output/<file stem>
   bool write_vtu = true;

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Every scene in scenes/ runs to its end with `snh run` (exit 0), writing its frames and stats; and
+# `snh run` reports bad scene files in one line with exit code 2.
+# Usage: test_scenes.sh SNH SCENES_DIR
+set -u
+SNH="$1" SCENES="$2"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+pass=0 fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+
+for scene in "$SCENES"/*.json; do
+  name="$(basename "$scene" .json)"
+  if "$SNH" run "$scene" --out "$work/$name" > "$work/$name.log" 2>&1; then ok; else bad "$name: $(tail -3 "$work/$name.log")"; fi
+  [ -f "$work/$name/000.obj" ] && [ -f "$work/$name/stats.json" ] && [ -f "$work/$name/stats.csv" ] && [ -f "$work/$name/frames.pvd" ] \
+    && ok || bad "$name: output files"
+  grep -q '"all_converged": true' "$work/$name/stats.json" && ok || bad "$name: stats.json all_converged"
+done
+
+# Bad scene files: one line naming the file and key, exit code 2.
+printf '{"gravty": [0, -9.8, 0]}' > "$work/typo.json"
+out="$("$SNH" run "$work/typo.json" --out "$work/t" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -q "typo.json: gravty: unknown key" \
+  && ok || bad "typo (exit $code): $out"
+out="$("$SNH" run "$work/missing.json" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "missing.json: cannot open the scene file" && ok || bad "missing (exit $code): $out"
+# A start outside the energy's domain: reported, exit code 1, frame 0 kept.
+printf '{"mesh": {"box": {"res": 2}}, "material": {"name": "neo_hookean"}, "initial": [{"type": "reflect"}]}' > "$work/inv.json"
+out="$("$SNH" run "$work/inv.json" --out "$work/inv" 2>&1)"; code=$?
+[ "$code" -eq 1 ] && printf '%s' "$out" | grep -q "initial state is outside the domain of neo_hookean" && [ -f "$work/inv/000.obj" ] \
+  && ok || bad "inverted start (exit $code): $out"
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
