@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "../common/omp_env.hpp"
+#include "lab_command.hpp"
 #include "material_command.hpp"
 #include "run_command.hpp"
 #include "stretch_command.hpp"
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
   snh::cli::add_material_command(app, exit_code);
   snh::cli::add_stretch_command(app, exit_code);
   snh::cli::add_run_command(app, exit_code);
+  snh::cli::add_lab_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
