@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Every scene in scenes/ runs to its end with `snh run` (exit 0), writing its frames and stats; and
-# `snh run` reports bad scene files in one line with exit code 2.
+# Every scene in scenes/ runs to its end with `snh run` (exit 0), writing its frames and stats;
+# `snh run` reports bad scene files in one line with exit code 2; `snh lab` prints and writes its report.
 # Usage: test_scenes.sh SNH SCENES_DIR
 set -u
 SNH="$1" SCENES="$2"
@@ -30,6 +30,14 @@ printf '{"mesh": {"box": {"res": 2}}, "material": {"name": "neo_hookean"}, "init
 out="$("$SNH" run "$work/inv.json" --out "$work/inv" 2>&1)"; code=$?
 [ "$code" -eq 1 ] && printf '%s' "$out" | grep -q "initial state is outside the domain of neo_hookean" && [ -f "$work/inv/000.obj" ] \
   && ok || bad "inverted start (exit $code): $out"
+
+# snh lab: tables by default, JSON with --json, lab.json and the runs' frames written.
+out="$("$SNH" lab --quick --energy stable_neo_hookean --out "$work/lab" 2>/dev/null)"; code=$?
+[ "$code" -eq 0 ] && printf '%s' "$out" | grep -q "^stable_neo_hookean .*stays at rest" && [ -f "$work/lab/lab.json" ] \
+  && [ -f "$work/lab/degeneracy/below_trap/stable_neo_hookean/stats.json" ] && ok || bad "snh lab (exit $code): $out"
+"$SNH" lab --quick --energy psi_d --json --out "$work/lab2" 2>/dev/null | grep -q '"energies": \[' && ok || bad "snh lab --json"
+out="$("$SNH" lab --energy bogus 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "^snh: error: --energy" && ok || bad "lab bad energy (exit $code): $out"
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
