@@ -291,6 +291,7 @@ std::vector<StretchRow> lab_stretch(const LabOptions& o) {
       // Near incompressibility the symmetric state at 3.5x can be a saddle that projected Newton leaves only
       // slowly (README, stretch test): allow more iterations than the paper's 50.
       c.newton.max_iterations = 200;
+      c.solver = LinearSolverKind::ldlt;  // as the scenes: no BLAS threads competing with the parallel runs
       c.out = o.out / "stretch" / fmt::format("nu_{}", nu) / e;
       // Reparametrized where the energy has a reparametrization, so that ν means the same for all.
       try {
