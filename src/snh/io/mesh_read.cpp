@@ -1,0 +1,523 @@
+#include "snh/io/mesh_read.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string_view>
+#include <unordered_map>
+
+#include <fmt/format.h>
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string read_all(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw MeshError(fmt::format("{}: cannot open the mesh file", path.string()));
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Whitespace-separated tokens with line numbers; `comment` starts a comment to the end of the line.
+class Lexer {
+ public:
+  Lexer(const fs::path& file, std::string text, char comment = '\0')
+      : file_(file.string()), text_(std::move(text)), comment_(comment) {}
+  [[noreturn]] void fail(const std::string& what, int line = -1) const {
+    throw MeshError(fmt::format("{}:{}: {}", file_, line < 0 ? line_ : line, what));
+  }
+  /// The next token, or an empty view at the end.
+  std::string_view next() {
+    skip();
+    const std::size_t start = pos_;
+    while (pos_ < text_.size() && !std::isspace(static_cast<unsigned char>(text_[pos_])) && text_[pos_] != comment_) ++pos_;
+    token_line_ = line_;
+    return std::string_view(text_).substr(start, pos_ - start);
+  }
+  bool at_end() {
+    skip();
+    return pos_ >= text_.size();
+  }
+  std::string_view word(const char* what) {
+    const std::string_view t = next();
+    if (t.empty()) fail(fmt::format("the file ends where {} was expected", what));
+    return t;
+  }
+  long long integer(const char* what) {
+    const std::string_view t = word(what);
+    long long v = 0;
+    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (ec != std::errc() || end != t.data() + t.size()) fail(fmt::format("expected {} (an integer), got '{}'", what, t));
+    return v;
+  }
+  long long count(const char* what, long long max = 1LL << 31) {
+    const long long n = integer(what);
+    if (n < 0 || n > max) fail(fmt::format("{} must be from 0 to {}, got {}", what, max, n));
+    return n;
+  }
+  double number(const char* what) {
+    const std::string_view t = word(what);
+    double v = 0;
+    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (ec == std::errc::result_out_of_range) fail(fmt::format("{} is out of range: '{}'", what, t));
+    if (ec != std::errc() || end != t.data() + t.size()) fail(fmt::format("expected {} (a number), got '{}'", what, t));
+    if (!std::isfinite(v)) fail(fmt::format("{} is not finite: '{}'", what, t));
+    return v;
+  }
+  void skip_line() {
+    while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+  }
+  int line() const { return token_line_; }
+  const std::string& file() const { return file_; }
+
+ private:
+  void skip() {
+    while (pos_ < text_.size()) {
+      const char c = text_[pos_];
+      if (c == '\n') {
+        ++line_;
+        ++pos_;
+      } else if (std::isspace(static_cast<unsigned char>(c))) {
+        ++pos_;
+      } else if (comment_ != '\0' && c == comment_) {
+        skip_line();
+      } else {
+        break;
+      }
+    }
+  }
+  std::string file_, text_;
+  char comment_;
+  std::size_t pos_ = 0;
+  int line_ = 1, token_line_ = 1;
+};
+
+/// Collects vertices and cells of one type; maps file vertex ids to indices.
+struct Builder {
+  std::vector<double> xyz;
+  std::unordered_map<long long, int> index_of;  ///< file id → index (formats with arbitrary ids)
+  std::optional<CellType> type;
+  std::vector<int> cells;
+  std::vector<int> lines;
+
+  void vertex(Lexer& lx, long long id, double x, double y, double z) {
+    if (!index_of.emplace(id, static_cast<int>(xyz.size() / 3)).second) lx.fail(fmt::format("vertex {} is defined twice", id));
+    xyz.insert(xyz.end(), {x, y, z});
+  }
+  /// Adds a cell from file ids (already in VolumeMesh corner order).
+  void cell(Lexer& lx, CellType t, const std::vector<long long>& ids, int line) {
+    if (type && *type != t)
+      lx.fail(fmt::format("a mesh of both tets and hexes is not supported (this {} follows {})", t == CellType::tet4 ? "tet" : "hex",
+                          *type == CellType::tet4 ? "tets" : "hexes"),
+              line);
+    type = t;
+    for (long long id : ids) {
+      const auto it = index_of.find(id);
+      if (it == index_of.end()) lx.fail(fmt::format("cell refers to vertex {}, which does not exist", id), line);
+      cells.push_back(it->second);
+    }
+    lines.push_back(line);
+  }
+  MeshFile finish(const Lexer& lx) {
+    if (!type) lx.fail("the file has no tetrahedra or hexahedra");
+    MeshFile m;
+    m.mesh.type = *type;
+    m.mesh.vertices = Eigen::Map<const Eigen::Matrix3Xd>(xyz.data(), 3, static_cast<Eigen::Index>(xyz.size() / 3));
+    const int n = nodes_per_cell(*type);
+    m.mesh.cells = Eigen::Map<const Eigen::MatrixXi>(cells.data(), n, static_cast<Eigen::Index>(cells.size() / n));
+    m.cell_lines = lines;
+    return m;
+  }
+};
+
+/// VTK / Gmsh / MEDIT hexahedron order (bottom face around, then top) ↔ VolumeMesh lattice order.
+constexpr int kHexFromVtk[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+
+std::vector<long long> hex_to_lattice(const std::vector<long long>& v) {
+  std::vector<long long> out(8);
+  for (int a = 0; a < 8; ++a) out[a] = v[kHexFromVtk[a]];
+  return out;
+}
+
+// ---- TetGen .node / .ele --------------------------------------------------------------------------
+
+MeshFile read_tetgen(const fs::path& node_path, const fs::path& ele_path) {
+  Builder b;
+  Lexer nodes(node_path, read_all(node_path), '#');
+  const long long n = nodes.count("the number of vertices");
+  const long long dim = nodes.integer("the dimension");
+  if (dim != 3) nodes.fail(fmt::format("only 3D .node files are supported, got dimension {}", dim));
+  const long long attributes = nodes.count("the number of attributes", 1000);
+  const long long markers = nodes.count("the boundary-marker flag", 1);
+  for (long long i = 0; i < n; ++i) {
+    const long long id = nodes.integer("a vertex index");
+    const double x = nodes.number("x"), y = nodes.number("y"), z = nodes.number("z");
+    for (long long a = 0; a < attributes + markers; ++a) (void)nodes.number("a vertex attribute");
+    b.vertex(nodes, id, x, y, z);
+  }
+  if (!nodes.at_end()) nodes.fail(fmt::format("more data than the {} vertices the header announces", n), nodes.line() + 1);
+  Lexer ele(ele_path, read_all(ele_path), '#');
+  const long long m = ele.count("the number of tetrahedra");
+  const long long per = ele.integer("the nodes per tetrahedron");
+  if (per != 4) ele.fail(fmt::format("only linear tetrahedra (4 nodes) are supported, got {} nodes", per));
+  const long long region = ele.count("the region-attribute flag", 1);
+  for (long long i = 0; i < m; ++i) {
+    (void)ele.integer("a tetrahedron index");
+    const int line = ele.line();
+    std::vector<long long> v(4);
+    for (auto& x : v) x = ele.integer("a vertex index");
+    if (region) (void)ele.number("a region attribute");
+    b.cell(ele, CellType::tet4, v, line);
+  }
+  if (!ele.at_end()) ele.fail(fmt::format("more data than the {} tetrahedra the header announces", m), ele.line() + 1);
+  return b.finish(ele);
+}
+
+// ---- MEDIT .mesh ----------------------------------------------------------------------------------
+
+MeshFile read_medit(const fs::path& path) {
+  Lexer lx(path, read_all(path), '#');
+  Builder b;
+  bool dimension_seen = false;
+  // Sections other than vertices, tets and hexes: values per item.
+  const std::map<std::string, int, std::less<>> skipped = {
+      {"Edges", 3},       {"Triangles", 4},       {"Quadrilaterals", 5}, {"Corners", 1},  {"Ridges", 1},
+      {"RequiredVertices", 1}, {"RequiredEdges", 1}, {"RequiredTriangles", 1}, {"Normals", 3}, {"Tangents", 3},
+      {"NormalAtVertices", 2}, {"TangentAtVertices", 2}};
+  for (;;) {
+    const std::string_view key = lx.next();
+    if (key.empty() || key == "End") break;
+    if (key == "MeshVersionFormatted") {
+      const long long v = lx.integer("the format version");
+      if (v != 1 && v != 2) lx.fail(fmt::format("unsupported MeshVersionFormatted {}", v));
+    } else if (key == "Dimension") {
+      const long long d = lx.integer("the dimension");
+      if (d != 3) lx.fail(fmt::format("only 3D meshes are supported, got Dimension {}", d));
+      dimension_seen = true;
+    } else if (key == "Vertices") {
+      const long long n = lx.count("the number of vertices");
+      for (long long i = 0; i < n; ++i) {
+        const double x = lx.number("x"), y = lx.number("y"), z = lx.number("z");
+        (void)lx.integer("a vertex reference");
+        b.vertex(lx, i + 1, x, y, z);
+      }
+    } else if (key == "Tetrahedra" || key == "Hexahedra") {
+      const bool tet = key == "Tetrahedra";
+      const long long n = lx.count(tet ? "the number of tetrahedra" : "the number of hexahedra");
+      for (long long i = 0; i < n; ++i) {
+        std::vector<long long> v(tet ? 4 : 8);
+        for (auto& x : v) x = lx.integer("a vertex index");
+        const int line = lx.line();
+        (void)lx.integer("a cell reference");
+        b.cell(lx, tet ? CellType::tet4 : CellType::hex8, tet ? v : hex_to_lattice(v), line);
+      }
+    } else if (const auto it = skipped.find(key); it != skipped.end()) {
+      const long long n = lx.count("the number of items");
+      for (long long i = 0; i < n * it->second; ++i) (void)lx.number("a value");
+    } else {
+      lx.fail(fmt::format("unknown or unsupported section '{}'", key));
+    }
+  }
+  if (!dimension_seen) lx.fail("no 'Dimension 3' line");
+  return b.finish(lx);
+}
+
+// ---- Gmsh .msh 2.2 and 4.1 ------------------------------------------------------------------------
+
+/// Gmsh element types kept (4: 4-node tet, 5: 8-node hex) and the node counts of those skipped.
+int gmsh_nodes(long long type) {
+  switch (type) {
+    case 15: return 1;  // point
+    case 1: return 2;   // line
+    case 2: return 3;   // triangle
+    case 3: return 4;   // quadrangle
+    case 4: return 4;   // tetrahedron
+    case 5: return 8;   // hexahedron
+    case 6: return 6;   // prism
+    case 7: return 5;   // pyramid
+    default: return -1;
+  }
+}
+
+void gmsh_cell(Lexer& lx, Builder& b, long long type, const std::vector<long long>& v, int line) {
+  if (type == 4) b.cell(lx, CellType::tet4, v, line);
+  else if (type == 5) b.cell(lx, CellType::hex8, hex_to_lattice(v), line);
+  else if (type == 6 || type == 7)
+    lx.fail(fmt::format("{} cells are not supported (tets or hexes only)", type == 6 ? "prism" : "pyramid"), line);
+}
+
+void expect_end(Lexer& lx, const char* section) {
+  const std::string_view t = lx.word(section);
+  if (t != section) lx.fail(fmt::format("expected {}, got '{}' (wrong count before it?)", section, t));
+}
+
+MeshFile read_gmsh(const fs::path& path) {
+  Lexer lx(path, read_all(path));
+  if (lx.word("$MeshFormat") != "$MeshFormat") lx.fail("not a Gmsh file: it must start with $MeshFormat");
+  const std::string_view version = lx.word("the format version");
+  const long long file_type = lx.integer("the file type");
+  (void)lx.integer("the data size");
+  const bool v2 = version.substr(0, 2) == "2.", v4 = version == "4.1";
+  if (!v2 && !v4) lx.fail(fmt::format("unsupported .msh version {} (2.2 and 4.1 are)", version));
+  if (file_type != 0) lx.fail("binary .msh files are not supported yet (save as ASCII)");
+  expect_end(lx, "$EndMeshFormat");
+  Builder b;
+  bool nodes_seen = false, elements_seen = false;
+  for (;;) {
+    const std::string_view section = lx.next();
+    if (section.empty()) break;
+    if (section == "$Nodes") {
+      nodes_seen = true;
+      if (v2) {
+        const long long n = lx.count("the number of nodes");
+        for (long long i = 0; i < n; ++i) {
+          const long long id = lx.integer("a node tag");
+          const double x = lx.number("x"), y = lx.number("y"), z = lx.number("z");
+          b.vertex(lx, id, x, y, z);
+        }
+      } else {
+        const long long blocks = lx.count("the number of entity blocks");
+        (void)lx.count("the number of nodes");
+        (void)lx.integer("the smallest node tag");
+        (void)lx.integer("the largest node tag");
+        for (long long k = 0; k < blocks; ++k) {
+          (void)lx.integer("the entity dimension");
+          (void)lx.integer("the entity tag");
+          const long long parametric = lx.count("the parametric flag", 1);
+          const long long n = lx.count("the nodes in the block");
+          std::vector<long long> tags(n);
+          for (auto& t : tags) t = lx.integer("a node tag");
+          for (long long i = 0; i < n; ++i) {
+            const double x = lx.number("x"), y = lx.number("y"), z = lx.number("z");
+            if (parametric) lx.fail("parametric node coordinates are not supported");
+            b.vertex(lx, tags[i], x, y, z);
+          }
+        }
+      }
+      expect_end(lx, "$EndNodes");
+    } else if (section == "$Elements") {
+      elements_seen = true;
+      if (!nodes_seen) lx.fail("$Elements before $Nodes");
+      if (v2) {
+        const long long n = lx.count("the number of elements");
+        for (long long i = 0; i < n; ++i) {
+          (void)lx.integer("an element tag");
+          const int line = lx.line();
+          const long long type = lx.integer("an element type");
+          const int nodes = gmsh_nodes(type);
+          if (nodes < 0) lx.fail(fmt::format("unsupported element type {} (tets or hexes only)", type));
+          const long long tags = lx.count("the number of tags", 100);
+          for (long long t = 0; t < tags; ++t) (void)lx.integer("a tag");
+          std::vector<long long> v(nodes);
+          for (auto& x : v) x = lx.integer("a node tag");
+          gmsh_cell(lx, b, type, v, line);
+        }
+      } else {
+        const long long blocks = lx.count("the number of entity blocks");
+        (void)lx.count("the number of elements");
+        (void)lx.integer("the smallest element tag");
+        (void)lx.integer("the largest element tag");
+        for (long long k = 0; k < blocks; ++k) {
+          (void)lx.integer("the entity dimension");
+          (void)lx.integer("the entity tag");
+          const long long type = lx.integer("the element type");
+          const int nodes = gmsh_nodes(type);
+          if (nodes < 0) lx.fail(fmt::format("unsupported element type {} (tets or hexes only)", type));
+          const long long n = lx.count("the elements in the block");
+          for (long long i = 0; i < n; ++i) {
+            (void)lx.integer("an element tag");
+            const int line = lx.line();
+            std::vector<long long> v(nodes);
+            for (auto& x : v) x = lx.integer("a node tag");
+            gmsh_cell(lx, b, type, v, line);
+          }
+        }
+      }
+      expect_end(lx, "$EndElements");
+    } else if (section.size() > 1 && section[0] == '$') {  // another section: skip to its end
+      const std::string end = fmt::format("$End{}", section.substr(1));
+      for (;;) {
+        const std::string_view t = lx.next();
+        if (t.empty()) lx.fail(fmt::format("the file ends inside {}", section));
+        if (t == end) break;
+      }
+    } else {
+      lx.fail(fmt::format("expected a section ($Nodes, $Elements, ...), got '{}'", section));
+    }
+  }
+  if (!nodes_seen || !elements_seen) lx.fail("the file has no $Nodes or no $Elements section");
+  return b.finish(lx);
+}
+
+// ---- VTK .vtu (ASCII data arrays) -----------------------------------------------------------------
+
+/// The value of attribute `name` in the tag that starts at `tag`, or "".
+std::string attribute(std::string_view tag, std::string_view name) {
+  const std::string key = fmt::format(" {}=\"", name);
+  const std::size_t at = tag.find(key);
+  if (at == std::string_view::npos) return "";
+  const std::size_t start = at + key.size(), end = tag.find('"', start);
+  return end == std::string_view::npos ? "" : std::string(tag.substr(start, end - start));
+}
+
+MeshFile read_vtu(const fs::path& path) {
+  const std::string text = read_all(path);
+  const std::string file = path.string();
+  auto line_of = [&](std::size_t pos) { return 1 + static_cast<int>(std::count(text.begin(), text.begin() + pos, '\n')); };
+  auto fail = [&](std::size_t pos, const std::string& what) -> void {
+    throw MeshError(fmt::format("{}:{}: {}", file, line_of(pos), what));
+  };
+  if (text.find("<VTKFile") == std::string::npos || text.find("UnstructuredGrid") == std::string::npos)
+    fail(0, "not a VTK UnstructuredGrid (.vtu) file");
+  if (text.find("<AppendedData") != std::string::npos) fail(text.find("<AppendedData"), "appended data is not supported yet (write ASCII)");
+  const std::size_t piece = text.find("<Piece");
+  if (piece == std::string::npos) fail(0, "no <Piece>");
+  const std::string_view piece_tag = std::string_view(text).substr(piece, text.find('>', piece) - piece);
+  long long n_points = -1, n_cells = -1;
+  try {
+    n_points = std::stoll(attribute(piece_tag, "NumberOfPoints"));
+    n_cells = std::stoll(attribute(piece_tag, "NumberOfCells"));
+  } catch (const std::exception&) {
+    fail(piece, "<Piece> needs NumberOfPoints and NumberOfCells");
+  }
+  // The ASCII contents of the DataArray named `name` inside section `section` (or its first one).
+  auto array = [&](const char* section, const char* name, std::size_t& where) {
+    const std::size_t sec = text.find(fmt::format("<{}", section), piece);
+    if (sec == std::string::npos) fail(piece, fmt::format("no <{}> section", section));
+    std::size_t at = sec;
+    for (;;) {
+      at = text.find("<DataArray", at + 1);
+      const std::size_t sec_end = text.find(fmt::format("</{}", section), sec);
+      if (at == std::string::npos || at > sec_end) fail(sec, fmt::format("no DataArray {} in <{}>", name ? name : "", section));
+      const std::string_view tag = std::string_view(text).substr(at, text.find('>', at) - at);
+      if (name && attribute(tag, "Name") != name) continue;
+      const std::string format = attribute(tag, "format");
+      if (format != "ascii") fail(at, fmt::format("DataArray {} has format \"{}\": only ascii is supported yet", name ? name : section, format));
+      const std::size_t start = text.find('>', at) + 1, end = text.find("</DataArray>", start);
+      if (end == std::string::npos) fail(at, "unterminated DataArray");
+      where = start;
+      return std::string_view(text).substr(start, end - start);
+    }
+  };
+  auto numbers = [&](std::string_view body, std::size_t where, long long expected, const char* what) {
+    std::vector<double> out;
+    Lexer lx(path, std::string(body));
+    while (!lx.at_end()) out.push_back(lx.number(what));
+    if (static_cast<long long>(out.size()) != expected)
+      fail(where, fmt::format("{} has {} values, expected {}", what, out.size(), expected));
+    return out;
+  };
+  std::size_t where = 0;
+  const std::vector<double> points = numbers(array("Points", nullptr, where), where, 3 * n_points, "Points");
+  Builder b;
+  Lexer dummy(path, "");
+  for (long long i = 0; i < n_points; ++i) b.vertex(dummy, i, points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+  std::size_t w_off = 0, w_types = 0, w_conn = 0;
+  const std::vector<double> offsets = numbers(array("Cells", "offsets", w_off), w_off, n_cells, "offsets");
+  const std::vector<double> types = numbers(array("Cells", "types", w_types), w_types, n_cells, "types");
+  const std::string_view conn_body = array("Cells", "connectivity", w_conn);
+  const std::vector<double> conn =
+      numbers(conn_body, w_conn, n_cells ? static_cast<long long>(offsets.back()) : 0, "connectivity");
+  long long previous = 0;
+  for (long long c = 0; c < n_cells; ++c) {
+    const long long type = static_cast<long long>(types[c]), end = static_cast<long long>(offsets[c]);
+    const int nodes = type == 10 ? 4 : type == 12 ? 8 : -1;
+    if (type == 5 || type == 9 || type == 3 || type == 1) {  // surface / line / vertex cells: skipped
+      previous = end;
+      continue;
+    }
+    if (nodes < 0) fail(w_types, fmt::format("cell {} has unsupported VTK type {} (tets 10 and hexes 12 only)", c, type));
+    if (end - previous != nodes) fail(w_off, fmt::format("cell {}: offsets give {} nodes for a {}-node cell", c, end - previous, nodes));
+    std::vector<long long> v(nodes);
+    for (int a = 0; a < nodes; ++a) v[a] = static_cast<long long>(conn[previous + a]);
+    b.cell(dummy, nodes == 4 ? CellType::tet4 : CellType::hex8, nodes == 4 ? v : hex_to_lattice(v), 0);
+    previous = end;
+  }
+  return b.finish(dummy);
+}
+
+double cell_volume(const VolumeMesh& m, Eigen::Index c) {
+  const auto X = [&](int a) -> Eigen::Vector3d { return m.vertices.col(m.cells(a, c)); };
+  if (m.type == CellType::tet4) {
+    Eigen::Matrix3d D;
+    D << X(1) - X(0), X(2) - X(0), X(3) - X(0);
+    return D.determinant() / 6.0;
+  }
+  // Trilinear hex, lattice corner order: the Jacobian at the centre times 8 (exact for parallelepipeds).
+  Eigen::Matrix3d J;
+  J.col(0) = 0.25 * (X(1) - X(0) + X(3) - X(2) + X(5) - X(4) + X(7) - X(6));
+  J.col(1) = 0.25 * (X(2) - X(0) + X(3) - X(1) + X(6) - X(4) + X(7) - X(5));
+  J.col(2) = 0.25 * (X(4) - X(0) + X(5) - X(1) + X(6) - X(2) + X(7) - X(3));
+  return J.determinant();
+}
+
+}  // namespace
+
+MeshFile read_mesh_file(const fs::path& path) {
+  const std::string ext = path.extension().string();
+  if (ext == ".node" || ext == ".ele") {
+    fs::path node = path, ele = path;
+    node.replace_extension(".node");
+    ele.replace_extension(".ele");
+    return read_tetgen(node, ele);
+  }
+  if (ext == ".mesh") return read_medit(path);
+  if (ext == ".msh") return read_gmsh(path);
+  if (ext == ".vtu") return read_vtu(path);
+  throw MeshError(fmt::format("{}: unknown mesh format '{}' (known: .node/.ele, .mesh, .msh, .vtu)", path.string(), ext));
+}
+
+void check_mesh(MeshFile& m, const fs::path& file) {
+  VolumeMesh& mesh = m.mesh;
+  auto where = [&](Eigen::Index c) {
+    const int line = c < static_cast<Eigen::Index>(m.cell_lines.size()) ? m.cell_lines[c] : 0;
+    return line > 0 ? fmt::format("{}:{}: cell {}", file.string(), line, c) : fmt::format("{}: cell {}", file.string(), c);
+  };
+  if (mesh.cell_count() == 0) throw MeshError(fmt::format("{}: the mesh has no cells", file.string()));
+  for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
+    if (!mesh.vertices.col(v).allFinite())
+      throw MeshError(fmt::format("{}: vertex {} has a non-finite coordinate", file.string(), v));
+  std::vector<char> used(mesh.vertex_count(), 0);
+  const int n = nodes_per_cell(mesh.type);
+  for (Eigen::Index c = 0; c < mesh.cell_count(); ++c)
+    for (int a = 0; a < n; ++a) {
+      const int v = mesh.cells(a, c);
+      if (v < 0 || v >= mesh.vertex_count())
+        throw MeshError(fmt::format("{}: vertex index {} out of range", where(c), v));
+      for (int b = 0; b < a; ++b)
+        if (mesh.cells(b, c) == v) throw MeshError(fmt::format("{}: vertex {} appears twice", where(c), v));
+      used[v] = 1;
+    }
+  for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
+    if (!used[v]) throw MeshError(fmt::format("{}: vertex {} is not used by any cell", file.string(), v));
+  Eigen::VectorXd volume(mesh.cell_count());
+  for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) volume[c] = cell_volume(mesh, c);
+  const double mean = volume.cwiseAbs().mean();
+  m.reoriented = 0;
+  for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
+    if (!(std::abs(volume[c]) > 1e-10 * mean))
+      throw MeshError(fmt::format("{}: degenerate (rest volume {:.3g}, the mean is {:.3g})", where(c), volume[c], mean));
+    if (volume[c] < 0.0) {  // turn it the right way round
+      if (mesh.type == CellType::tet4) std::swap(mesh.cells(2, c), mesh.cells(3, c));
+      else
+        for (int a = 0; a < 4; ++a) std::swap(mesh.cells(a, c), mesh.cells(a + 4, c));
+      ++m.reoriented;
+    }
+  }
+}
+
+MeshFile read_mesh(const fs::path& path) {
+  MeshFile m = read_mesh_file(path);
+  check_mesh(m, path);
+  return m;
+}
+
+}  // namespace snh

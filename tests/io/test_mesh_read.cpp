@@ -1,0 +1,148 @@
+// Mesh readers: TetGen, MEDIT, Gmsh 2.2 / 4.1 and VTU read the same small meshes; the checks re-orient
+// inverted cells and give one-line errors naming the file and line for malformed input.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "snh/io/mesh_read.hpp"
+#include "snh/io/vtu.hpp"
+#include "snh/mesh/box.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+
+class MeshRead : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("snh_test_mesh_read_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+    return dir_ / name;
+  }
+  /// The error message of reading `name` with `text`, or "" if it reads.
+  std::string error_of(const std::string& name, const std::string& text) {
+    const fs::path p = write(name, text);
+    try {
+      (void)read_mesh(p);
+    } catch (const MeshError& e) {
+      const std::string msg = e.what();
+      EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
+      return msg.substr(p.string().size());  // drop the directory for comparison
+    }
+    return "";
+  }
+  fs::path dir_;
+};
+
+// Two tets sharing a face, the second given inverted in the file.
+const char* kNode = "# two tets\n5 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n";
+const char* kEle = "2 4 0\n1 1 2 3 4\n2 2 4 3 5\n";
+
+TEST_F(MeshRead, TetGenPairReadsFromEitherFileAndReorients) {
+  write("t.node", kNode);
+  const fs::path ele = write("t.ele", kEle);
+  for (const fs::path& p : {ele, dir_ / "t.node"}) {
+    const MeshFile m = read_mesh(p);
+    EXPECT_EQ(m.mesh.type, CellType::tet4);
+    EXPECT_EQ(m.mesh.vertex_count(), 5);
+    ASSERT_EQ(m.mesh.cell_count(), 2);
+    EXPECT_EQ(m.mesh.cells(0, 0), 0);
+    EXPECT_EQ(m.reoriented, 1) << "the second tet is inverted in the file";
+    EXPECT_EQ(m.cell_lines[1], 3);
+  }
+}
+
+TEST_F(MeshRead, AllFormatsAgreeOnATwoHexMesh) {
+  // Two unit cubes along x: vertices in lattice order (i + 3 j + 6 k), hexes in VTK order in the files.
+  const VolumeMesh ref = [] {
+    VolumeMesh m = box_hexes(1);
+    m.vertices.resize(3, 12);
+    m.cells.resize(8, 2);
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 3; ++i) m.vertices.col(i + 3 * j + 6 * k) = Eigen::Vector3d(i, j, k);
+    for (int c = 0; c < 2; ++c)
+      for (int a = 0; a < 8; ++a) m.cells(a, c) = c + (a & 1) + 3 * ((a >> 1) & 1) + 6 * (a >> 2);
+    return m;
+  }();
+  auto vtk_order = [&](int c, int base) {  // one hex's nodes in VTK order, 0- or 1-based
+    std::string s;
+    for (int a : {0, 1, 3, 2, 4, 5, 7, 6}) s += " " + std::to_string(ref.cells(a, c) + base);
+    return s;
+  };
+  std::string coords0, coords1;
+  for (int v = 0; v < 12; ++v) {
+    const auto x = ref.vertices.col(v);
+    coords0 += fmt::format("{} {} {} {}\n", v + 1, x[0], x[1], x[2]);
+    coords1 += fmt::format("{} {} {} 0\n", x[0], x[1], x[2]);
+  }
+  const std::string medit = "MeshVersionFormatted 2\nDimension 3\nVertices 12\n" + coords1 +
+                            "Quadrilaterals 1\n1 2 5 4 0\nHexahedra 2\n" + vtk_order(0, 1) + " 0\n" + vtk_order(1, 1) +
+                            " 0\nEnd\n";
+  const std::string gmsh2 = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n3 1 \"body\"\n$EndPhysicalNames\n$Nodes\n12\n" +
+                            coords0 + "$EndNodes\n$Elements\n3\n1 15 2 0 1 1\n2 5 2 1 1" + vtk_order(0, 1) + "\n3 5 2 1 1" +
+                            vtk_order(1, 1) + "\n$EndElements\n";
+  std::string gmsh4 = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 12 1 12\n3 1 0 12\n";
+  for (int v = 1; v <= 12; ++v) gmsh4 += std::to_string(v) + "\n";
+  for (int v = 0; v < 12; ++v) gmsh4 += fmt::format("{} {} {}\n", ref.vertices(0, v), ref.vertices(1, v), ref.vertices(2, v));
+  gmsh4 += "$EndNodes\n$Elements\n1 2 1 2\n3 1 5 2\n1" + vtk_order(0, 1) + "\n2" + vtk_order(1, 1) + "\n$EndElements\n";
+  const fs::path vtu = dir_ / "h.vtu";
+  write_vtu(vtu, ref, ref.vertices, {}, {});
+  for (const fs::path& p : {write("h.mesh", medit), write("h2.msh", gmsh2), write("h4.msh", gmsh4), vtu}) {
+    const MeshFile m = read_mesh(p);
+    EXPECT_EQ(m.mesh.type, CellType::hex8) << p;
+    EXPECT_EQ(m.mesh.vertices, ref.vertices) << p;
+    EXPECT_EQ(m.mesh.cells, ref.cells) << p;
+    EXPECT_EQ(m.reoriented, 0) << p;
+  }
+}
+
+TEST_F(MeshRead, OurOwnTetFramesReadBack) {
+  const VolumeMesh t = box_tets(2);
+  write_vtu(dir_ / "t.vtu", t, t.vertices, {{"displacement", Eigen::Matrix3Xd::Zero(3, t.vertex_count())}},
+            {{"J", Eigen::VectorXd::Ones(t.cell_count())}});
+  const MeshFile m = read_mesh(dir_ / "t.vtu");
+  EXPECT_TRUE(m.mesh.vertices.isApprox(t.vertices));
+  EXPECT_EQ(m.mesh.cells, t.cells);
+}
+
+TEST_F(MeshRead, MalformedFilesGiveOneLineErrors) {
+  write("a.node", kNode);
+  EXPECT_EQ(error_of("a.ele", "2 4 0\n1 1 2 3 4\n"), ":3: the file ends where a tetrahedron index was expected");
+  EXPECT_EQ(error_of("b.node", "2 3 0 0\n1 0 0 0\n2 0 nan 0\n"), ":3: y is not finite: 'nan'");
+  write("c.node", kNode);
+  EXPECT_EQ(error_of("c.ele", "1 4 0\n1 1 2 3 9\n"), ":2: cell refers to vertex 9, which does not exist");
+  write("d.node", kNode);
+  EXPECT_EQ(error_of("d.ele", "2 4 0\n1 1 2 3 3\n2 2 3 4 5\n"), ":2: cell 0: vertex 2 appears twice");
+  write("e.node", kNode);
+  EXPECT_EQ(error_of("e.ele", "1 4 0\n1 1 2 3 4\n"), ": vertex 4 is not used by any cell");
+  write("f.node", "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 1 1 0\n");
+  EXPECT_NE(error_of("f.ele", "1 4 0\n1 1 2 3 4\n").find(":2: cell 0: degenerate (rest volume 0"), std::string::npos);
+  write("g.node", kNode);
+  EXPECT_EQ(error_of("g.ele", "1 10 0\n"), ":1: only linear tetrahedra (4 nodes) are supported, got 10 nodes");
+  write("h.node", kNode);
+  EXPECT_EQ(error_of("h.ele", "1 4 0\n1 1 2 3 4\n2 2 3 4 5\n"), ":3: more data than the 1 tetrahedra the header announces");
+  EXPECT_EQ(error_of("i.msh", "$MeshFormat\n4.1 1 8\n"), ":2: binary .msh files are not supported yet (save as ASCII)");
+  EXPECT_EQ(error_of("j.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n$Elements\n1\n1 6 0 1 1 1 1 1 1\n"),
+            ":10: prism cells are not supported (tets or hexes only)");
+  EXPECT_EQ(error_of("k.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n$EndNodes\n"),
+            ":7: expected a node tag (an integer), got '$EndNodes'");
+  EXPECT_EQ(error_of("l.mesh", "MeshVersionFormatted 2\nDimension 3\nPrisms 1\n"), ":3: unknown or unsupported section 'Prisms'");
+  EXPECT_EQ(error_of("m.stl", "solid x\n"), ": unknown mesh format '.stl' (known: .node/.ele, .mesh, .msh, .vtu)");
+  EXPECT_EQ(error_of("n.vtu", "<VTKFile type=\"UnstructuredGrid\">\n<AppendedData encoding=\"raw\">"),
+            ":2: appended data is not supported yet (write ASCII)");
+  EXPECT_THROW((void)read_mesh(dir_ / "missing.mesh"), MeshError);
+}
+
+}  // namespace
+}  // namespace snh
