@@ -184,5 +184,37 @@ TEST(SceneRun, AStartOutsideTheDomainIsReportedNotCrashed) {
   EXPECT_EQ(good.frames.size(), 3u);
 }
 
+TEST(SceneRun, AMeshFileRelativeToTheScene) {
+  const auto dir = std::filesystem::temp_directory_path() / ("snh_test_scene_file_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "meshes");
+  std::ofstream(dir / "meshes" / "two.node") << "5 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n";
+  std::ofstream(dir / "meshes" / "two.ele") << "2 4 0\n1 1 2 3 4\n2 2 4 3 5\n";  // the second inverted
+  const Scene s = parse_scene(json::parse(R"({"mesh": {"file": "meshes/two.ele"}, "pins": [{"indices": [0, 1, 2]}],
+                                             "gravity": [0, 0, -1], "frames": 2, "end_time": 0.1})"),
+                              dir / "s.json");
+  EXPECT_EQ(s.mesh_file, dir / "meshes" / "two.ele");
+  int reoriented = -1;
+  const VolumeMesh m = scene_mesh(s, &reoriented);
+  EXPECT_EQ(m.cell_count(), 2);
+  EXPECT_EQ(reoriented, 1);
+  Scene run = s;
+  run.out = dir / "out";
+  std::ostringstream log;
+  const SceneResult r = run_scene(run, log);
+  EXPECT_TRUE(r.all_converged) << r.failure;
+  EXPECT_EQ(r.element, CellType::tet4);
+  EXPECT_NE(log.str().find("1 inverted cell(s) re-oriented"), std::string::npos) << log.str();
+  // A broken mesh file: its reader's one-line error, naming the file and line.
+  std::ofstream(dir / "meshes" / "two.ele") << "2 4 0\n1 1 2 3 4\n";
+  try {
+    (void)parse_scene(json::parse(R"({"mesh": {"file": "meshes/two.ele"}})"), dir / "s.json");
+    ADD_FAILURE() << "no error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("two.ele:3: the file ends"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(error_of(json::parse(R"({"mesh": {"file": "x.msh", "box": {}}})")), "s.json: mesh: give exactly one of box or file");
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace snh

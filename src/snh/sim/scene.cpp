@@ -13,6 +13,7 @@
 
 #include "snh/fem/elastic_system.hpp"
 #include "snh/io/atomic_file.hpp"
+#include "snh/io/mesh_read.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/sim/dynamics.hpp"
 #include "snh/sim/output.hpp"
@@ -250,8 +251,9 @@ void write_scene_stats(const Scene& s, const SceneResult& r) {
   json j;
   j["program"] = "snh run";
   j["scene"] = s.source.string();
-  j["element"] = std::string(to_string(s.element));
-  j["resolution"] = s.resolution;
+  j["element"] = std::string(to_string(r.element));
+  if (s.mesh_file.empty()) j["resolution"] = s.resolution;
+  else j["mesh_file"] = s.mesh_file.string();
   j["material"] = s.material;
   j["mu"] = s.params.mu;
   j["lambda"] = s.params.lambda;
@@ -305,15 +307,22 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
   if (const json* mesh = top.get("mesh")) {
     Keys m(*mesh, "mesh", file);
     const json* box = m.get("box");
-    if (!box) m.fail("needs box (mesh files arrive with the mesh readers)");
-    Keys b(*box, "mesh.box", file);
-    s.element = b.choice("element", "hex", {"tet", "hex"}) == "tet" ? CellType::tet4 : CellType::hex8;
-    s.resolution = static_cast<int>(b.integer("res", 4, 1, 400));
-    s.tet_split = b.choice("tet_split", "paper", {"paper", "mirrored"}) == "mirrored" ? TetSplit::mirrored : TetSplit::paper;
-    s.box_min = b.vec3("min").value_or(s.box_min);
-    s.box_max = b.vec3("max").value_or(s.box_max);
-    if (!(s.box_min.array() < s.box_max.array()).all()) b.fail("min must be below max on every axis");
-    b.finish();
+    const json* mesh_file = m.get("file");
+    if ((box != nullptr) == (mesh_file != nullptr)) m.fail("give exactly one of box or file");
+    if (mesh_file) {
+      if (!mesh_file->is_string() || mesh_file->get<std::string>().empty()) m.fail("expected a file name", "file");
+      const std::filesystem::path f = mesh_file->get<std::string>();
+      s.mesh_file = f.is_absolute() ? f : source.parent_path() / f;
+    } else {
+      Keys b(*box, "mesh.box", file);
+      s.element = b.choice("element", "hex", {"tet", "hex"}) == "tet" ? CellType::tet4 : CellType::hex8;
+      s.resolution = static_cast<int>(b.integer("res", 4, 1, 400));
+      s.tet_split = b.choice("tet_split", "paper", {"paper", "mirrored"}) == "mirrored" ? TetSplit::mirrored : TetSplit::paper;
+      s.box_min = b.vec3("min").value_or(s.box_min);
+      s.box_max = b.vec3("max").value_or(s.box_max);
+      if (!(s.box_min.array() < s.box_max.array()).all()) b.fail("min must be below max on every axis");
+      b.finish();
+    }
     m.finish();
   }
 
@@ -431,7 +440,12 @@ Scene load_scene(const std::filesystem::path& file) {
   return parse_scene(j, file);
 }
 
-VolumeMesh scene_mesh(const Scene& s) {
+VolumeMesh scene_mesh(const Scene& s, int* reoriented) {
+  if (!s.mesh_file.empty()) {
+    MeshFile m = read_mesh(s.mesh_file);
+    if (reoriented) *reoriented = m.reoriented;
+    return std::move(m.mesh);
+  }
   VolumeMesh mesh = s.element == CellType::tet4 ? box_tets(s.resolution, s.tet_split) : box_hexes(s.resolution);
   // [−1, 1]³ → [min, max]
   const Eigen::Vector3d half = 0.5 * (s.box_max - s.box_min), mid = 0.5 * (s.box_max + s.box_min);
@@ -472,7 +486,12 @@ Eigen::VectorXd initial_positions(const Scene& s, const VolumeMesh& mesh) {
 SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
   const auto t_start = Clock::now();
   ensure_writable_directory(s.out);
-  const VolumeMesh mesh = scene_mesh(s);
+  int reoriented = 0;
+  const VolumeMesh mesh = scene_mesh(s, &reoriented);
+  if (!s.mesh_file.empty())
+    log << fmt::format("mesh {}: {} vertices, {} {}{}\n", s.mesh_file.string(), mesh.vertex_count(), mesh.cell_count(),
+                       mesh.type == CellType::tet4 ? "tets" : "hexes",
+                       reoriented ? fmt::format("; warning: {} inverted cell(s) re-oriented", reoriented) : "");
   Eigen::VectorXd x = initial_positions(s, mesh);
   const Eigen::Matrix3Xd X0 = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, mesh.vertex_count());
 
@@ -512,10 +531,11 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
   auto solver = make_linear_solver({.kind = s.solver, .reuse_factor = s.reuse_factor});
 
   SceneResult result;
+  result.element = mesh.type;
   result.vertices = mesh.vertex_count();
   result.cells = mesh.cell_count();
   log << fmt::format("snh run {}: {} {} ({} vertices), material {}, mu {:g}, lambda {:g}{}, density {:g}\n",
-                     s.source.string(), mesh.cell_count(), s.element == CellType::tet4 ? "tets" : "hexes",
+                     s.source.string(), mesh.cell_count(), mesh.type == CellType::tet4 ? "tets" : "hexes",
                      mesh.vertex_count(), s.material, s.params.mu, s.params.lambda,
                      s.reparametrize ? " (linear, reparametrized)" : "", s.density);
   log << fmt::format("{}, {} frames to t = {:g}{}, gravity ({:g}, {:g}, {:g}), solver {}, output {}\n",

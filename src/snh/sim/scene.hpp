@@ -65,7 +65,9 @@ enum class Integrator { backward_euler, quasi_static };
 
 struct Scene {
   std::filesystem::path source;  ///< the file, for messages and stats
-  // Mesh: a box of tets or hexes spanning [box_min, box_max].
+  // Mesh: a file (mesh_file, relative paths resolved against the scene file's directory), or else a box
+  // of tets or hexes spanning [box_min, box_max].
+  std::filesystem::path mesh_file;
   CellType element = CellType::hex8;
   int resolution = 4;
   TetSplit tet_split = TetSplit::paper;
@@ -98,8 +100,9 @@ struct Scene {
 /// Checks a parsed scene; `source` names it in messages. Throws SceneError.
 [[nodiscard]] Scene parse_scene(const nlohmann::json& j, const std::filesystem::path& source);
 
-/// The mesh of a scene (a box of its element type, scaled to its bounds).
-[[nodiscard]] VolumeMesh scene_mesh(const Scene& scene);
+/// The mesh of a scene: its mesh file (read and checked; `reoriented` gets the count of inverted cells
+/// turned round), or a box of its element type scaled to its bounds. Throws MeshError for a bad file.
+[[nodiscard]] VolumeMesh scene_mesh(const Scene& scene, int* reoriented = nullptr);
 /// The initial positions: the rest positions with scene.initial applied (3 #V).
 [[nodiscard]] Eigen::VectorXd initial_positions(const Scene& scene, const VolumeMesh& mesh);
 
@@ -123,6 +126,7 @@ struct SceneResult {
   bool all_converged = true;
   std::string failure;             ///< why the run stopped early (empty when it ran to the end)
   double total_seconds = 0.0, peak_memory_mib = 0.0;
+  CellType element = CellType::hex8;
   Eigen::Index vertices = 0, cells = 0;
   Eigen::VectorXd final_positions;
 };
