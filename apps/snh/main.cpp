@@ -8,6 +8,7 @@
 #include "../common/omp_env.hpp"
 #include "lab_command.hpp"
 #include "material_command.hpp"
+#include "mesh_commands.hpp"
 #include "run_command.hpp"
 #include "stretch_command.hpp"
 
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
   snh::cli::add_stretch_command(app, exit_code);
   snh::cli::add_run_command(app, exit_code);
   snh::cli::add_lab_command(app, exit_code);
+  snh::cli::add_mesh_commands(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

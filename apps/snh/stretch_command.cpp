@@ -28,6 +28,7 @@ struct Options {
   bool projected_only = false;
   bool refactorize = false;
   std::string tet_split = "paper";
+  std::string mesh, axis = "y";
 };
 
 }  // namespace
@@ -42,6 +43,10 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--element", o->element, "tet (6 tets per lattice cell, as tetcli) or hex (trilinear, as hexcli)")
       ->check(CLI::IsMember({"tet", "hex"}));
   cmd->add_option("--res", o->res, "Cells per side (default 10)");
+  cmd->add_option("--mesh", o->mesh,
+                  "A mesh file (.node/.ele, .mesh, .msh, .vtu) instead of the box: its extreme vertex layers along --axis "
+                  "are pulled apart");
+  cmd->add_option("--axis", o->axis, "Stretch axis: x, y (default) or z")->check(CLI::IsMember({"x", "y", "z"}));
   cmd->add_option("--tet-split", o->tet_split,
                   "paper (default: every cell cut around its c0-c7 diagonal, as tetcli) or mirrored (the cut mirrored "
                   "in the upper half of each axis, so that for even res the mesh is mirror symmetric)")
@@ -68,6 +73,8 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     c.program = "snh stretch";
     c.element = o->element == "hex" ? CellType::hex8 : CellType::tet4;
     c.resolution = o->res;
+    c.mesh_file = o->mesh;
+    c.axis = o->axis[0] - 'x';
     c.tet_split = o->tet_split == "mirrored" ? TetSplit::mirrored : TetSplit::paper;
     c.material = o->material;
     c.params = o->params.lame();

@@ -26,6 +26,13 @@ double edge_ratio(const VolumeMesh& m, Eigen::Index c, const int (&edges)[E][2])
 
 }  // namespace
 
+Eigen::VectorXd cell_edge_ratios(const VolumeMesh& mesh) {
+  Eigen::VectorXd r(mesh.cell_count());
+  for (Eigen::Index c = 0; c < mesh.cell_count(); ++c)
+    r[c] = mesh.type == CellType::tet4 ? edge_ratio(mesh, c, kTetEdges) : edge_ratio(mesh, c, kHexEdges);
+  return r;
+}
+
 MeshQuality mesh_quality(const VolumeMesh& mesh, const RestState& rest) {
   MeshQuality q;
   q.vertices = mesh.vertex_count();
@@ -35,8 +42,9 @@ MeshQuality mesh_quality(const VolumeMesh& mesh, const RestState& rest) {
     q.min_volume = vol.minCoeff();
     q.max_volume = vol.maxCoeff();
   }
+  const Eigen::VectorXd ratios = cell_edge_ratios(mesh);
   for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
-    const double r = mesh.type == CellType::tet4 ? edge_ratio(mesh, c, kTetEdges) : edge_ratio(mesh, c, kHexEdges);
+    const double r = ratios[c];
     if (r > q.worst_edge_ratio) {
       q.worst_edge_ratio = r;
       q.worst_cell = c;

@@ -14,6 +14,9 @@ struct MeshQuality {
   Eigen::Index worst_cell = -1;               ///< the cell with that ratio
 };
 
+/// Longest over shortest edge of every cell (+∞ for a cell with a zero-length edge).
+[[nodiscard]] Eigen::VectorXd cell_edge_ratios(const VolumeMesh& mesh);
+
 /// Computes the summary; rest is compute_rest_state(mesh).
 [[nodiscard]] MeshQuality mesh_quality(const VolumeMesh& mesh, const RestState& rest);
 

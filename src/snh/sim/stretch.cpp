@@ -10,6 +10,7 @@
 #include "snh/fem/elastic_system.hpp"
 #include "snh/fem/quality.hpp"
 #include "snh/io/atomic_file.hpp"
+#include "snh/io/mesh_read.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/sim/output.hpp"
@@ -19,7 +20,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-/// Half-length along y of the box at step s.
+/// Length at step s relative to the rest length.
 double half_length(const StretchConfig& c, int s) { return 1.0 + (c.stretch - 1.0) * s / c.steps; }
 
 /// Min det F, inverted-element count and volume ratio of a deformation.
@@ -32,8 +33,8 @@ void record_deformation(const ElasticSystem::Deformation& d, double rest_volume,
 void write_stats(const StretchConfig& c, const StretchResult& r) {
   nlohmann::json j;
   j["program"] = c.program;
-  j["element"] = std::string(to_string(c.element));
-  j["resolution"] = c.resolution;
+  j["element"] = std::string(to_string(r.element));
+  if (c.mesh_file.empty()) j["resolution"] = c.resolution;
   j["material"] = c.material;
   j["mu"] = c.params.mu;
   j["lambda"] = c.params.lambda;
@@ -42,6 +43,8 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   j["stretch"] = c.stretch;
   j["solver"] = std::string(to_string(c.solver));
   j["reuse_factor"] = c.reuse_factor;
+  if (!c.mesh_file.empty()) j["mesh_file"] = c.mesh_file.string();
+  j["axis"] = std::string(1, char('x' + c.axis));
   if (c.element == CellType::tet4) j["tet_split"] = c.tet_split == TetSplit::paper ? "paper" : "mirrored";
   j["tolerance"] = c.newton.tolerance;
   j["vertices"] = r.vertices;
@@ -90,7 +93,8 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
 }  // namespace
 
 void validate(const StretchConfig& c) {
-  if (c.resolution < 1 || c.resolution > 400)
+  if (c.axis < 0 || c.axis > 2) throw std::invalid_argument(fmt::format("axis must be 0, 1 or 2, got {}", c.axis));
+  if (c.mesh_file.empty() && (c.resolution < 1 || c.resolution > 400))
     throw std::invalid_argument(fmt::format("resolution must be an integer from 1 to 400, got {}", c.resolution));
   if (c.steps < 1 || c.steps > 100000) throw std::invalid_argument(fmt::format("steps must be from 1 to 100000, got {}", c.steps));
   if (!std::isfinite(c.stretch) || c.stretch <= 0.0)
@@ -104,30 +108,46 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   validate(c);
   const auto t_start = Clock::now();
   const int res = c.resolution;
-  VolumeMesh mesh = c.element == CellType::tet4 ? box_tets(res, c.tet_split) : box_hexes(res);
+  int reoriented = 0;
+  VolumeMesh mesh;
+  if (c.mesh_file.empty()) {
+    mesh = c.element == CellType::tet4 ? box_tets(res, c.tet_split) : box_hexes(res);
+  } else {
+    MeshFile file = read_mesh(c.mesh_file);
+    mesh = std::move(file.mesh);
+    reoriented = file.reoriented;
+  }
 
-  // Kinematic vertices: the j = 0 and j = res layers, all three coordinates.
+  // Kinematic vertices: the two extreme layers along the axis (the box's j = 0 and j = res layers),
+  // all three coordinates; they move apart symmetrically about the centre.
+  const int a = c.axis;
+  const double lo_a = mesh.vertices.row(a).minCoeff(), hi_a = mesh.vertices.row(a).maxCoeff();
+  const double centre = 0.5 * (lo_a + hi_a), half0 = 0.5 * (hi_a - lo_a), eps = 1e-9 * std::max(hi_a - lo_a, 1e-300);
+  if (!(half0 > 0.0)) throw std::invalid_argument("the mesh is flat along the stretch axis");
   std::vector<std::uint8_t> fixed(3 * mesh.vertex_count(), 0);
   std::vector<int> bottom, top;
-  for (int k = 0; k <= res; ++k)
-    for (int i = 0; i <= res; ++i) {
-      bottom.push_back(lattice_index(res, i, 0, k));
-      top.push_back(lattice_index(res, i, res, k));
-    }
+  for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) {
+    if (mesh.vertices(a, v) <= lo_a + eps) bottom.push_back(static_cast<int>(v));
+    if (mesh.vertices(a, v) >= hi_a - eps) top.push_back(static_cast<int>(v));
+  }
   for (int v : bottom) fixed[3 * v] = fixed[3 * v + 1] = fixed[3 * v + 2] = 1;
   for (int v : top) fixed[3 * v] = fixed[3 * v + 1] = fixed[3 * v + 2] = 1;
+  auto along = [&](double rest_coordinate, int s) { return centre + (rest_coordinate - centre) * half_length(c, s); };
 
   StretchResult result;
+  result.element = mesh.type;
   result.vertices = mesh.vertex_count();
   result.cells = mesh.cell_count();
   const ElasticSystem system(mesh, make_material(c.material, c.params, c.reparametrize), std::move(fixed));
   auto solver = make_linear_solver({.kind = c.solver, .reuse_factor = c.reuse_factor});
 
-  log << fmt::format("{}: resolution {}, material {}, mu {:g}, lambda {:g}{}\n", c.program, res, c.material, c.params.mu,
-                     c.params.lambda, c.reparametrize ? " (linear, reparametrized)" : "");
-  log << fmt::format("{} vertices, {} {}, {} steps to a {:g}x stretch, solver {}, output {}\n", mesh.vertex_count(),
-                     mesh.cell_count(), c.element == CellType::tet4 ? "tets" : "cubes", c.steps, c.stretch,
-                     to_string(c.solver), c.out.string());
+  log << fmt::format("{}: {}, material {}, mu {:g}, lambda {:g}{}\n", c.program,
+                     c.mesh_file.empty() ? fmt::format("resolution {}", res) : "mesh " + c.mesh_file.string(), c.material,
+                     c.params.mu, c.params.lambda, c.reparametrize ? " (linear, reparametrized)" : "");
+  if (reoriented) log << fmt::format("warning: {} inverted cell(s) of the mesh re-oriented\n", reoriented);
+  log << fmt::format("{} vertices, {} {}, {} steps to a {:g}x stretch along {}, solver {}, output {}\n",
+                     mesh.vertex_count(), mesh.cell_count(), mesh.type == CellType::tet4 ? "tets" : "cubes", c.steps,
+                     c.stretch, char('x' + a), to_string(c.solver), c.out.string());
   log << "mesh: " << describe(mesh_quality(system.mesh(), system.rest()), mesh.type) << "\n";
 
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
@@ -143,18 +163,21 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     Eigen::VectorXd guess;
     if (s == 1) {
       guess = x;
-      for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) guess[3 * v + 1] *= half_length(c, 1);
+      for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) guess[3 * v + a] = along(guess[3 * v + a], 1);
     } else {
       guess = 2.0 * x - previous;
     }
-    for (int v : bottom) guess.segment<3>(3 * v) = Eigen::Vector3d(mesh.vertices(0, v), -half_length(c, s), mesh.vertices(2, v));
-    for (int v : top) guess.segment<3>(3 * v) = Eigen::Vector3d(mesh.vertices(0, v), half_length(c, s), mesh.vertices(2, v));
+    for (const auto* layer : {&bottom, &top})
+      for (int v : *layer) {
+        guess.segment<3>(3 * v) = mesh.vertices.col(v);
+        guess[3 * v + a] = along(mesh.vertices(a, v), s);
+      }
     // An extrapolated guess outside the energy's domain falls back to the last solution scaled along y
     // to the new boundary (a positive scaling keeps every det F > 0 that was).
     if (!std::isfinite(system.energy(guess))) {
       guess = x;
       const double ratio = half_length(c, s) / half_length(c, s - 1);
-      for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) guess[3 * v + 1] *= ratio;
+      for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) guess[3 * v + a] = centre + (guess[3 * v + a] - centre) * ratio;
     }
     previous = x;
     x = guess;
@@ -196,25 +219,31 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     }
   }
 
-  // Middle cross-section: the lattice layer j = res/2 (nearest to y = 0).
+  // Middle cross-section: the layer at the largest rest coordinate along the axis not above the centre
+  // (the box's lattice layer j = res/2), measured along the first other axis.
   {
-    const int j = res / 2;
-    double lo = 1e300, hi = -1e300;
-    for (int k = 0; k <= res; ++k)
-      for (int i = 0; i <= res; ++i) {
-        const double xv = x[3 * lattice_index(res, i, j, k)];
-        lo = std::min(lo, xv);
-        hi = std::max(hi, xv);
+    double layer = -std::numeric_limits<double>::infinity();
+    for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
+      if (mesh.vertices(a, v) <= centre + eps) layer = std::max(layer, mesh.vertices(a, v));
+    const int across = a == 0 ? 1 : 0;
+    double lo = 1e300, hi = -1e300, rest_lo = 1e300, rest_hi = -1e300;
+    for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
+      if (std::abs(mesh.vertices(a, v) - layer) <= eps) {
+        lo = std::min(lo, x[3 * v + across]);
+        hi = std::max(hi, x[3 * v + across]);
+        rest_lo = std::min(rest_lo, mesh.vertices(across, v));
+        rest_hi = std::max(rest_hi, mesh.vertices(across, v));
       }
     result.middle_width = hi - lo;
+    result.middle_rest_width = rest_hi - rest_lo;
   }
   result.total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
   result.peak_memory_mib = peak_memory_mib();
   write_stats(c, result);
-  log << fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); middle cross-section width {:.4f} (rest 2); frames ("
+  log << fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); middle cross-section width {:.4f} (rest {:.4g}); frames ("
                      "NNN.obj{}), stats.json and stats.csv in {}\n",
                      result.all_converged ? "converged every step" : "STOPPED: a step did not converge",
-                     result.total_seconds, result.peak_memory_mib, result.middle_width,
+                     result.total_seconds, result.peak_memory_mib, result.middle_width, result.middle_rest_width,
                      c.write_vtu ? ", NNN.vtu, frames.pvd" : "", c.out.string());
   return result;
 }

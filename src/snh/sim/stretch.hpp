@@ -19,6 +19,9 @@ struct StretchConfig {
   CellType element = CellType::tet4;
   int resolution = 10;                    ///< cells per side
   TetSplit tet_split = TetSplit::paper;   ///< how tets cut the lattice cells (box.hpp)
+  /// A mesh file instead of the box (io/mesh_read.hpp); element, resolution and tet_split then unused.
+  std::filesystem::path mesh_file;
+  int axis = 1;                           ///< the stretch axis (0 x, 1 y, 2 z): its extreme faces are pulled
   std::string material = "stable_neo_hookean";
   Lame params{1.0, 10.0};
   bool reparametrize = false;             ///< params are linear μ_L, λ_L (MATH.md §2)
@@ -57,8 +60,12 @@ struct StretchResult {
   std::vector<StepStats> steps;
   bool all_converged = true;
   double total_seconds = 0.0;
-  double middle_width = 0.0;  ///< x-extent of the lattice layer nearest y = 0 at the last step
+  /// At the last step, the extent along the first other axis (x, or y when stretching along x) of the
+  /// vertex layer nearest the middle (the largest rest coordinate along the axis not above the centre).
+  double middle_width = 0.0;
   double peak_memory_mib = 0.0;  ///< peak resident memory of the process (VmHWM)
+  double middle_rest_width = 0.0;  ///< the same extent at rest
+  CellType element = CellType::tet4;
   Eigen::Index vertices = 0, cells = 0;
 };
 

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# `snh info`, `snh convert` and `snh stretch --mesh`: round trips through every writable format, the
+# report's lines, and one-line errors with exit code 2.
+# Usage: test_mesh_cli.sh SNH
+set -u
+SNH="$1"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+pass=0 fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+
+# Two tets, the second inverted in the file.
+printf '5 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n' > "$work/t.node"
+printf '2 4 0\n1 1 2 3 4\n2 2 4 3 5\n' > "$work/t.ele"
+out="$("$SNH" info "$work/t.ele" 2>&1)" && ok || bad "info: $out"
+printf '%s' "$out" | grep -q "tet4, 5 vertices, 2 cells, 6 boundary triangles" && ok || bad "info counts: $out"
+printf '%s' "$out" | grep -q "rest volume: total 0.5" && ok || bad "info volume: $out"
+printf '%s' "$out" | grep -q "problems: 1 inverted cell(s), re-oriented when used" && ok || bad "info problems: $out"
+# t.ele -> .msh -> .mesh -> .vtu: the same mesh each time, re-oriented once.
+"$SNH" convert "$work/t.ele" "$work/t.msh" | grep -q "(1 re-oriented)" && ok || bad "convert to msh"
+"$SNH" convert "$work/t.msh" "$work/t.mesh" > /dev/null && "$SNH" convert "$work/t.mesh" "$work/t.vtu" > /dev/null && ok || bad "convert chain"
+for f in t.msh t.mesh t.vtu; do
+  "$SNH" info "$work/$f" | grep -q "problems: none" && ok || bad "info $f"
+done
+# Errors.
+printf '2 4 0\n1 1 2 3 4\n' > "$work/t.ele"
+out="$("$SNH" info "$work/t.ele" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -q "t.ele:3: the file ends where a tetrahedron index was expected" \
+  && ok || bad "truncated (exit $code): $out"
+out="$("$SNH" convert "$work/t.msh" "$work/t.stl" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "cannot write '.stl' meshes" && ok || bad "bad output format (exit $code): $out"
+# snh stretch --mesh: a small hex mesh file, pulled along z.
+printf '$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n12\n' > "$work/b.msh"
+n=1; for k in 0 1 2; do for j in 0 1; do for i in 0 1; do printf '%d %d %d %d\n' $n $i $j $k >> "$work/b.msh"; n=$((n + 1)); done; done; done
+printf '$EndNodes\n$Elements\n2\n1 5 0 1 2 4 3 5 6 8 7\n2 5 0 5 6 8 7 9 10 12 11\n$EndElements\n' >> "$work/b.msh"
+out="$("$SNH" stretch --mesh "$work/b.msh" --axis z --steps 3 --stretch 1.3 --out "$work/s" 2>&1)" && ok || bad "stretch --mesh: $out"
+printf '%s' "$out" | grep -q "mesh $work/b.msh" && printf '%s' "$out" | grep -q "2 cubes, 3 steps to a 1.3x stretch along z" && ok || bad "stretch header: $out"
+grep -q '"axis": "z"' "$work/s/stats.json" && grep -q '"mesh_file"' "$work/s/stats.json" && ok || bad "stretch stats"
+out="$("$SNH" stretch --mesh "$work/missing.msh" --out "$work/s2" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "cannot open the mesh file" && ok || bad "missing mesh (exit $code): $out"
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
