@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <cstdint>
 #include <fstream>
 
 #include <fmt/format.h>
@@ -107,6 +108,56 @@ TEST_F(MeshRead, AllFormatsAgreeOnATwoHexMesh) {
   }
 }
 
+/// Appends the bytes of a value.
+template <class T>
+void put(std::string& s, T v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+TEST_F(MeshRead, BinaryGmsh22And41) {
+  // One unit cube (8 nodes) as a hex, node tags 11..18, a binary $Entities section to skip.
+  const int lattice[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};  // VTK order
+  std::string v41 = "$MeshFormat\n4.1 1 8\n";
+  put<std::int32_t>(v41, 1);
+  v41 += "\n$EndMeshFormat\n$Entities\n";
+  v41 += std::string("\x01\x00\n$End\x07\xff", 8);  // arbitrary bytes
+  v41 += "\n$EndEntities\n$Nodes\n";
+  for (std::uint64_t v : {1, 8, 11, 18}) put<std::uint64_t>(v41, v);
+  put<std::int32_t>(v41, 3); put<std::int32_t>(v41, 1); put<std::int32_t>(v41, 0); put<std::uint64_t>(v41, 8);
+  for (int i = 0; i < 8; ++i) put<std::uint64_t>(v41, 11 + i);
+  for (const auto& p : lattice)
+    for (int a = 0; a < 3; ++a) put<double>(v41, p[a]);
+  v41 += "\n$EndNodes\n$Elements\n";
+  for (std::uint64_t v : {1, 1, 1, 1}) put<std::uint64_t>(v41, v);
+  put<std::int32_t>(v41, 3); put<std::int32_t>(v41, 1); put<std::int32_t>(v41, 5); put<std::uint64_t>(v41, 1);
+  put<std::uint64_t>(v41, 1);
+  for (int i = 0; i < 8; ++i) put<std::uint64_t>(v41, 11 + i);
+  v41 += "\n$EndElements\n";
+
+  std::string v22 = "$MeshFormat\n2.2 1 8\n";
+  put<std::int32_t>(v22, 1);
+  v22 += "\n$EndMeshFormat\n$Nodes\n8\n";
+  for (int i = 0; i < 8; ++i) {
+    put<std::int32_t>(v22, 11 + i);
+    for (int a = 0; a < 3; ++a) put<double>(v22, lattice[i][a]);
+  }
+  v22 += "\n$EndNodes\n$Elements\n1\n";
+  put<std::int32_t>(v22, 5); put<std::int32_t>(v22, 1); put<std::int32_t>(v22, 2);
+  put<std::int32_t>(v22, 1); put<std::int32_t>(v22, 7); put<std::int32_t>(v22, 7);
+  for (int i = 0; i < 8; ++i) put<std::int32_t>(v22, 11 + i);
+  v22 += "\n$EndElements\n";
+
+  for (const auto& [name, bytes] : {std::pair{"b41.msh", v41}, {"b22.msh", v22}}) {
+    const MeshFile m = read_mesh(write(name, bytes));
+    EXPECT_EQ(m.mesh.type, CellType::hex8) << name;
+    ASSERT_EQ(m.mesh.cell_count(), 1) << name;
+    for (int a = 0; a < 8; ++a)  // lattice order: corner a at (a & 1, a >> 1 & 1, a >> 2)
+      EXPECT_EQ(m.mesh.vertices.col(m.mesh.cells(a, 0)), Eigen::Vector3d(a & 1, (a >> 1) & 1, a >> 2)) << name << " corner " << a;
+  }
+  // Truncated binary data: a one-line error.
+  EXPECT_NE(error_of("t41.msh", v41.substr(0, v41.size() - 40)).find("the file ends inside binary data"), std::string::npos);
+}
+
 TEST_F(MeshRead, OurOwnTetFramesReadBack) {
   const VolumeMesh t = box_tets(2);
   write_vtu(dir_ / "t.vtu", t, t.vertices, {{"displacement", Eigen::Matrix3Xd::Zero(3, t.vertex_count())}},
@@ -132,7 +183,7 @@ TEST_F(MeshRead, MalformedFilesGiveOneLineErrors) {
   EXPECT_EQ(error_of("g.ele", "1 10 0\n"), ":1: only linear tetrahedra (4 nodes) are supported, got 10 nodes");
   write("h.node", kNode);
   EXPECT_EQ(error_of("h.ele", "1 4 0\n1 1 2 3 4\n2 2 3 4 5\n"), ":3: more data than the 1 tetrahedra the header announces");
-  EXPECT_EQ(error_of("i.msh", "$MeshFormat\n4.1 1 8\n"), ":2: binary .msh files are not supported yet (save as ASCII)");
+  EXPECT_EQ(error_of("i.msh", "$MeshFormat\n4.1 1 8\n"), ":2: the file ends inside binary data (reading the endianness check)");
   EXPECT_EQ(error_of("j.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n$Elements\n1\n1 6 0 1 1 1 1 1 1\n"),
             ":10: prism cells are not supported (tets or hexes only)");
   EXPECT_EQ(error_of("k.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n$EndNodes\n"),

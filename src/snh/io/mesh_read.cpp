@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstring>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -74,6 +75,28 @@ class Lexer {
   }
   void skip_line() {
     while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+  }
+  /// Binary data starts after the newline that ends the current text line.
+  void begin_binary() {
+    if (pos_ < text_.size() && text_[pos_] == '\r') ++pos_;
+    if (pos_ < text_.size() && text_[pos_] == '\n') ++pos_;
+  }
+  /// A little-endian value of type T read from the bytes at the current position.
+  template <class T>
+  T raw(const char* what) {
+    if (text_.size() - pos_ < sizeof(T)) fail(fmt::format("the file ends inside binary data (reading {})", what));
+    T v;
+    std::memcpy(&v, text_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+  /// Moves past the next occurrence of `marker` (for skipping binary sections); false if there is none.
+  bool skip_past(std::string_view marker) {
+    const std::size_t at = text_.find(marker, pos_);
+    if (at == std::string::npos) return false;
+    line_ += static_cast<int>(std::count(text_.begin() + pos_, text_.begin() + at, '\n'));
+    pos_ = at + marker.size();
+    return true;
   }
   int line() const { return token_line_; }
   const std::string& file() const { return file_; }
@@ -259,22 +282,117 @@ void expect_end(Lexer& lx, const char* section) {
   if (t != section) lx.fail(fmt::format("expected {}, got '{}' (wrong count before it?)", section, t));
 }
 
+double finite(Lexer& lx, double v, const char* what) {
+  if (!std::isfinite(v)) lx.fail(fmt::format("{} is not finite", what));
+  return v;
+}
+
+/// $Nodes or $Elements of a binary 4.1 file (the section name just read; the data follows its line).
+void read_gmsh41_binary_section(Lexer& lx, Builder& b, std::string_view section) {
+  lx.begin_binary();
+  const int line = lx.line();
+  if (section == "$Nodes") {
+    const auto blocks = lx.raw<std::uint64_t>("the number of entity blocks");
+    (void)lx.raw<std::uint64_t>("the number of nodes");
+    (void)lx.raw<std::uint64_t>("the smallest node tag");
+    (void)lx.raw<std::uint64_t>("the largest node tag");
+    for (std::uint64_t k = 0; k < blocks; ++k) {
+      (void)lx.raw<std::int32_t>("the entity dimension");
+      (void)lx.raw<std::int32_t>("the entity tag");
+      if (lx.raw<std::int32_t>("the parametric flag") != 0) lx.fail("parametric node coordinates are not supported", line);
+      const auto n = lx.raw<std::uint64_t>("the nodes in the block");
+      if (n > (1ULL << 31)) lx.fail(fmt::format("implausible node count {} in a block", n), line);
+      std::vector<std::uint64_t> tags(n);
+      for (auto& t : tags) t = lx.raw<std::uint64_t>("a node tag");
+      for (std::uint64_t i = 0; i < n; ++i) {
+        const double x = finite(lx, lx.raw<double>("x"), "a coordinate"), y = finite(lx, lx.raw<double>("y"), "a coordinate"),
+                     z = finite(lx, lx.raw<double>("z"), "a coordinate");
+        b.vertex(lx, static_cast<long long>(tags[i]), x, y, z);
+      }
+    }
+  } else {
+    const auto blocks = lx.raw<std::uint64_t>("the number of entity blocks");
+    (void)lx.raw<std::uint64_t>("the number of elements");
+    (void)lx.raw<std::uint64_t>("the smallest element tag");
+    (void)lx.raw<std::uint64_t>("the largest element tag");
+    for (std::uint64_t k = 0; k < blocks; ++k) {
+      (void)lx.raw<std::int32_t>("the entity dimension");
+      (void)lx.raw<std::int32_t>("the entity tag");
+      const auto type = lx.raw<std::int32_t>("the element type");
+      const int nodes = gmsh_nodes(type);
+      if (nodes < 0) lx.fail(fmt::format("unsupported element type {} (tets or hexes only)", type), line);
+      const auto n = lx.raw<std::uint64_t>("the elements in the block");
+      if (n > (1ULL << 31)) lx.fail(fmt::format("implausible element count {} in a block", n), line);
+      for (std::uint64_t i = 0; i < n; ++i) {
+        (void)lx.raw<std::uint64_t>("an element tag");
+        std::vector<long long> v(nodes);
+        for (auto& x : v) x = static_cast<long long>(lx.raw<std::uint64_t>("a node tag"));
+        gmsh_cell(lx, b, type, v, line);
+      }
+    }
+  }
+}
+
+/// Gmsh 2.2 binary: a text count line, then the records.
+void read_gmsh22_binary_section(Lexer& lx, Builder& b, std::string_view section) {
+  const long long n = lx.count(section == "$Nodes" ? "the number of nodes" : "the number of elements");
+  lx.begin_binary();
+  const int line = lx.line();
+  if (section == "$Nodes") {
+    for (long long i = 0; i < n; ++i) {
+      const auto id = lx.raw<std::int32_t>("a node tag");
+      const double x = finite(lx, lx.raw<double>("x"), "a coordinate"), y = finite(lx, lx.raw<double>("y"), "a coordinate"),
+                   z = finite(lx, lx.raw<double>("z"), "a coordinate");
+      b.vertex(lx, id, x, y, z);
+    }
+    return;
+  }
+  for (long long read = 0; read < n;) {
+    const auto type = lx.raw<std::int32_t>("an element type");
+    const auto count = lx.raw<std::int32_t>("the elements that follow");
+    const auto tags = lx.raw<std::int32_t>("the number of tags");
+    const int nodes = gmsh_nodes(type);
+    if (nodes < 0) lx.fail(fmt::format("unsupported element type {} (tets or hexes only)", type), line);
+    if (count <= 0 || count > n - read || tags < 0 || tags > 100) lx.fail("corrupt binary element header", line);
+    for (int i = 0; i < count; ++i) {
+      (void)lx.raw<std::int32_t>("an element tag");
+      for (int t = 0; t < tags; ++t) (void)lx.raw<std::int32_t>("a tag");
+      std::vector<long long> v(nodes);
+      for (auto& x : v) x = lx.raw<std::int32_t>("a node tag");
+      gmsh_cell(lx, b, type, v, line);
+    }
+    read += count;
+  }
+}
+
 MeshFile read_gmsh(const fs::path& path) {
   Lexer lx(path, read_all(path));
   if (lx.word("$MeshFormat") != "$MeshFormat") lx.fail("not a Gmsh file: it must start with $MeshFormat");
   const std::string_view version = lx.word("the format version");
   const long long file_type = lx.integer("the file type");
-  (void)lx.integer("the data size");
+  const long long data_size = lx.integer("the data size");
   const bool v2 = version.substr(0, 2) == "2.", v4 = version == "4.1";
   if (!v2 && !v4) lx.fail(fmt::format("unsupported .msh version {} (2.2 and 4.1 are)", version));
-  if (file_type != 0) lx.fail("binary .msh files are not supported yet (save as ASCII)");
+  if (file_type != 0 && file_type != 1) lx.fail(fmt::format("unknown file type {} (0 ASCII, 1 binary)", file_type));
+  const bool binary = file_type == 1;
+  if (binary) {
+    if (data_size != 8) lx.fail(fmt::format("binary files with data size {} are not supported (8 is)", data_size));
+    lx.begin_binary();
+    if (lx.raw<std::int32_t>("the endianness check") != 1) lx.fail("a big-endian binary file is not supported");
+  }
   expect_end(lx, "$EndMeshFormat");
   Builder b;
   bool nodes_seen = false, elements_seen = false;
   for (;;) {
     const std::string_view section = lx.next();
     if (section.empty()) break;
-    if (section == "$Nodes") {
+    if ((section == "$Nodes" || section == "$Elements") && binary) {
+      if (section == "$Elements" && !nodes_seen) lx.fail("$Elements before $Nodes");
+      (section == "$Nodes" ? nodes_seen : elements_seen) = true;
+      if (v4) read_gmsh41_binary_section(lx, b, section);
+      else read_gmsh22_binary_section(lx, b, section);
+      expect_end(lx, section == "$Nodes" ? "$EndNodes" : "$EndElements");
+    } else if (section == "$Nodes") {
       nodes_seen = true;
       if (v2) {
         const long long n = lx.count("the number of nodes");
@@ -344,11 +462,8 @@ MeshFile read_gmsh(const fs::path& path) {
       expect_end(lx, "$EndElements");
     } else if (section.size() > 1 && section[0] == '$') {  // another section: skip to its end
       const std::string end = fmt::format("$End{}", section.substr(1));
-      for (;;) {
-        const std::string_view t = lx.next();
-        if (t.empty()) lx.fail(fmt::format("the file ends inside {}", section));
-        if (t == end) break;
-      }
+      // Binary sections ($Entities, ...) cannot be tokenised: find the end marker in the bytes.
+      if (!lx.skip_past(end)) lx.fail(fmt::format("the file ends inside {}", section));
     } else {
       lx.fail(fmt::format("expected a section ($Nodes, $Elements, ...), got '{}'", section));
     }
