@@ -158,6 +158,73 @@ TEST_F(MeshRead, BinaryGmsh22And41) {
   EXPECT_NE(error_of("t41.msh", v41.substr(0, v41.size() - 40)).find("the file ends inside binary data"), std::string::npos);
 }
 
+std::string base64(const std::string& bytes) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 2]);
+    out += k[(v >> 18) & 63];
+    out += k[(v >> 12) & 63];
+    out += i + 1 < bytes.size() ? k[(v >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? k[v & 63] : '=';
+  }
+  return out;
+}
+
+TEST_F(MeshRead, BinaryAndAppendedVtu) {
+  // One hex: points Float32, connectivity Int64, offsets Int32, types UInt8; UInt32 and UInt64 headers.
+  const int lattice[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  std::string points, conn, offsets, types;
+  for (const auto& p : lattice)
+    for (int a = 0; a < 3; ++a) put<float>(points, static_cast<float>(p[a]));
+  for (int i = 0; i < 8; ++i) put<std::int64_t>(conn, i);
+  put<std::int32_t>(offsets, 8);
+  put<std::uint8_t>(types, 12);
+  for (const std::string header : {"UInt32", "UInt64"}) {
+    auto with_length = [&](const std::string& data) {
+      std::string h;
+      if (header == "UInt32") put<std::uint32_t>(h, static_cast<std::uint32_t>(data.size()));
+      else put<std::uint64_t>(h, data.size());
+      return std::pair{h, data};
+    };
+    const std::string head = "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"" +
+                             header + "\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"8\" NumberOfCells=\"1\">\n";
+    const std::pair<const char*, std::string> arrays[4] = {
+        {"<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\"", points},
+        {"</Points><Cells><DataArray type=\"Int64\" Name=\"connectivity\"", conn},
+        {"<DataArray type=\"Int32\" Name=\"offsets\"", offsets},
+        {"<DataArray type=\"UInt8\" Name=\"types\"", types}};
+    // Inline base64, header and data encoded separately.
+    std::string inline_file = head;
+    for (const auto& [tag, data] : arrays) {
+      const auto [h, d] = with_length(data);
+      inline_file += std::string(tag) + " format=\"binary\">" + base64(h) + base64(d) + "</DataArray>\n";
+    }
+    inline_file += "</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+    // Appended, raw and base64.
+    std::string files[2];
+    for (int enc = 0; enc < 2; ++enc) {
+      std::string f = head, blob;
+      for (const auto& [tag, data] : arrays) {
+        f += std::string(tag) + " format=\"appended\" offset=\"" + std::to_string(blob.size()) + "\"/>\n";
+        const auto [h, d] = with_length(data);
+        blob += enc == 0 ? h + d : base64(h) + base64(d);
+      }
+      f += "</Cells>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"" + std::string(enc == 0 ? "raw" : "base64") +
+           "\">\n_" + blob + "\n</AppendedData>\n</VTKFile>\n";
+      files[enc] = f;
+    }
+    for (const auto& [name, content] : {std::pair{"inline.vtu", inline_file}, {"raw.vtu", files[0]}, {"b64.vtu", files[1]}}) {
+      const MeshFile m = read_mesh(write(header + name, content));
+      ASSERT_EQ(m.mesh.cell_count(), 1) << header << name;
+      for (int a = 0; a < 8; ++a)
+        EXPECT_EQ(m.mesh.vertices.col(m.mesh.cells(a, 0)), Eigen::Vector3d(a & 1, (a >> 1) & 1, a >> 2)) << header << name;
+    }
+  }
+}
+
 TEST_F(MeshRead, OurOwnTetFramesReadBack) {
   const VolumeMesh t = box_tets(2);
   write_vtu(dir_ / "t.vtu", t, t.vertices, {{"displacement", Eigen::Matrix3Xd::Zero(3, t.vertex_count())}},
@@ -191,7 +258,9 @@ TEST_F(MeshRead, MalformedFilesGiveOneLineErrors) {
   EXPECT_EQ(error_of("l.mesh", "MeshVersionFormatted 2\nDimension 3\nPrisms 1\n"), ":3: unknown or unsupported section 'Prisms'");
   EXPECT_EQ(error_of("m.stl", "solid x\n"), ": unknown mesh format '.stl' (known: .node/.ele, .mesh, .msh, .vtu)");
   EXPECT_EQ(error_of("n.vtu", "<VTKFile type=\"UnstructuredGrid\">\n<AppendedData encoding=\"raw\">"),
-            ":2: appended data is not supported yet (write ASCII)");
+            ":2: <AppendedData> without the '_' that starts the data");
+  EXPECT_EQ(error_of("o.vtu", "<VTKFile type=\"UnstructuredGrid\" compressor=\"vtkZLibDataCompressor\">"),
+            ":1: compressed data (vtkZLibDataCompressor) is not supported: write the file uncompressed");
   EXPECT_THROW((void)read_mesh(dir_ / "missing.mesh"), MeshError);
 }
 

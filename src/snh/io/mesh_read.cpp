@@ -483,16 +483,102 @@ std::string attribute(std::string_view tag, std::string_view name) {
   return end == std::string_view::npos ? "" : std::string(tag.substr(start, end - start));
 }
 
+/// Decodes base64, allowing several padded streams one after another (VTK encodes the length header
+/// and the data separately). Returns false on a character outside the alphabet.
+bool decode_base64(std::string_view in, std::string& out) {
+  auto value = [](char c) -> int {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    if (c == '+') return 62;
+    if (c == '/') return 63;
+    return -1;
+  };
+  out.clear();
+  unsigned buffer = 0;
+  int bits = 0;
+  for (char c : in) {
+    if (std::isspace(static_cast<unsigned char>(c))) continue;
+    if (c == '=') {  // padding: the current stream ends; drop its partial bits
+      buffer = 0;
+      bits = 0;
+      continue;
+    }
+    const int v = value(c);
+    if (v < 0) return false;
+    buffer = (buffer << 6) | static_cast<unsigned>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<char>((buffer >> bits) & 0xFF));
+    }
+  }
+  return true;
+}
+
+/// Reads `count` little-endian values of VTK type `type` from bytes, as doubles; nullopt for an unknown type.
+std::optional<std::vector<double>> decode_values(std::string_view type, const char* bytes, std::size_t count) {
+  std::vector<double> out(count);
+  auto take = [&](auto tag) {
+    using T = decltype(tag);
+    for (std::size_t i = 0; i < count; ++i) {
+      T v;
+      std::memcpy(&v, bytes + i * sizeof(T), sizeof(T));
+      out[i] = static_cast<double>(v);
+    }
+  };
+  if (type == "Float64") take(double{});
+  else if (type == "Float32") take(float{});
+  else if (type == "Int64") take(std::int64_t{});
+  else if (type == "UInt64") take(std::uint64_t{});
+  else if (type == "Int32") take(std::int32_t{});
+  else if (type == "UInt32") take(std::uint32_t{});
+  else if (type == "Int16") take(std::int16_t{});
+  else if (type == "UInt16") take(std::uint16_t{});
+  else if (type == "Int8") take(std::int8_t{});
+  else if (type == "UInt8") take(std::uint8_t{});
+  else return std::nullopt;
+  return out;
+}
+
+std::size_t vtk_type_size(std::string_view type) {
+  if (type == "Float64" || type == "Int64" || type == "UInt64") return 8;
+  if (type == "Float32" || type == "Int32" || type == "UInt32") return 4;
+  if (type == "Int16" || type == "UInt16") return 2;
+  if (type == "Int8" || type == "UInt8") return 1;
+  return 0;
+}
+
 MeshFile read_vtu(const fs::path& path) {
   const std::string text = read_all(path);
   const std::string file = path.string();
-  auto line_of = [&](std::size_t pos) { return 1 + static_cast<int>(std::count(text.begin(), text.begin() + pos, '\n')); };
+  auto line_of = [&](std::size_t pos) {
+    return 1 + static_cast<int>(std::count(text.begin(), text.begin() + std::min(pos, text.size()), '\n'));
+  };
   auto fail = [&](std::size_t pos, const std::string& what) -> void {
     throw MeshError(fmt::format("{}:{}: {}", file, line_of(pos), what));
   };
-  if (text.find("<VTKFile") == std::string::npos || text.find("UnstructuredGrid") == std::string::npos)
+  const std::size_t root = text.find("<VTKFile");
+  if (root == std::string::npos || text.find("UnstructuredGrid") == std::string::npos)
     fail(0, "not a VTK UnstructuredGrid (.vtu) file");
-  if (text.find("<AppendedData") != std::string::npos) fail(text.find("<AppendedData"), "appended data is not supported yet (write ASCII)");
+  const std::string_view root_tag = std::string_view(text).substr(root, text.find('>', root) - root);
+  if (const std::string c = attribute(root_tag, "compressor"); !c.empty())
+    fail(root, fmt::format("compressed data ({}) is not supported: write the file uncompressed", c));
+  if (attribute(root_tag, "byte_order") == "BigEndian") fail(root, "big-endian data is not supported");
+  const std::string header_type = attribute(root_tag, "header_type");
+  const std::size_t header_size = header_type == "UInt64" ? 8 : 4;
+  if (!header_type.empty() && header_type != "UInt32" && header_type != "UInt64")
+    fail(root, fmt::format("unknown header_type \"{}\"", header_type));
+  // The appended data: what follows the underscore, raw or base64.
+  std::string_view appended;
+  bool appended_base64 = false;
+  if (const std::size_t ad = text.find("<AppendedData"); ad != std::string::npos) {
+    const std::string_view tag = std::string_view(text).substr(ad, text.find('>', ad) - ad);
+    appended_base64 = attribute(tag, "encoding") == "base64";
+    const std::size_t underscore = text.find('_', text.find('>', ad));
+    if (underscore == std::string::npos) fail(ad, "<AppendedData> without the '_' that starts the data");
+    appended = std::string_view(text).substr(underscore + 1);
+  }
   const std::size_t piece = text.find("<Piece");
   if (piece == std::string::npos) fail(0, "no <Piece>");
   const std::string_view piece_tag = std::string_view(text).substr(piece, text.find('>', piece) - piece);
@@ -503,56 +589,96 @@ MeshFile read_vtu(const fs::path& path) {
   } catch (const std::exception&) {
     fail(piece, "<Piece> needs NumberOfPoints and NumberOfCells");
   }
-  // The ASCII contents of the DataArray named `name` inside section `section` (or its first one).
-  auto array = [&](const char* section, const char* name, std::size_t& where) {
+  if (n_points < 0 || n_cells < 0 || n_points > (1LL << 31) || n_cells > (1LL << 31)) fail(piece, "implausible point or cell count");
+  // The values of the DataArray named `name` inside `section` (or its first one), `expected` of them.
+  auto array = [&](const char* section, const char* name, long long expected, std::size_t& where) {
     const std::size_t sec = text.find(fmt::format("<{}", section), piece);
     if (sec == std::string::npos) fail(piece, fmt::format("no <{}> section", section));
+    const std::size_t sec_end = text.find(fmt::format("</{}", section), sec);
     std::size_t at = sec;
     for (;;) {
       at = text.find("<DataArray", at + 1);
-      const std::size_t sec_end = text.find(fmt::format("</{}", section), sec);
       if (at == std::string::npos || at > sec_end) fail(sec, fmt::format("no DataArray {} in <{}>", name ? name : "", section));
       const std::string_view tag = std::string_view(text).substr(at, text.find('>', at) - at);
       if (name && attribute(tag, "Name") != name) continue;
-      const std::string format = attribute(tag, "format");
-      if (format != "ascii") fail(at, fmt::format("DataArray {} has format \"{}\": only ascii is supported yet", name ? name : section, format));
-      const std::size_t start = text.find('>', at) + 1, end = text.find("</DataArray>", start);
-      if (end == std::string::npos) fail(at, "unterminated DataArray");
-      where = start;
-      return std::string_view(text).substr(start, end - start);
+      where = at;
+      const std::string label = name ? name : section;
+      const std::string format = attribute(tag, "format"), type = attribute(tag, "type");
+      if (format == "ascii") {
+        const std::size_t start = text.find('>', at) + 1, end = text.find("</DataArray>", start);
+        if (end == std::string::npos) fail(at, "unterminated DataArray");
+        std::vector<double> out;
+        Lexer lx(path, text.substr(start, end - start));
+        while (!lx.at_end()) out.push_back(lx.number(label.c_str()));
+        if (static_cast<long long>(out.size()) != expected)
+          fail(at, fmt::format("{} has {} values, expected {}", label, out.size(), expected));
+        return out;
+      }
+      const std::size_t size = vtk_type_size(type);
+      if (size == 0) fail(at, fmt::format("DataArray {} has unknown type \"{}\"", label, type));
+      std::string bytes;
+      if (format == "binary") {
+        const std::size_t start = text.find('>', at) + 1, end = text.find("</DataArray>", start);
+        if (end == std::string::npos) fail(at, "unterminated DataArray");
+        if (!decode_base64(std::string_view(text).substr(start, end - start), bytes)) fail(at, fmt::format("DataArray {}: invalid base64", label));
+      } else if (format == "appended") {
+        if (appended.empty()) fail(at, fmt::format("DataArray {} is appended, but the file has no <AppendedData>", label));
+        std::size_t offset = 0;
+        try {
+          offset = std::stoull(attribute(tag, "offset"));
+        } catch (const std::exception&) {
+          fail(at, fmt::format("DataArray {} is appended but has no offset", label));
+        }
+        if (offset >= appended.size()) fail(at, fmt::format("DataArray {}: offset {} is past the end of the appended data", label, offset));
+        if (appended_base64) {
+          // Base64: the header, then the data, each its own stream; decode enough characters for both.
+          const std::size_t chars = 4 * ((header_size + 2) / 3) + 4 * ((static_cast<std::size_t>(expected) * size + 2) / 3);
+          if (!decode_base64(appended.substr(offset, chars), bytes)) fail(at, fmt::format("DataArray {}: invalid base64", label));
+        } else {
+          bytes = std::string(appended.substr(offset, header_size + static_cast<std::size_t>(expected) * size));
+        }
+      } else {
+        fail(at, fmt::format("DataArray {} has unknown format \"{}\"", label, format));
+      }
+      if (bytes.size() < header_size) fail(at, fmt::format("DataArray {}: the data ends before its length header", label));
+      std::uint64_t length = 0;
+      std::memcpy(&length, bytes.data(), header_size);  // little-endian: the low bytes come first
+      if (length != static_cast<std::uint64_t>(expected) * size || bytes.size() < header_size + length)
+        fail(at, fmt::format("DataArray {}: {} bytes of data, expected {} ({} values of {})", label,
+                             std::min<std::uint64_t>(length, bytes.size() - header_size), expected * size, expected, type));
+      std::vector<double> out = *decode_values(type, bytes.data() + header_size, static_cast<std::size_t>(expected));
+      if (std::strcmp(section, "Points") == 0)
+        for (double v : out)
+          if (!std::isfinite(v)) fail(at, "a point coordinate is not finite");
+      return out;
     }
   };
-  auto numbers = [&](std::string_view body, std::size_t where, long long expected, const char* what) {
-    std::vector<double> out;
-    Lexer lx(path, std::string(body));
-    while (!lx.at_end()) out.push_back(lx.number(what));
-    if (static_cast<long long>(out.size()) != expected)
-      fail(where, fmt::format("{} has {} values, expected {}", what, out.size(), expected));
-    return out;
-  };
   std::size_t where = 0;
-  const std::vector<double> points = numbers(array("Points", nullptr, where), where, 3 * n_points, "Points");
+  const std::vector<double> points = array("Points", nullptr, 3 * n_points, where);
   Builder b;
   Lexer dummy(path, "");
   for (long long i = 0; i < n_points; ++i) b.vertex(dummy, i, points[3 * i], points[3 * i + 1], points[3 * i + 2]);
   std::size_t w_off = 0, w_types = 0, w_conn = 0;
-  const std::vector<double> offsets = numbers(array("Cells", "offsets", w_off), w_off, n_cells, "offsets");
-  const std::vector<double> types = numbers(array("Cells", "types", w_types), w_types, n_cells, "types");
-  const std::string_view conn_body = array("Cells", "connectivity", w_conn);
-  const std::vector<double> conn =
-      numbers(conn_body, w_conn, n_cells ? static_cast<long long>(offsets.back()) : 0, "connectivity");
+  const std::vector<double> offsets = array("Cells", "offsets", n_cells, w_off);
+  const std::vector<double> types = array("Cells", "types", n_cells, w_types);
+  long long total = n_cells ? static_cast<long long>(offsets.back()) : 0;
+  if (total < 0 || total > (1LL << 33)) fail(w_off, "implausible offsets");
+  const std::vector<double> conn = array("Cells", "connectivity", total, w_conn);
   long long previous = 0;
   for (long long c = 0; c < n_cells; ++c) {
     const long long type = static_cast<long long>(types[c]), end = static_cast<long long>(offsets[c]);
-    const int nodes = type == 10 ? 4 : type == 12 ? 8 : -1;
+    if (end < previous || end > total) fail(w_off, fmt::format("cell {}: offsets are not increasing", c));
     if (type == 5 || type == 9 || type == 3 || type == 1) {  // surface / line / vertex cells: skipped
       previous = end;
       continue;
     }
+    const int nodes = type == 10 ? 4 : type == 12 ? 8 : -1;
     if (nodes < 0) fail(w_types, fmt::format("cell {} has unsupported VTK type {} (tets 10 and hexes 12 only)", c, type));
     if (end - previous != nodes) fail(w_off, fmt::format("cell {}: offsets give {} nodes for a {}-node cell", c, end - previous, nodes));
     std::vector<long long> v(nodes);
     for (int a = 0; a < nodes; ++a) v[a] = static_cast<long long>(conn[previous + a]);
+    for (long long id : v)
+      if (id < 0 || id >= n_points) fail(w_conn, fmt::format("cell {} refers to point {}, which does not exist", c, id));
     b.cell(dummy, nodes == 4 ? CellType::tet4 : CellType::hex8, nodes == 4 ? v : hex_to_lattice(v), 0);
     previous = end;
   }
