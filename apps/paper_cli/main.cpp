@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "../common/omp_env.hpp"
+#include "snh/sim/interrupt.hpp"
 #include "snh/sim/stretch.hpp"
 
 namespace {
@@ -71,7 +72,9 @@ int main(int argc, char** argv) {
   try {
     config.live_progress = ::isatty(STDOUT_FILENO) != 0;
     snh::validate(config);
+    snh::install_stop_handlers();
     const snh::StretchResult result = snh::run_stretch(config, std::cout);
+    if (result.interrupted_by) return 128 + result.interrupted_by;
     return result.all_converged ? 0 : 1;
   } catch (const std::exception& e) {
     fail(program, e.what());

@@ -6,6 +6,7 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include "snh/sim/interrupt.hpp"
 #include "snh/sim/scene.hpp"
 
 namespace snh::cli {
@@ -28,8 +29,9 @@ void add_run_command(CLI::App& app, int& exit_code) {
     Scene scene = load_scene(o->scene);
     if (!o->out.empty()) scene.out = o->out;
     if (o->threads > 0) omp_set_num_threads(o->threads);
+    install_stop_handlers();
     const SceneResult r = run_scene(scene, std::cout, ::isatty(STDOUT_FILENO) != 0);
-    exit_code = r.all_converged ? 0 : 1;
+    exit_code = r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;
   });
 }
 

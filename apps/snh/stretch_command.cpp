@@ -8,6 +8,7 @@
 
 #include "parameter_options.hpp"
 #include "snh/material/registry.hpp"
+#include "snh/sim/interrupt.hpp"
 #include "snh/sim/stretch.hpp"
 
 namespace snh::cli {
@@ -90,8 +91,9 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     if (o->threads > 0) omp_set_num_threads(o->threads);
     c.live_progress = ::isatty(STDOUT_FILENO) != 0;
     validate(c);
+    install_stop_handlers();
     const StretchResult r = run_stretch(c, std::cout);
-    exit_code = r.all_converged ? 0 : 1;
+    exit_code = r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;
   });
 }
 

@@ -69,5 +69,10 @@ facts=$(sed -n 's/^  "factorizations": \([0-9]*\),/\1/p' "$work/r/stats.json")
 expect_error "stretch solver" "solver" -- "$SNH" stretch --solver umfpack --out "$work/s2"
 expect_error "stretch poisson" "Poisson's ratio must satisfy" -- "$SNH" stretch --youngs 100 --poisson 0.5 --out "$work/s3"
 
+# Ctrl-C: the run stops cleanly with exit code 130, keeping its frames and stats.
+timeout --preserve-status -s INT 3 "$SNH" stretch --element hex --res 30 --out "$work/int" > "$work/int.log" 2>&1; code=$?
+[ "$code" -eq 130 ] && grep -q '"interrupted_by_signal": 2' "$work/int/stats.json" && [ -f "$work/int/000.obj" ] \
+  && grep -q "STOPPED: interrupted" "$work/int.log" && ok || bad "SIGINT (exit $code): $(tail -2 "$work/int.log")"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

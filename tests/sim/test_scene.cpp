@@ -4,12 +4,16 @@
 
 #include <unistd.h>
 
+#include <csignal>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "snh/sim/interrupt.hpp"
 #include "snh/sim/scene.hpp"
 
 namespace snh {
@@ -182,6 +186,31 @@ TEST(SceneRun, AStartOutsideTheDomainIsReportedNotCrashed) {
   const SceneResult good = run_json(scene("stable_neo_hookean"), "inverted_snh");
   EXPECT_TRUE(good.all_converged) << good.failure;
   EXPECT_EQ(good.frames.size(), 3u);
+}
+
+TEST(SceneRun, AStopKeepsTheCompletedFrames) {
+  Scene s = parse_scene(json::parse(R"({"mesh": {"box": {"res": 2}}, "gravity": [0, -9.8, 0], "frames": 10, "end_time": 1,
+                                        "pins": [{"region": {"min": [-1, 1, -1], "max": [1, 1, 1]}}]})"),
+                        "stop.json");
+  int calls = 0;
+  s.newton.on_iteration = [&](int, double) {
+    if (++calls == 40) request_stop(SIGINT);
+  };
+  s.out = std::filesystem::temp_directory_path() / ("snh_test_scene_stop_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(s.out);
+  std::ostringstream log;
+  const SceneResult r = run_scene(s, log);
+  request_stop(0);
+  EXPECT_EQ(r.interrupted_by, SIGINT);
+  EXPECT_FALSE(r.all_converged);
+  const std::size_t frames = r.frames.size();  // frame 0 and the completed ones
+  ASSERT_GT(frames, 1u);
+  ASSERT_LT(frames, 11u);
+  EXPECT_TRUE(std::filesystem::exists(s.out / fmt::format("{:03d}.obj", frames - 1)));
+  EXPECT_FALSE(std::filesystem::exists(s.out / fmt::format("{:03d}.obj", frames)));
+  EXPECT_TRUE(r.final_positions.allFinite());
+  EXPECT_NE(r.failure.find("interrupted by signal 2"), std::string::npos) << r.failure;
+  std::filesystem::remove_all(s.out);
 }
 
 TEST(SceneRun, AMeshFileRelativeToTheScene) {

@@ -4,6 +4,8 @@
 
 #include <unistd.h>
 
+#include <csignal>
+
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -11,8 +13,11 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "snh/io/mesh_write.hpp"
 #include "snh/mesh/box.hpp"
+#include "snh/sim/interrupt.hpp"
 #include "snh/sim/stretch.hpp"
 
 namespace snh {
@@ -170,6 +175,41 @@ TEST(StretchMeshFile, AMeshFileOfTheBoxGivesTheBoxResultAndAnyAxisWorks) {
     EXPECT_NEAR(r.steps.back().energy, ry.steps.back().energy, 1e-9 * ry.steps.back().energy);
   }
   fs::remove_all(dir);
+}
+
+TEST(StretchInterrupt, AStopKeepsTheCompletedStepsAndTheirFrames) {
+  const fs::path full_dir = fresh_dir("int_full"), cut_dir = fresh_dir("int_cut");
+  StretchConfig c;
+  c.element = CellType::hex8;
+  c.resolution = 3;
+  c.steps = 8;
+  c.out = full_dir;
+  std::ostringstream log;
+  const StretchResult full = run_stretch(c, log);
+  ASSERT_TRUE(full.all_converged);
+  // Ask to stop (as SIGTERM would) at the 6th Newton iteration, in the middle of a step.
+  int calls = 0;
+  c.newton.on_iteration = [&](int, double) {
+    if (++calls == 6) request_stop(SIGTERM);
+  };
+  c.out = cut_dir;
+  const StretchResult cut = run_stretch(c, log);
+  request_stop(0);
+  EXPECT_EQ(cut.interrupted_by, SIGTERM);
+  EXPECT_FALSE(cut.all_converged);
+  const std::size_t done = cut.steps.size();
+  ASSERT_GT(done, 0u);
+  ASSERT_LT(done, 8u);
+  const std::string last = fmt::format("{:03d}.obj", done), next = fmt::format("{:03d}.obj", done + 1);
+  EXPECT_TRUE(fs::exists(cut_dir / last));
+  EXPECT_FALSE(fs::exists(cut_dir / next)) << "the abandoned step wrote no frame";
+  EXPECT_EQ(read_obj_vertices(cut_dir / last), read_obj_vertices(full_dir / last)) << "completed frames are the full run's";
+  std::ifstream stats(cut_dir / "stats.json");
+  const std::string text((std::istreambuf_iterator<char>(stats)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"interrupted_by_signal\": 15"), std::string::npos);
+  EXPECT_NE(log.str().find("INTERRUPTED by signal 15"), std::string::npos);
+  fs::remove_all(full_dir);
+  fs::remove_all(cut_dir);
 }
 
 TEST(StretchMirroredTets, ConvergesEveryStepAndIsMirrorSymmetricInXAndZ) {

@@ -16,6 +16,7 @@
 #include "snh/io/mesh_read.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/sim/dynamics.hpp"
+#include "snh/sim/interrupt.hpp"
 #include "snh/sim/output.hpp"
 
 namespace snh {
@@ -271,6 +272,7 @@ void write_scene_stats(const Scene& s, const SceneResult& r) {
   j["cells"] = r.cells;
   j["all_converged"] = r.all_converged;
   j["failure"] = r.failure;
+  j["interrupted_by_signal"] = r.interrupted_by;
   j["total_seconds"] = r.total_seconds;
   j["peak_memory_mib"] = r.peak_memory_mib;
   json frames = json::array();
@@ -557,6 +559,11 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
     frames.write(f.frame, f.time, x, d.min_J);
   };
   auto finish = [&]() {
+    if (stop_requested()) {
+      result.interrupted_by = stop_signal();
+      result.all_converged = false;
+      result.failure = fmt::format("interrupted by signal {} after frame {}", result.interrupted_by, result.frames.back().frame);
+    }
     result.total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
     result.peak_memory_mib = peak_memory_mib();
     result.final_positions = x;
@@ -587,7 +594,9 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
 
   Eigen::VectorXd previous = x;  // quasi-static: the solution one frame back, for extrapolation
   for (int frame = 1; frame <= s.frames; ++frame) {
+    if (stop_requested()) break;
     const auto t_frame = Clock::now();
+    const Eigen::VectorXd frame_start_x = x, frame_start_v = v;
     FrameStats f;
     f.frame = frame;
     f.time = frame * frame_dt;
@@ -603,6 +612,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
         place_pins(guess, t);
       }
       NewtonOptions newton = s.newton;
+      newton.should_stop = [] { return stop_requested(); };
       if (live_progress)
         newton.on_iteration = [&](int it, double r) {
           log << fmt::format("\r\x1b[2Kframe {:>3}/{}: substep {}/{}, Newton iteration {}, |g| = {:.2e} ...", frame,
@@ -613,6 +623,10 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
       x = guess;
       const NewtonReport rep = newton_solve(potential, x, *solver, newton);
       if (live_progress) log << "\r\x1b[2K";
+      if (rep.interrupted) {  // abandon the frame: back to the last completed substep's state
+        x = x_n;
+        break;
+      }
       f.newton_iterations += rep.iterations;
       f.line_search_steps += rep.line_search_steps;
       f.linear_iterations += rep.linear_iterations;
@@ -625,6 +639,11 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
         if (!x.allFinite()) x = x_n;  // never write a non-finite frame
         break;
       }
+    }
+    if (stop_requested()) {  // interrupted inside this frame: its substeps are not written
+      x = frame_start_x;
+      v = frame_start_v;
+      break;
     }
     record(f);
     f.wall_seconds = std::chrono::duration<double>(Clock::now() - t_frame).count();

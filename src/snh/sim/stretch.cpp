@@ -13,6 +13,7 @@
 #include "snh/io/mesh_read.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/box.hpp"
+#include "snh/sim/interrupt.hpp"
 #include "snh/sim/output.hpp"
 
 namespace snh {
@@ -50,6 +51,7 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   j["vertices"] = r.vertices;
   j["cells"] = r.cells;
   j["all_converged"] = r.all_converged;
+  j["interrupted_by_signal"] = r.interrupted_by;
   j["total_seconds"] = r.total_seconds;
   j["middle_width"] = r.middle_width;
   j["peak_memory_mib"] = r.peak_memory_mib;
@@ -157,6 +159,10 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   Eigen::VectorXd previous = x;  // the solution one step back, for extrapolation
 
   for (int s = 1; s <= c.steps; ++s) {
+    if (stop_requested()) {
+      result.interrupted_by = stop_signal();
+      break;
+    }
     const auto t_step = Clock::now();
     // Initial guess: linear extrapolation from the last two solutions; at step 1, the rest state
     // stretched affinely to the new boundary.
@@ -182,6 +188,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     previous = x;
     x = guess;
     NewtonOptions newton = c.newton;
+    newton.should_stop = [] { return stop_requested(); };
     if (c.live_progress)
       newton.on_iteration = [&](int it, double r) {
         log << fmt::format("\r\x1b[2Kstep {:>3}/{}: Newton iteration {}, |f| = {:.2e} ...", s, c.steps, it, r);
@@ -189,6 +196,11 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
       };
     const NewtonReport rep = newton_solve(system, x, *solver, newton);
     if (c.live_progress) log << "\r\x1b[2K";
+    if (rep.interrupted) {  // abandon this step: the state stays at the last completed one
+      x = previous;
+      result.interrupted_by = stop_signal();
+      break;
+    }
 
     StepStats st;
     st.step = s;
@@ -239,10 +251,16 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   }
   result.total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
   result.peak_memory_mib = peak_memory_mib();
+  if (result.interrupted_by) result.all_converged = false;
   write_stats(c, result);
+  if (result.interrupted_by)
+    log << fmt::format("INTERRUPTED by signal {} after step {}: frames 000 to {:03d} and the stats are kept\n",
+                       result.interrupted_by, result.steps.size(), result.steps.size());
   log << fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); middle cross-section width {:.4f} (rest {:.4g}); frames ("
                      "NNN.obj{}), stats.json and stats.csv in {}\n",
-                     result.all_converged ? "converged every step" : "STOPPED: a step did not converge",
+                     result.all_converged    ? "converged every step"
+                     : result.interrupted_by ? "STOPPED: interrupted"
+                                             : "STOPPED: a step did not converge",
                      result.total_seconds, result.peak_memory_mib, result.middle_width, result.middle_rest_width,
                      c.write_vtu ? ", NNN.vtu, frames.pvd" : "", c.out.string());
   return result;

@@ -59,6 +59,7 @@ struct StepStats {
 struct StretchResult {
   std::vector<StepStats> steps;
   bool all_converged = true;
+  int interrupted_by = 0;     ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
   double total_seconds = 0.0;
   /// At the last step, the extent along the first other axis (x, or y when stretching along x) of the
   /// vertex layer nearest the middle (the largest rest coordinate along the axis not above the centre).

@@ -38,6 +38,11 @@ NewtonReport newton_iterations(const Objective& system, Eigen::VectorXd& x, Line
       report.converged = true;
       return report;
     }
+    if (options.should_stop && options.should_stop()) {
+      report.interrupted = true;
+      report.failure = fmt::format("interrupted at Newton iteration {}", report.iterations);
+      return report;
+    }
     if (report.iterations >= options.max_iterations) {
       report.failure = fmt::format("no convergence in {} Newton iterations (|g| = {:.3e})", options.max_iterations, r);
       return report;

@@ -30,6 +30,8 @@ struct NewtonOptions {
   int max_halvings = 60;
   /// Called at the start of every iteration with its number (0 = the starting state) and ‖g‖.
   std::function<void(int iteration, double residual)> on_iteration;
+  /// Asked at the start of every iteration; true stops the solve with `interrupted` set.
+  std::function<bool()> should_stop;
 };
 
 struct NewtonReport {
@@ -45,6 +47,7 @@ struct NewtonReport {
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;
   std::string failure;            ///< why it stopped without converging (empty when converged)
+  bool interrupted = false;       ///< stopped because should_stop() said so
 };
 
 /// Minimises the objective (the elastic energy, or a time step's incremental potential) over the free
