@@ -15,6 +15,7 @@ void add_run_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::string scene, out;
     int threads = 0;
+    bool resume = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -24,10 +25,12 @@ void add_run_command(CLI::App& app, int& exit_code) {
       "and stats.csv. Exit code 0 when every step converged, 1 when the run stopped early, 2 for bad input.");
   cmd->add_option("scene", o->scene, "Scene file (.json)")->required();
   cmd->add_option("--out", o->out, "Output directory (default: the scene's output.dir, else output/<scene name>)");
+  cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
   cmd->callback([o, &exit_code]() {
     Scene scene = load_scene(o->scene);
     if (!o->out.empty()) scene.out = o->out;
+    scene.resume = o->resume;
     if (o->threads > 0) omp_set_num_threads(o->threads);
     install_stop_handlers();
     const SceneResult r = run_scene(scene, std::cout, ::isatty(STDOUT_FILENO) != 0);

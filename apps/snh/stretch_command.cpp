@@ -28,6 +28,7 @@ struct Options {
   std::string projection = "clamp";
   bool projected_only = false;
   bool refactorize = false;
+  bool resume = false;
   std::string tet_split = "paper";
   std::string mesh, axis = "y";
 };
@@ -63,6 +64,8 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--refactorize", o->refactorize,
                 "Direct solvers: factorize every Newton matrix (by default the last factor preconditions conjugate "
                 "gradients on the next matrix, and a new factorization is made only when that converges slowly)");
+  cmd->add_flag("--resume", o->resume,
+                "Continue a stopped run in --out from its last completed step (the other options must be the same)");
   cmd->add_option("--tolerance", o->tolerance, "Newton stops when |f| < tolerance (default 1e-3: |f|^2 < 1e-6 as the paper)");
   cmd->add_option("--projection", o->projection, "PSD projection of element Hessians: clamp (default) or abs")
       ->check(CLI::IsMember({"clamp", "abs"}));
@@ -85,6 +88,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     c.out = o->out;
     c.solver = *parse_linear_solver(o->solver);
     c.reuse_factor = !o->refactorize;
+    c.resume = o->resume;
     c.newton.tolerance = o->tolerance;
     c.newton.projection = *parse_projection(o->projection);
     c.newton.try_true_hessian = !o->projected_only;

@@ -74,5 +74,12 @@ timeout --preserve-status -s INT 3 "$SNH" stretch --element hex --res 30 --out "
 [ "$code" -eq 130 ] && grep -q '"interrupted_by_signal": 2' "$work/int/stats.json" && [ -f "$work/int/000.obj" ] \
   && grep -q "STOPPED: interrupted" "$work/int.log" && ok || bad "SIGINT (exit $code): $(tail -2 "$work/int.log")"
 
+# --resume: a completed run resumes at its end; an empty directory has nothing to resume.
+"$SNH" stretch --element tet --res 2 --steps 3 --stretch 1.5 --out "$work/res" > /dev/null 2>&1
+out="$("$SNH" stretch --element tet --res 2 --steps 3 --stretch 1.5 --out "$work/res" --resume 2>&1)"; code=$?
+[ "$code" -eq 0 ] && printf '%s' "$out" | grep -q "resuming after step 3" && ok || bad "resume complete run (exit $code): $out"
+out="$("$SNH" stretch --res 2 --out "$work/empty" --resume 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "cannot resume: .* has no checkpoint.bin" && ok || bad "resume nothing (exit $code): $out"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

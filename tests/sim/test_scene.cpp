@@ -213,6 +213,41 @@ TEST(SceneRun, AStopKeepsTheCompletedFrames) {
   std::filesystem::remove_all(s.out);
 }
 
+TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
+  const json j = json::parse(R"({"mesh": {"box": {"res": 2}}, "gravity": [0, -9.8, 0], "frames": 12, "end_time": 1.2,
+                                 "damping": {"mass": 0.5}, "pins": [{"region": {"min": [-1, 1, -1], "max": [1, 1, 1]}}]})");
+  const auto base = std::filesystem::temp_directory_path() / ("snh_test_scene_resume_" + std::to_string(::getpid()));
+  Scene full = parse_scene(j, "resume.json"), cut = full;
+  full.out = base / "full";
+  cut.out = base / "cut";
+  std::ostringstream log;
+  const SceneResult a = run_scene(full, log);
+  ASSERT_TRUE(a.all_converged);
+  int calls = 0;
+  cut.newton.on_iteration = [&](int, double) {
+    if (++calls == 50) request_stop(SIGINT);
+  };
+  const SceneResult b = run_scene(cut, log);
+  request_stop(0);
+  ASSERT_EQ(b.interrupted_by, SIGINT);
+  ASSERT_LT(b.frames.size(), 13u);
+  Scene again = parse_scene(j, "resume.json");
+  again.out = cut.out;
+  again.resume = true;
+  const SceneResult c = run_scene(again, log);
+  ASSERT_TRUE(c.all_converged) << c.failure;
+  ASSERT_EQ(c.frames.size(), 13u);
+  EXPECT_EQ(c.frames[1].newton_iterations, a.frames[1].newton_iterations) << "the history before the stop is kept";
+  EXPECT_LT((c.final_positions - a.final_positions).cwiseAbs().maxCoeff(), 1e-6) << "the uninterrupted run's answer";
+  EXPECT_NEAR(c.frames.back().kinetic_energy, a.frames.back().kinetic_energy, 1e-6);
+  // Another scene in the same directory cannot resume there.
+  Scene other = parse_scene(json::parse(R"({"mesh": {"box": {"res": 2}}, "frames": 12})"), "resume.json");
+  other.out = cut.out;
+  other.resume = true;
+  EXPECT_THROW((void)run_scene(other, log), std::invalid_argument);
+  std::filesystem::remove_all(base);
+}
+
 TEST(SceneRun, AMeshFileRelativeToTheScene) {
   const auto dir = std::filesystem::temp_directory_path() / ("snh_test_scene_file_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir / "meshes");

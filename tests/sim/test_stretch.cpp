@@ -212,6 +212,59 @@ TEST(StretchInterrupt, AStopKeepsTheCompletedStepsAndTheirFrames) {
   fs::remove_all(cut_dir);
 }
 
+TEST(StretchInterrupt, ResumeContinuesFromTheLastCompletedStep) {
+  const fs::path full_dir = fresh_dir("resume_full"), dir = fresh_dir("resume");
+  StretchConfig c;
+  c.element = CellType::tet4;
+  c.resolution = 4;
+  c.steps = 10;
+  c.stretch = 2.5;
+  c.out = full_dir;
+  std::ostringstream log;
+  const StretchResult full = run_stretch(c, log);
+  ASSERT_TRUE(full.all_converged);
+  int calls = 0;
+  c.newton.on_iteration = [&](int, double) {
+    if (++calls == 9) request_stop(SIGINT);
+  };
+  c.out = dir;
+  const StretchResult cut = run_stretch(c, log);
+  request_stop(0);
+  ASSERT_EQ(cut.interrupted_by, SIGINT);
+  const std::size_t done = cut.steps.size();
+  ASSERT_LT(done, 10u);
+  // Resuming with other settings is refused, with a message naming both.
+  StretchConfig other = c;
+  other.newton.on_iteration = nullptr;
+  other.resume = true;
+  other.stretch = 3.0;
+  try {
+    (void)run_stretch(other, log);
+    ADD_FAILURE() << "resumed with another stretch";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("used other settings"), std::string::npos) << e.what();
+  }
+  StretchConfig again = c;
+  again.newton.on_iteration = nullptr;
+  again.resume = true;
+  const StretchResult resumed = run_stretch(again, log);
+  ASSERT_TRUE(resumed.all_converged);
+  ASSERT_EQ(resumed.steps.size(), 10u) << "the history before the stop is kept";
+  EXPECT_EQ(resumed.steps[0].newton_iterations, full.steps[0].newton_iterations);
+  // The same answer as the uninterrupted run, to the solver tolerance (the resumed run starts with a
+  // fresh factorization where the other reused one, so the last bits differ).
+  const Eigen::Matrix3Xd a = read_obj_vertices(full_dir / "010.obj"), b = read_obj_vertices(dir / "010.obj");
+  EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-4);
+  EXPECT_NEAR(resumed.middle_width, full.middle_width, 1e-4);
+  for (int s = 0; s <= 10; ++s) EXPECT_TRUE(fs::exists(dir / fmt::format("{:03d}.vtu", s)));
+  std::ifstream pvd(dir / "frames.pvd");
+  const std::string series((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
+  EXPECT_NE(series.find("000.vtu"), std::string::npos) << "the series lists the frames from before the stop";
+  EXPECT_NE(series.find("010.vtu"), std::string::npos);
+  fs::remove_all(full_dir);
+  fs::remove_all(dir);
+}
+
 TEST(StretchMirroredTets, ConvergesEveryStepAndIsMirrorSymmetricInXAndZ) {
   const fs::path out = fresh_dir("tet_mirrored");
   const StretchResult r = run(CellType::tet4, out, 1e-3, 25, 3.5, TetSplit::mirrored);

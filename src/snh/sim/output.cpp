@@ -20,6 +20,12 @@ double peak_memory_mib() {
 FrameWriter::FrameWriter(std::filesystem::path out, const VolumeMesh& mesh, bool write_vtu)
     : out_(std::move(out)), mesh_(mesh), surface_(boundary_triangles(mesh)), write_vtu_(write_vtu) {}
 
+void FrameWriter::adopt_written(int last, const std::function<double(int)>& time) {
+  series_.clear();
+  if (!write_vtu_) return;
+  for (int i = 0; i <= last; ++i) series_.emplace_back(time(i), fmt::format("{:03d}.vtu", i));
+}
+
 void FrameWriter::write(int index, double time, const Eigen::VectorXd& x, const Eigen::VectorXd& min_J) {
   const Eigen::Matrix3Xd X = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3);
   write_obj(out_ / fmt::format("{:03d}.obj", index), X, surface_);

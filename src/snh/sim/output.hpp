@@ -3,6 +3,7 @@
 // the boundary triangles) and NNN.vtu with a frames.pvd series for ParaView, each file written
 // atomically; and the process' peak memory for the stats.
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -25,6 +26,9 @@ class FrameWriter {
   ///   x      deformed positions, 3 #V
   ///   min_J  per cell
   void write(int index, double time, const Eigen::VectorXd& x, const Eigen::VectorXd& min_J);
+  /// Continues a series whose frames 0 … last are already on disk (a resumed run): lists them in the
+  /// .pvd at time(i) without writing anything.
+  void adopt_written(int last, const std::function<double(int)>& time);
   [[nodiscard]] const Eigen::Matrix3Xi& surface() const { return surface_; }
 
  private:

@@ -16,6 +16,7 @@
 #include "snh/io/mesh_read.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/sim/dynamics.hpp"
+#include "snh/sim/checkpoint.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/output.hpp"
 
@@ -248,6 +249,50 @@ Eigen::Matrix3Xd pin_targets(const PinSet& pin, const Eigen::Matrix3Xd& base, do
 
 using Clock = std::chrono::steady_clock;
 
+/// The first `count` frames' stats of DIR/stats.json (a resumed run's history).
+std::vector<FrameStats> read_frames(const std::filesystem::path& dir, int count) {
+  std::ifstream in(dir / "stats.json");
+  if (!in) throw std::invalid_argument(fmt::format("cannot resume: {} has no stats.json", dir.string()));
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::exception&) {
+    throw std::invalid_argument(fmt::format("cannot resume: {}/stats.json is not valid JSON", dir.string()));
+  }
+  auto num = [](const json& f, const char* key) {
+    const auto it = f.find(key);
+    return it == f.end() || !it->is_number() ? std::numeric_limits<double>::quiet_NaN() : it->get<double>();
+  };
+  std::vector<FrameStats> out;
+  for (const auto& f : j.value("frames", json::array())) {
+    if (static_cast<int>(out.size()) == count) break;
+    FrameStats s;
+    s.frame = f.value("frame", 0);
+    s.time = num(f, "time");
+    s.substeps = f.value("substeps", 0);
+    s.converged = f.value("converged", false);
+    s.newton_iterations = f.value("newton_iterations", 0);
+    s.line_search_steps = f.value("line_search_steps", 0);
+    s.linear_iterations = f.value("linear_iterations", 0);
+    s.factorizations = f.value("factorizations", 0);
+    s.residual = num(f, "residual");
+    s.elastic_energy = num(f, "elastic_energy");
+    s.kinetic_energy = num(f, "kinetic_energy");
+    s.gravity_energy = num(f, "gravity_energy");
+    s.total_energy = num(f, "total_energy");
+    s.volume_ratio = num(f, "volume_ratio");
+    s.min_J = num(f, "min_J");
+    s.inverted = f.value("inverted", 0);
+    s.wall_seconds = num(f, "wall_seconds");
+    s.failure = f.value("failure", std::string());
+    out.push_back(s);
+  }
+  if (static_cast<int>(out.size()) != count)
+    throw std::invalid_argument(fmt::format("cannot resume: {}/stats.json lists {} frames, the checkpoint needs {}",
+                                            dir.string(), out.size(), count));
+  return out;
+}
+
 void write_scene_stats(const Scene& s, const SceneResult& r) {
   json j;
   j["program"] = "snh run";
@@ -421,6 +466,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
   }
   if (s.out.empty()) s.out = std::filesystem::path("output") / source.stem();
   top.finish();
+  s.settings = j.dump();  // object keys sorted: the same text for the same scene
 
   // Selections must select something on this mesh.
   const VolumeMesh mesh = scene_mesh(s);
@@ -496,6 +542,10 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
                        reoriented ? fmt::format("; warning: {} inverted cell(s) re-oriented", reoriented) : "");
   Eigen::VectorXd x = initial_positions(s, mesh);
   const Eigen::Matrix3Xd X0 = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, mesh.vertex_count());
+  // A resume is checked before any work: the checkpoint must exist and match this scene.
+  const std::string print = "scene " + (s.settings.empty() ? s.source.string() : s.settings);
+  std::optional<Checkpoint> resume_from;
+  if (s.resume) resume_from = checkpoint_for_resume(s.out, print, x.size());
 
   // Pins: each set's vertices and their positions at t = 0 (the base of its motions).
   std::vector<std::uint8_t> fixed(3 * mesh.vertex_count(), 0);
@@ -574,7 +624,16 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
     return result;
   };
 
-  {
+  Eigen::VectorXd previous = x;  // quasi-static: the solution one frame back, for extrapolation
+  int first = 1;
+  if (resume_from) {
+    x = resume_from->x;
+    (dynamic ? v : previous) = resume_from->aux;
+    result.frames = read_frames(s.out, resume_from->step + 1);
+    frames.adopt_written(resume_from->step, [&](int i) { return i * frame_dt; });
+    first = resume_from->step + 1;
+    log << fmt::format("resuming after frame {} (checkpoint in {})\n", resume_from->step, s.out.string());
+  } else {
     FrameStats f0;
     const auto t0 = Clock::now();
     record(f0);
@@ -592,8 +651,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
     if (!result.all_converged) return finish();
   }
 
-  Eigen::VectorXd previous = x;  // quasi-static: the solution one frame back, for extrapolation
-  for (int frame = 1; frame <= s.frames; ++frame) {
+  for (int frame = first; frame <= s.frames; ++frame) {
     if (stop_requested()) break;
     const auto t_frame = Clock::now();
     const Eigen::VectorXd frame_start_x = x, frame_start_v = v;
@@ -658,6 +716,10 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
       result.failure = fmt::format("frame {}, {}", frame, f.failure);
       break;
     }
+    // Everything needed to resume after this frame: the stats so far and the exact state.
+    result.total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+    write_scene_stats(s, result);
+    write_checkpoint(s.out, {.fingerprint = print, .step = frame, .time = f.time, .x = x, .aux = dynamic ? v : previous});
   }
   return finish();
 }

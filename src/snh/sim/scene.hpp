@@ -65,6 +65,8 @@ enum class Integrator { backward_euler, quasi_static };
 
 struct Scene {
   std::filesystem::path source;  ///< the file, for messages and stats
+  std::string settings;          ///< the parsed file, canonical (checkpoint fingerprint); empty if built in code
+  bool resume = false;           ///< continue the run in `out` from its checkpoint (the last completed frame)
   // Mesh: a file (mesh_file, relative paths resolved against the scene file's directory), or else a box
   // of tets or hexes spanning [box_min, box_max].
   std::filesystem::path mesh_file;

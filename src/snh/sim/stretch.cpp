@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <fstream>
+#include <optional>
 #include <string>
 
 #include <fmt/format.h>
@@ -13,6 +15,7 @@
 #include "snh/io/mesh_read.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/box.hpp"
+#include "snh/sim/checkpoint.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/output.hpp"
 
@@ -29,6 +32,45 @@ void record_deformation(const ElasticSystem::Deformation& d, double rest_volume,
   st.min_J = d.min_J.minCoeff();
   st.inverted = static_cast<int>((d.min_J.array() <= 0.0).count());
   st.volume_ratio = d.volume / rest_volume;
+}
+
+/// The per-step stats of the first `count` steps of DIR/stats.json (a resumed run's history).
+std::vector<StepStats> read_steps(const std::filesystem::path& dir, int count) {
+  std::ifstream in(dir / "stats.json");
+  if (!in) throw std::invalid_argument(fmt::format("cannot resume: {} has no stats.json", dir.string()));
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(fmt::format("cannot resume: {}/stats.json is not valid JSON", dir.string()));
+  }
+  std::vector<StepStats> out;
+  for (const auto& s : j.value("steps", nlohmann::json::array())) {
+    if (static_cast<int>(out.size()) == count) break;
+    StepStats st;
+    st.step = s.value("step", 0);
+    st.converged = s.value("converged", false);
+    st.newton_iterations = s.value("newton_iterations", 0);
+    st.line_search_steps = s.value("line_search_steps", 0);
+    st.linear_iterations = s.value("linear_iterations", 0);
+    st.factorizations = s.value("factorizations", 0);
+    st.true_hessian_steps = s.value("true_hessian_steps", 0);
+    st.residual = s.value("residual", 0.0);
+    st.energy = s.value("energy", 0.0);
+    st.wall_seconds = s.value("wall_seconds", 0.0);
+    st.assembly_seconds = s.value("assembly_seconds", 0.0);
+    st.solve_seconds = s.value("solve_seconds", 0.0);
+    st.min_J = s.value("min_J", 0.0);
+    st.inverted = s.value("inverted", 0);
+    st.volume_ratio = s.value("volume_ratio", 1.0);
+    st.residuals = s.value("residual_history", std::vector<double>{});
+    st.failure = s.value("failure", std::string());
+    out.push_back(st);
+  }
+  if (static_cast<int>(out.size()) != count)
+    throw std::invalid_argument(fmt::format("cannot resume: {}/stats.json lists {} steps, the checkpoint {}", dir.string(),
+                                            out.size(), count));
+  return out;
 }
 
 void write_stats(const StretchConfig& c, const StretchResult& r) {
@@ -94,6 +136,20 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
 
 }  // namespace
 
+std::string fingerprint(const StretchConfig& c) {
+  return fmt::format("stretch: {} material {} mu {:.17g} lambda {:.17g}{}, {} steps to {:.17g}x along {}, tolerance {:.17g}, "
+                     "projection {}{}",
+                     c.mesh_file.empty() ? fmt::format("{} res {}{}", to_string(c.element), c.resolution,
+                                                       c.element == CellType::tet4 && c.tet_split == TetSplit::mirrored
+                                                           ? " mirrored"
+                                                           : "")
+                                         : "mesh " + c.mesh_file.string(),
+                     c.material, c.params.mu, c.params.lambda, c.reparametrize ? " reparametrized" : "", c.steps,
+                     c.stretch, char('x' + c.axis), c.newton.tolerance,
+                     c.newton.projection == PsdProjection::abs ? "abs" : "clamp",
+                     c.newton.try_true_hessian ? "" : ", projected only");
+}
+
 void validate(const StretchConfig& c) {
   if (c.axis < 0 || c.axis > 2) throw std::invalid_argument(fmt::format("axis must be 0, 1 or 2, got {}", c.axis));
   if (c.mesh_file.empty() && (c.resolution < 1 || c.resolution > 400))
@@ -119,6 +175,11 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     mesh = std::move(file.mesh);
     reoriented = file.reoriented;
   }
+
+  // A resume is checked before any work: the checkpoint must exist and match these settings.
+  const std::string print = fingerprint(c);
+  std::optional<Checkpoint> resume_from;
+  if (c.resume) resume_from = checkpoint_for_resume(c.out, print, 3 * mesh.vertex_count());
 
   // Kinematic vertices: the two extreme layers along the axis (the box's j = 0 and j = res layers),
   // all three coordinates; they move apart symmetrically about the centre.
@@ -155,10 +216,21 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
   FrameWriter frames(c.out, mesh, c.write_vtu);
   const double rest_volume = rest_volumes(system.rest()).sum();
-  frames.write(0, 0.0, x, Eigen::VectorXd::Ones(mesh.cell_count()));
   Eigen::VectorXd previous = x;  // the solution one step back, for extrapolation
+  int first = 1;
+  if (resume_from) {
+    const Checkpoint& ck = *resume_from;
+    x = ck.x;
+    previous = ck.aux;
+    result.steps = read_steps(c.out, ck.step);
+    frames.adopt_written(ck.step, [](int i) { return static_cast<double>(i); });
+    first = ck.step + 1;
+    log << fmt::format("resuming after step {} (checkpoint in {})\n", ck.step, c.out.string());
+  } else {
+    frames.write(0, 0.0, x, Eigen::VectorXd::Ones(mesh.cell_count()));
+  }
 
-  for (int s = 1; s <= c.steps; ++s) {
+  for (int s = first; s <= c.steps; ++s) {
     if (stop_requested()) {
       result.interrupted_by = stop_signal();
       break;
@@ -229,6 +301,10 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
       result.all_converged = false;
       break;
     }
+    // Everything needed to resume after this step: the stats so far and the exact state.
+    result.total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+    write_stats(c, result);
+    write_checkpoint(c.out, {.fingerprint = print, .step = s, .time = static_cast<double>(s), .x = x, .aux = previous});
   }
 
   // Middle cross-section: the layer at the largest rest coordinate along the axis not above the centre

@@ -34,6 +34,8 @@ struct StretchConfig {
   std::string program = "snh stretch";    ///< for the header and stats.json
   bool write_vtu = true;                  ///< also NNN.vtu frames and frames.pvd for ParaView
   bool live_progress = false;             ///< log is a terminal: update the step's line at every Newton iteration
+  /// Continue the run in `out` from its checkpoint (the last completed step); the settings must match.
+  bool resume = false;
 };
 
 struct StepStats {
@@ -73,6 +75,9 @@ struct StretchResult {
 /// Checks the configuration (material, parameters, numbers, output directory) without running anything.
 /// Throws std::invalid_argument, ParameterError, UnknownMaterial or WriteError with a one-line message.
 void validate(const StretchConfig& config);
+
+/// The settings that determine a run's result, as one line (for checkpoints).
+[[nodiscard]] std::string fingerprint(const StretchConfig& config);
 
 /// Runs the test, printing a header and one line per step to log, writing 000.obj … NNN.obj (and
 /// NNN.vtu with frames.pvd), stats.json and stats.csv into config.out. Stops at the first step that fails to converge (its

@@ -1,0 +1,97 @@
+#include "snh/sim/checkpoint.hpp"
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "snh/io/atomic_file.hpp"
+
+namespace snh {
+namespace {
+
+constexpr char kMagic[8] = {'S', 'N', 'H', 'C', 'K', 'P', 'T', '1'};
+
+template <class T>
+void put(std::ostream& o, const T& v) {
+  o.write(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+void put_vector(std::ostream& o, const Eigen::VectorXd& v) {
+  put<std::uint64_t>(o, static_cast<std::uint64_t>(v.size()));
+  o.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(double)));
+}
+
+}  // namespace
+
+void write_checkpoint(const std::filesystem::path& dir, const Checkpoint& c) {
+  write_atomically(dir / "checkpoint.bin", [&](std::ostream& o) {
+    o.write(kMagic, sizeof(kMagic));
+    put<std::uint64_t>(o, c.fingerprint.size());
+    o.write(c.fingerprint.data(), static_cast<std::streamsize>(c.fingerprint.size()));
+    put<std::int64_t>(o, c.step);
+    put<double>(o, c.time);
+    put_vector(o, c.x);
+    put_vector(o, c.aux);
+  });
+}
+
+std::optional<Checkpoint> read_checkpoint(const std::filesystem::path& dir) {
+  const std::filesystem::path path = dir / "checkpoint.bin";
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  const std::string bytes = buffer.str();
+  std::size_t pos = 0;
+  auto fail = [&](const char* what) -> void {
+    throw std::runtime_error(fmt::format("{}: damaged checkpoint ({})", path.string(), what));
+  };
+  auto take = [&](void* out, std::size_t n) {
+    if (bytes.size() - pos < n) fail("it ends early");
+    std::memcpy(out, bytes.data() + pos, n);
+    pos += n;
+  };
+  char magic[8];
+  take(magic, sizeof(magic));
+  if (std::memcmp(magic, kMagic, sizeof(magic)) != 0) fail("not an snh checkpoint");
+  Checkpoint c;
+  std::uint64_t n = 0;
+  take(&n, sizeof(n));
+  if (n > bytes.size()) fail("bad fingerprint length");
+  c.fingerprint.resize(n);
+  take(c.fingerprint.data(), n);
+  std::int64_t step = 0;
+  take(&step, sizeof(step));
+  c.step = static_cast<int>(step);
+  take(&c.time, sizeof(c.time));
+  for (Eigen::VectorXd* v : {&c.x, &c.aux}) {
+    take(&n, sizeof(n));
+    if (n > bytes.size() / sizeof(double)) fail("bad vector length");
+    v->resize(static_cast<Eigen::Index>(n));
+    take(v->data(), n * sizeof(double));
+  }
+  if (pos != bytes.size()) fail("trailing bytes");
+  return c;
+}
+
+Checkpoint checkpoint_for_resume(const std::filesystem::path& dir, const std::string& fingerprint, Eigen::Index dofs) {
+  std::optional<Checkpoint> c;
+  try {
+    c = read_checkpoint(dir);
+  } catch (const std::runtime_error& e) {
+    throw std::invalid_argument(e.what());
+  }
+  if (!c) throw std::invalid_argument(fmt::format("cannot resume: {} has no checkpoint.bin (no step was completed there)", dir.string()));
+  if (c->fingerprint != fingerprint)
+    throw std::invalid_argument(fmt::format("cannot resume: the run in {} used other settings ({}; now {})", dir.string(),
+                                            c->fingerprint, fingerprint));
+  if (c->x.size() != dofs || c->aux.size() != dofs)
+    throw std::invalid_argument(fmt::format("cannot resume: the checkpoint in {} is for another mesh", dir.string()));
+  return *c;
+}
+
+}  // namespace snh
