@@ -265,6 +265,25 @@ TEST(StretchInterrupt, ResumeContinuesFromTheLastCompletedStep) {
   fs::remove_all(dir);
 }
 
+TEST(StretchFailure, ANonConvergedStepIsReportedWithItsWorstElement) {
+  // Corotated's linear volume term drives the lateral singular values negative at res 4 (README).
+  const fs::path dir = fresh_dir("corotated");
+  StretchConfig c;
+  c.resolution = 4;
+  c.material = "corotated";
+  c.out = dir;
+  std::ostringstream log;
+  const StretchResult r = run_stretch(c, log);
+  ASSERT_FALSE(r.all_converged);
+  const StepStats& last = r.steps.back();
+  EXPECT_FALSE(last.converged);
+  EXPECT_NE(last.failure.find("no convergence in 50 Newton iterations"), std::string::npos) << last.failure;
+  EXPECT_NE(last.failure.find("; worst element "), std::string::npos) << last.failure;
+  EXPECT_TRUE(fs::exists(dir / fmt::format("{:03d}.obj", last.step))) << "the failed step's frame is kept";
+  EXPECT_TRUE(fs::exists(dir / "stats.json"));
+  fs::remove_all(dir);
+}
+
 TEST(StretchMirroredTets, ConvergesEveryStepAndIsMirrorSymmetricInXAndZ) {
   const fs::path out = fresh_dir("tet_mirrored");
   const StretchResult r = run(CellType::tet4, out, 1e-3, 25, 3.5, TetSplit::mirrored);

@@ -1,5 +1,6 @@
 #include "snh/sim/output.hpp"
 
+#include <cmath>
 #include <fstream>
 
 #include <fmt/format.h>
@@ -15,6 +16,14 @@ double peak_memory_mib() {
   for (std::string line; std::getline(in, line);)
     if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // reported in kB
   return 0.0;
+}
+
+std::string worst_element(const Eigen::VectorXd& min_J) {
+  if (min_J.size() == 0) return "";
+  Eigen::Index worst = 0;
+  for (Eigen::Index c = 1; c < min_J.size(); ++c)  // NaN-aware: a NaN is the worst
+    if (std::isnan(min_J[c]) || (!std::isnan(min_J[worst]) && min_J[c] < min_J[worst])) worst = c;
+  return fmt::format("; worst element {} (min det F = {:.4g})", worst, min_J[worst]);
 }
 
 FrameWriter::FrameWriter(std::filesystem::path out, const VolumeMesh& mesh, bool write_vtu)

@@ -17,6 +17,10 @@ namespace snh {
 /// Peak resident memory of this process in MiB (VmHWM from /proc/self/status; 0 where unavailable).
 [[nodiscard]] double peak_memory_mib();
 
+/// "; worst element E (min det F = J)": the cell with the smallest det F over its quadrature points, for
+/// a failure diagnostic ("" for no cells).
+[[nodiscard]] std::string worst_element(const Eigen::VectorXd& min_J);
+
 class FrameWriter {
  public:
   /// mesh: the rest mesh (copied); write_vtu: also NNN.vtu frames and frames.pvd.

@@ -693,7 +693,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
       if (dynamic) v = (x - x_n) / h;
       if (!rep.converged) {
         f.converged = false;
-        f.failure = fmt::format("substep {} (t = {:.6g}): {}", sub, t, rep.failure);
+        f.failure = fmt::format("substep {} (t = {:.6g}): {}{}", sub, t, rep.failure,
+                                worst_element(elastic.deformation(x.allFinite() ? x : x_n).min_J));
         if (!x.allFinite()) x = x_n;  // never write a non-finite frame
         break;
       }

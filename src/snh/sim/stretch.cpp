@@ -287,8 +287,8 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     st.assembly_seconds = rep.assembly_seconds;
     st.solve_seconds = rep.solve_seconds;
     st.residuals = rep.residuals;
-    st.failure = rep.failure;
     const ElasticSystem::Deformation deformed = system.deformation(x);
+    if (!rep.converged) st.failure = rep.failure + worst_element(deformed.min_J);
     record_deformation(deformed, rest_volume, st);
     frames.write(s, s, x, deformed.min_J);
     st.wall_seconds = std::chrono::duration<double>(Clock::now() - t_step).count();
