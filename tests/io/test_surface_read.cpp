@@ -1,0 +1,108 @@
+// Surface meshes: OBJ, OFF, PLY and STL (ASCII and binary) read to the same cube, tetrahedralized by
+// tetgen into a closed mesh of volume 1; one-line errors, including a missing tetgen program.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <array>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "snh/fem/rest_state.hpp"
+#include "snh/io/surface_read.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+
+const double kCube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+const int kQuads[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};  // outward
+
+class Surface : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("snh_test_surface_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name, std::ios::binary) << text;
+    return dir_ / name;
+  }
+  fs::path dir_;
+};
+
+TEST_F(Surface, EveryFormatGivesTheCube) {
+  std::string obj = "# cube\no cube\n", off = "OFF\n8 6 0\n", ply = "ply\nformat ascii 1.0\ncomment cube\nelement vertex 8\n"
+                                                                  "property float x\nproperty float y\nproperty float z\n"
+                                                                  "element face 6\nproperty list uchar int vertex_indices\nend_header\n";
+  std::string stl = "solid cube\n", bin(80, ' ');
+  std::uint32_t count = 12;
+  bin.append(reinterpret_cast<const char*>(&count), 4);
+  for (const auto& p : kCube) {
+    obj += fmt::format("v {} {} {}\nvn 0 0 1\n", p[0], p[1], p[2]);
+    off += fmt::format("{} {} {}\n", p[0], p[1], p[2]);
+    ply += fmt::format("{} {} {}\n", p[0], p[1], p[2]);
+  }
+  for (const auto& q : kQuads) {
+    obj += fmt::format("f {}//1 {}//1 {}//1 {}//1\n", q[0] + 1, q[1] + 1, q[2] + 1, q[3] + 1);
+    off += fmt::format("4 {} {} {} {}\n", q[0], q[1], q[2], q[3]);
+    ply += fmt::format("4 {} {} {} {}\n", q[0], q[1], q[2], q[3]);
+    for (const auto& t : {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
+      stl += "facet normal 0 0 0\nouter loop\n";
+      float record[12] = {0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        const auto& p = kCube[t[k]];
+        stl += fmt::format("vertex {} {} {}\n", p[0], p[1], p[2]);
+        for (int a = 0; a < 3; ++a) record[3 + 3 * k + a] = static_cast<float>(p[a]);
+      }
+      stl += "endloop\nendfacet\n";
+      bin.append(reinterpret_cast<const char*>(record), 48);
+      bin.append(2, '\0');
+    }
+  }
+  stl += "endsolid cube\n";
+  for (const auto& [name, text] : {std::pair{"c.obj", obj}, {"c.off", off}, {"c.ply", ply}, {"a.stl", stl}, {"b.stl", bin}}) {
+    const SurfaceMesh s = read_surface(write(name, text));
+    EXPECT_EQ(s.vertices.cols(), 8) << name;
+    EXPECT_EQ(s.triangles.cols(), 12) << name;
+    const MeshFile m = read_mesh(dir_ / name);  // through tetgen
+    EXPECT_EQ(m.mesh.type, CellType::tet4) << name;
+    EXPECT_GE(m.mesh.cell_count(), 5) << name;
+    EXPECT_NEAR(rest_volumes(compute_rest_state(m.mesh)).sum(), 1.0, 1e-12) << name;
+  }
+}
+
+TEST_F(Surface, ErrorsAreOneLine) {
+  auto error = [&](const std::string& name, const std::string& text) {
+    try {
+      (void)read_mesh(write(name, text));
+    } catch (const MeshError& e) {
+      const std::string msg = e.what();
+      EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+      return msg.substr((dir_ / name).string().size());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error("a.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\n"), ":3: face refers to vertex 3, but there are 2");
+  EXPECT_EQ(error("b.obj", "v 0 0 nan\n"), ":1: a coordinate is not finite: 'nan'");
+  EXPECT_EQ(error("c.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n"), ":5: the file ends where a coordinate was expected");
+  EXPECT_EQ(error("d.ply", "ply\nformat binary_little_endian 1.0\n"), ":2: PLY format 'binary_little_endian' is not supported (ascii is)");
+  EXPECT_EQ(error("e.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0\n"), ":5: the file ends where z was expected");
+  EXPECT_NE(error("f.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").find("tetgen could not tetrahedralize the surface"),
+            std::string::npos);
+  // Without the tetgen program: a clear error naming the Debian package.
+  const std::string saved = std::getenv("PATH") ? std::getenv("PATH") : "";
+  ::setenv("PATH", "/nonexistent", 1);
+  const std::string missing = error("g.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
+  ::setenv("PATH", saved.c_str(), 1);
+  EXPECT_NE(missing.find("Debian package tetgen"), std::string::npos) << missing;
+}
+
+}  // namespace
+}  // namespace snh
