@@ -256,7 +256,8 @@ TEST_F(MeshRead, MalformedFilesGiveOneLineErrors) {
   EXPECT_EQ(error_of("k.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n$EndNodes\n"),
             ":7: expected a node tag (an integer), got '$EndNodes'");
   EXPECT_EQ(error_of("l.mesh", "MeshVersionFormatted 2\nDimension 3\nPrisms 1\n"), ":3: unknown or unsupported section 'Prisms'");
-  EXPECT_EQ(error_of("m.stl", "solid x\n"), ": unknown mesh format '.stl' (known: .node/.ele, .mesh, .msh, .vtu)");
+  EXPECT_EQ(error_of("m.xyz", "1 2 3\n"),
+            ": unknown mesh format '.xyz' (known: .node/.ele, .mesh, .msh, .vtu; surfaces .obj, .off, .ply, .stl)");
   EXPECT_EQ(error_of("n.vtu", "<VTKFile type=\"UnstructuredGrid\">\n<AppendedData encoding=\"raw\">"),
             ":2: <AppendedData> without the '_' that starts the data");
   EXPECT_EQ(error_of("o.vtu", "<VTKFile type=\"UnstructuredGrid\" compressor=\"vtkZLibDataCompressor\">"),
