@@ -1,5 +1,5 @@
 # Thin wrapper over the CMake presets. The two commands the README names first:
-#   make demo   installs what is missing, builds, and runs the main job (the thesis' tetcli example)
+#   make demo   installs what is missing, builds, and runs the main job (the thesis' tetcli example) and the bunny scene
 #   make test   installs what is missing, builds, and runs every test
 PRESET ?= release
 JOBS   ?= $(shell nproc)
@@ -20,7 +20,9 @@ build: configure
 
 demo: build
 	$(BUILD)/apps/tetcli 10 stable_neo_hookean 1.0 10.0 output
-	@echo "demo output: $(CURDIR)/output (frames 000.obj ... 025.obj, 000.vtu ... 025.vtu + frames.pvd for ParaView, stats.json, stats.csv)"
+	$(BUILD)/apps/snh run scenes/bunny_squash.json --out output/bunny_squash
+	@echo "demo output: $(CURDIR)/output (the stretch test: frames 000.obj ... 025.obj, 000.vtu ... 025.vtu + frames.pvd for ParaView, stats.json, stats.csv)"
+	@echo "             $(CURDIR)/output/bunny_squash (the bunny squashed and released: the same files)"
 
 test: build
 	ctest --preset $(PRESET)
