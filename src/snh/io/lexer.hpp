@@ -100,6 +100,8 @@ class Lexer {
     return true;
   }
   int line() const { return token_line_; }
+  /// Bytes left after the current position (a bound for counts read from headers).
+  std::size_t remaining() const { return text_.size() - pos_; }
   const std::string& file() const { return file_; }
 
  private:

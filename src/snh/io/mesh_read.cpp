@@ -202,7 +202,7 @@ void read_gmsh41_binary_section(Lexer& lx, Builder& b, std::string_view section)
       (void)lx.raw<std::int32_t>("the entity tag");
       if (lx.raw<std::int32_t>("the parametric flag") != 0) lx.fail("parametric node coordinates are not supported", line);
       const auto n = lx.raw<std::uint64_t>("the nodes in the block");
-      if (n > (1ULL << 31)) lx.fail(fmt::format("implausible node count {} in a block", n), line);
+      if (n > lx.remaining() / 32) lx.fail(fmt::format("{} nodes announced, more than the file holds", n), line);
       std::vector<std::uint64_t> tags(n);
       for (auto& t : tags) t = lx.raw<std::uint64_t>("a node tag");
       for (std::uint64_t i = 0; i < n; ++i) {
@@ -312,6 +312,7 @@ MeshFile read_gmsh(const fs::path& path) {
           (void)lx.integer("the entity tag");
           const long long parametric = lx.count("the parametric flag", 1);
           const long long n = lx.count("the nodes in the block");
+          if (static_cast<std::size_t>(n) > lx.remaining()) lx.fail(fmt::format("{} nodes announced, more than the file holds", n));
           std::vector<long long> tags(n);
           for (auto& t : tags) t = lx.integer("a node tag");
           for (long long i = 0; i < n; ++i) {
