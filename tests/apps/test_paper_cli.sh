@@ -81,5 +81,15 @@ out="$("$SNH" stretch --element tet --res 2 --steps 3 --stretch 1.5 --out "$work
 out="$("$SNH" stretch --res 2 --out "$work/empty" --resume 2>&1)"; code=$?
 [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "cannot resume: .* has no checkpoint.bin" && ok || bad "resume nothing (exit $code): $out"
 
+# A frame that cannot be written (a directory in its place): an error naming the step, earlier frames and
+# stats kept, and --resume finishes the run once the obstacle is gone.
+mkdir -p "$work/blocked/003.obj"
+out="$("$SNH" stretch --element tet --res 2 --steps 5 --stretch 1.5 --out "$work/blocked" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "snh: error: step 3: cannot rename .*003.obj" && [ -f "$work/blocked/002.obj" ] \
+  && grep -q '"step": 2' "$work/blocked/stats.json" && ok || bad "unwritable frame (exit $code): $out"
+rmdir "$work/blocked/003.obj"
+"$SNH" stretch --element tet --res 2 --steps 5 --stretch 1.5 --out "$work/blocked" --resume > /dev/null 2>&1 && [ -f "$work/blocked/005.obj" ] \
+  && ok || bad "resume after the unwritable frame"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -606,7 +606,12 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
     f.kinetic_energy = potential.kinetic_energy(v);
     f.gravity_energy = potential.gravity_energy(x);
     f.total_energy = f.elastic_energy + f.kinetic_energy + f.gravity_energy;
-    frames.write(f.frame, f.time, x, d.min_J);
+    try {
+      frames.write(f.frame, f.time, x, d.min_J);
+    } catch (const WriteError& e) {
+      throw WriteError(fmt::format("frame {}: {} (the frames before it, stats.json and checkpoint.bin are kept)", f.frame,
+                                   e.what()));
+    }
   };
   auto finish = [&]() {
     if (stop_requested()) {

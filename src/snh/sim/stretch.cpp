@@ -290,7 +290,13 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     const ElasticSystem::Deformation deformed = system.deformation(x);
     if (!rep.converged) st.failure = rep.failure + worst_element(deformed.min_J);
     record_deformation(deformed, rest_volume, st);
-    frames.write(s, s, x, deformed.min_J);
+    try {
+      frames.write(s, s, x, deformed.min_J);
+    } catch (const WriteError& e) {
+      throw WriteError(fmt::format("step {}: {} (frames 000 to {:03d}, stats.json and checkpoint.bin are kept: --resume "
+                                   "continues once the output can be written)",
+                                   s, e.what(), s - 1));
+    }
     st.wall_seconds = std::chrono::duration<double>(Clock::now() - t_step).count();
     result.steps.push_back(st);
     log << fmt::format("step {:>3}/{}: {} Newton iterations, |f| = {:.2e}, energy {:.8g}, volume {:.4f}, min J {:.4f}, {:.3f} s{}\n",
