@@ -1,8 +1,6 @@
 #include "mesh_commands.hpp"
 
-#include <filesystem>
 #include <iostream>
-#include <stdexcept>
 #include <memory>
 
 #include <fmt/format.h>
@@ -57,9 +55,7 @@ void add_mesh_commands(CLI::App& app, int& exit_code) {
   convert->add_option("in", io->first, "Input mesh (.node/.ele, .mesh, .msh, .vtu)")->required();
   convert->add_option("out", io->second, "Output mesh (.msh, .vtu, .mesh)")->required();
   convert->callback([io, &exit_code]() {
-    const std::string ext = std::filesystem::path(io->second).extension().string();
-    if (ext != ".msh" && ext != ".vtu" && ext != ".mesh")
-      throw std::invalid_argument(fmt::format("{}: cannot write '{}' meshes (known: .msh, .vtu, .mesh)", io->second, ext));
+    check_writable_mesh_format(io->second);  // before reading: a bad output name fails at once
     const MeshFile m = read_mesh(io->first);
     write_mesh(io->second, m.mesh);
     std::cout << fmt::format("wrote {}: {} vertices, {} {}{}\n", io->second, m.mesh.vertex_count(), m.mesh.cell_count(),

@@ -11,6 +11,8 @@ namespace snh {
 void write_msh(const std::filesystem::path& path, const VolumeMesh& mesh);
 /// MEDIT .mesh (MeshVersionFormatted 2): Vertices and Tetrahedra or Hexahedra, references 0.
 void write_medit(const std::filesystem::path& path, const VolumeMesh& mesh);
+/// Throws std::invalid_argument (one line) unless write_mesh can write `path`'s extension.
+void check_writable_mesh_format(const std::filesystem::path& path);
 /// By extension: .msh, .vtu or .mesh. Throws std::invalid_argument for another extension.
 void write_mesh(const std::filesystem::path& path, const VolumeMesh& mesh);
 

@@ -42,6 +42,19 @@ struct Collect {
   }
 };
 
+/// `count` faces of "k i0 … i(k−1)" (0-based) as in OFF and PLY; `rest_of_line`: skip what follows each
+/// face on its line (OFF's optional colour).
+void read_counted_faces(Lexer& lx, Collect& c, long long count, bool rest_of_line) {
+  for (long long f = 0; f < count; ++f) {
+    const long long k = lx.count("the vertices of a face", 1000);
+    const int line = lx.line();
+    std::vector<long long> v(k);
+    for (auto& i : v) i = lx.integer("a vertex index");
+    c.polygon(lx, v, line);
+    if (rest_of_line) lx.skip_line();
+  }
+}
+
 SurfaceMesh read_obj_surface(const fs::path& path) {
   const std::string text = read_all(path);
   Lexer err(path, "");
@@ -91,14 +104,7 @@ SurfaceMesh read_off(const fs::path& path) {
   (void)lx.count("the number of edges");
   for (long long i = 0; i < nv; ++i)
     for (int a = 0; a < 3; ++a) c.xyz.push_back(lx.number("a coordinate"));
-  for (long long f = 0; f < nf; ++f) {
-    const long long k = lx.count("the vertices of a face", 1000);
-    const int line = lx.line();
-    std::vector<long long> v(k);
-    for (auto& i : v) i = lx.integer("a vertex index");
-    c.polygon(lx, v, line);
-    lx.skip_line();  // optional colour
-  }
+  read_counted_faces(lx, c, nf, true);
   return c.finish(lx);
 }
 
@@ -154,13 +160,7 @@ SurfaceMesh read_ply(const fs::path& path) {
     for (auto& r : row) r = lx.number("a vertex property");
     c.xyz.insert(c.xyz.end(), {row[ix], row[iy], row[iz]});
   }
-  for (long long f = 0; f < nf; ++f) {
-    const long long k = lx.count("the vertices of a face", 1000);
-    const int line = lx.line();
-    std::vector<long long> v(k);
-    for (auto& i : v) i = lx.integer("a vertex index");
-    c.polygon(lx, v, line);
-  }
+  read_counted_faces(lx, c, nf, false);
   if (!lx.at_end()) lx.fail("more data than the header announces");
   return c.finish(lx);
 }

@@ -78,6 +78,26 @@ std::optional<Checkpoint> read_checkpoint(const std::filesystem::path& dir) {
   return c;
 }
 
+std::vector<nlohmann::json> history_for_resume(const std::filesystem::path& dir, const char* key, int count) {
+  std::ifstream in(dir / "stats.json");
+  if (!in) throw std::invalid_argument(fmt::format("cannot resume: {} has no stats.json", dir.string()));
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception&) {
+    throw std::invalid_argument(fmt::format("cannot resume: {}/stats.json is not valid JSON", dir.string()));
+  }
+  std::vector<nlohmann::json> out;
+  for (const auto& entry : j.value(key, nlohmann::json::array())) {
+    if (static_cast<int>(out.size()) == count) break;
+    out.push_back(entry);
+  }
+  if (static_cast<int>(out.size()) != count)
+    throw std::invalid_argument(fmt::format("cannot resume: {}/stats.json lists {} {}, the checkpoint needs {}", dir.string(),
+                                            out.size(), key, count));
+  return out;
+}
+
 Checkpoint checkpoint_for_resume(const std::filesystem::path& dir, const std::string& fingerprint, Eigen::Index dofs) {
   std::optional<Checkpoint> c;
   try {

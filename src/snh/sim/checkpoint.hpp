@@ -6,8 +6,10 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 namespace snh {
 
@@ -27,5 +29,10 @@ void write_checkpoint(const std::filesystem::path& dir, const Checkpoint& c);
 /// both), and vectors of `dofs` entries. Throws std::invalid_argument with a one-line message.
 [[nodiscard]] Checkpoint checkpoint_for_resume(const std::filesystem::path& dir, const std::string& fingerprint,
                                                Eigen::Index dofs);
+
+/// The first `count` entries of the array `key` ("steps", "frames") in DIR/stats.json: the history of the
+/// run being resumed. Throws std::invalid_argument (one line) if the file is missing, is not JSON, or lists
+/// fewer entries.
+[[nodiscard]] std::vector<nlohmann::json> history_for_resume(const std::filesystem::path& dir, const char* key, int count);
 
 }  // namespace snh

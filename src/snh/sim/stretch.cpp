@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <optional>
 #include <string>
 
@@ -36,17 +35,8 @@ void record_deformation(const ElasticSystem::Deformation& d, double rest_volume,
 
 /// The per-step stats of the first `count` steps of DIR/stats.json (a resumed run's history).
 std::vector<StepStats> read_steps(const std::filesystem::path& dir, int count) {
-  std::ifstream in(dir / "stats.json");
-  if (!in) throw std::invalid_argument(fmt::format("cannot resume: {} has no stats.json", dir.string()));
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(fmt::format("cannot resume: {}/stats.json is not valid JSON", dir.string()));
-  }
   std::vector<StepStats> out;
-  for (const auto& s : j.value("steps", nlohmann::json::array())) {
-    if (static_cast<int>(out.size()) == count) break;
+  for (const auto& s : history_for_resume(dir, "steps", count)) {
     StepStats st;
     st.step = s.value("step", 0);
     st.converged = s.value("converged", false);
@@ -67,9 +57,6 @@ std::vector<StepStats> read_steps(const std::filesystem::path& dir, int count) {
     st.failure = s.value("failure", std::string());
     out.push_back(st);
   }
-  if (static_cast<int>(out.size()) != count)
-    throw std::invalid_argument(fmt::format("cannot resume: {}/stats.json lists {} steps, the checkpoint {}", dir.string(),
-                                            out.size(), count));
   return out;
 }
 
