@@ -1,0 +1,91 @@
+// Lazy loading of the frame files (report/frames/NNN.js). They are classic scripts that call
+// window.snhReportFrame(index, {...}), so they load from file:// where fetch() does not.
+import { decodeBase64, message } from './util.js';
+
+const LOAD_TIMEOUT_MS = 60000;
+
+export class FrameStore {
+  constructor(mesh) {
+    this.mesh = mesh;
+    this.loaded = new Map(); // index -> Promise of the decoded frame (kept once loaded)
+    this.waiting = new Map(); // index -> {resolve, reject} while its script loads
+    window.snhReportFrame = (index, raw) => this.receive(index, raw);
+  }
+
+  get count() {
+    return this.mesh.frames.length;
+  }
+
+  /** The decoded frame {x: Float32Array, fields: {name: Float32Array}}; loads its file once. */
+  get(index) {
+    if (!Number.isInteger(index) || index < 0 || index >= this.count) {
+      return Promise.reject(new Error(`no frame ${index} (the report has ${this.count})`));
+    }
+    if (!this.loaded.has(index)) this.loaded.set(index, this.load(index));
+    return this.loaded.get(index);
+  }
+
+  /** Loads every frame not yet loaded, one after another, starting after `first`. */
+  async prefetch(first, onError) {
+    for (let k = 1; k < this.count; k++) {
+      const i = (first + k) % this.count;
+      if (this.loaded.has(i)) continue;
+      try {
+        await this.get(i);
+      } catch (e) {
+        onError(e);
+      }
+    }
+  }
+
+  load(index) {
+    const src = this.mesh.frames[index].src;
+    return new Promise((resolve, reject) => {
+      const script = document.createElement('script');
+      const done = () => {
+        clearTimeout(timer);
+        script.remove();
+        this.waiting.delete(index);
+      };
+      const fail = (why) => {
+        done();
+        reject(new Error(`frame ${index} (${src}): ${why}`));
+      };
+      const timer = setTimeout(() => fail('its file did not load in time'), LOAD_TIMEOUT_MS);
+      this.waiting.set(index, {
+        resolve: (f) => { done(); resolve(f); },
+        reject: (e) => fail(message(e)),
+      });
+      script.onerror = () => fail('its file could not be loaded');
+      // A script runs before its load event, so by then it must have delivered the frame.
+      script.onload = () => this.waiting.has(index) && fail('its file did not deliver this frame');
+      script.src = src;
+      document.head.append(script);
+    });
+  }
+
+  receive(index, raw) {
+    const w = this.waiting.get(index);
+    if (!w) return; // a frame nobody asked for (or delivered twice): ignore
+    try {
+      w.resolve(this.decode(raw));
+    } catch (e) {
+      w.reject(e);
+    }
+  }
+
+  decode(raw) {
+    const s = this.mesh.surface;
+    const counts = { vertex: s.vertex_count, cell: s.cell_count };
+    const x = decodeBase64(raw && raw.x, Float32Array, 'positions "x"');
+    if (x.length !== 3 * s.vertex_count) throw new Error(`"x" has ${x.length} values, expected ${3 * s.vertex_count}`);
+    const fields = {};
+    for (const f of this.mesh.fields) {
+      const v = decodeBase64(raw[f.name], Float32Array, `field "${f.name}"`);
+      const n = counts[f.per];
+      if (v.length !== n) throw new Error(`field "${f.name}" has ${v.length} values, expected ${n} (one per ${f.per})`);
+      fields[f.name] = v;
+    }
+    return { x, fields };
+  }
+}

@@ -1,0 +1,47 @@
+// The static parts of the page: header (title, status, meta) and the tables.
+import { el } from './util.js';
+
+const KIND_NAMES = { stretch: 'stretch run', scene: 'scene run', lab: 'lab report' };
+
+export function header(data) {
+  const status = data.status || {};
+  const ok = status.ok !== false;
+  const meta = Array.isArray(data.meta) ? data.meta : [];
+  return el('header', { class: 'snh-header' },
+    el('div', { class: 'snh-kicker' }, KIND_NAMES[data.kind] || data.kind || 'report',
+      data.generated_by ? el('span', { class: 'snh-generated' }, ` · ${data.generated_by}`) : null),
+    el('h1', { class: 'snh-title' }, data.title || 'snh report'),
+    el('div', { class: `snh-status ${ok ? 'snh-status-ok' : 'snh-status-fail'}`, role: 'status' },
+      el('span', { class: 'snh-status-icon', 'aria-hidden': 'true' }, ok ? '✓' : '✗'),
+      el('span', {}, status.text || (ok ? 'ok' : 'failed'))),
+    meta.length
+      ? el('dl', { class: 'snh-meta' }, meta.map(([k, v]) => el('div', {}, el('dt', {}, k), el('dd', {}, v === null ? '–' : String(v)))))
+      : null);
+}
+
+const NUMERIC = /^[-+−]?(\d[\d,]*\.?\d*|\.\d+)([eE][-+]?\d+)?\s*(%|×|x|s|ms)?$/;
+
+function cell(v, tag) {
+  if (v === null || v === undefined) return el(tag, { class: 'snh-empty' }, '–');
+  if (typeof v === 'object') {
+    return el(tag, {}, v.href ? el('a', { href: v.href }, v.text ?? v.href) : String(v.text ?? ''));
+  }
+  const text = String(v);
+  return el(tag, { class: typeof v === 'number' || NUMERIC.test(text.trim()) ? 'snh-num' : null }, text);
+}
+
+export function table(t) {
+  const columns = t.columns || [];
+  const rows = t.rows || [];
+  return el('div', { class: 'snh-table-wrap' },
+    el('table', { class: 'snh-table' },
+      el('caption', {},
+        el('span', { class: 'snh-table-title' }, t.title || ''),
+        t.note ? el('span', { class: 'snh-table-note' }, t.note) : null),
+      columns.length ? el('thead', {}, el('tr', {}, columns.map((c) => el('th', { scope: 'col' }, c)))) : null,
+      el('tbody', {}, rows.map((r) => el('tr', {}, (Array.isArray(r) ? r : [r]).map((c) => cell(c, 'td')))))));
+}
+
+export function tablesSection(tables) {
+  return el('section', { class: 'snh-section snh-tables' }, el('h2', {}, 'Tables'), tables.map(table));
+}

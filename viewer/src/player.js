@@ -1,0 +1,209 @@
+// Playback of the mesh frames: the controls (play, slider, field, wireframe, pins), the keys,
+// the legend, and the frame/field state that the test hooks expose.
+import { fieldColors } from './colormap.js';
+import { el, fmt4, fmtTime, message } from './util.js';
+
+const FRAME_MS = 100; // ~10 frames per second
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+export class Player {
+  /**
+   * mesh: the report's mesh; store: FrameStore; view: MeshView; hooks: window.snhReport;
+   * parts: {legend, caption, message} elements in the view; onError(e) records an error.
+   */
+  constructor({ mesh, store, view, hooks, parts, onError }) {
+    Object.assign(this, { mesh, store, view, hooks, parts, onError });
+    this.frame = -1; // the frame drawn
+    this.target = -1; // the frame last asked for
+    this.field = null;
+    this.request = 0; // the latest setFrame/setField call; older ones do not draw
+    this.playing = null; // a token while playing
+    this.ui = null;
+    hooks.frameCount = store.count;
+    hooks.setFrame = (i) => this.setFrame(i);
+    hooks.setField = (name) => this.setField(name);
+  }
+
+  fieldByName(name) {
+    const f = this.mesh.fields.find((x) => x.name === name);
+    if (!f) throw new Error(`unknown field "${name}" (the report has ${this.mesh.fields.map((x) => x.name).join(', ') || 'none'})`);
+    return f;
+  }
+
+  /** Shows frame i with the current field; resolves once it is drawn. */
+  async setFrame(i) {
+    const req = ++this.request;
+    this.target = i;
+    if (this.ui) this.ui.slider.value = String(i);
+    let data;
+    try {
+      data = await this.store.get(i);
+    } catch (e) {
+      if (req === this.request) this.showMessage(message(e));
+      throw e;
+    }
+    if (req !== this.request) return; // a later request wins
+    this.frame = i;
+    this.draw(data);
+    this.hooks.frame = i;
+  }
+
+  /** Colours the surface by the named field; resolves once it is drawn. */
+  async setField(name) {
+    const field = this.fieldByName(name);
+    this.field = field;
+    this.colors = fieldColors(field);
+    this.hooks.field = field.name;
+    this.updateLegend();
+    if (this.ui) this.ui.field.value = field.name;
+    if (this.target >= 0) await this.setFrame(this.target);
+  }
+
+  draw(data) {
+    this.view.setPositions(data.x);
+    if (this.field) this.view.setColors(this.field, data.fields[this.field.name], this.colors);
+    this.view.render();
+    this.showMessage('');
+    const label = this.frameLabel(this.frame);
+    if (this.ui) {
+      this.ui.slider.value = String(this.frame);
+      this.ui.label.textContent = label;
+    }
+    if (this.parts.caption) this.parts.caption.lastChild.textContent = label;
+  }
+
+  frameLabel(i) {
+    const f = this.mesh.frames[i];
+    const t = f.time === undefined || f.time === null ? '' : ` · t = ${fmtTime(f.time)}`;
+    return `${f.label || `frame ${i}`}${t}`;
+  }
+
+  showMessage(text) {
+    this.parts.message.textContent = text;
+    this.parts.message.hidden = !text;
+  }
+
+  updateLegend() {
+    const f = this.field;
+    const lg = this.parts.legend;
+    lg.hidden = false;
+    this.hooks.legend = { field: f.name, min: f.min, max: f.max };
+    lg.dataset.field = f.name;
+    lg.dataset.min = String(f.min);
+    lg.dataset.max = String(f.max);
+    lg.querySelector('.snh-legend-label').textContent = f.label || f.name;
+    lg.querySelector('.snh-legend-bar').style.background = this.colors.gradient();
+    lg.querySelector('.snh-legend-min').textContent = fmt4(f.min);
+    lg.querySelector('.snh-legend-max').textContent = fmt4(f.max);
+    // The diverging map's centre (white), when it lies inside min..max.
+    const mark = lg.querySelector('.snh-legend-center');
+    const c = f.center;
+    const inside = this.colors.name === 'diverging' && Number.isFinite(c) && c > f.min && c < f.max;
+    mark.hidden = !inside;
+    if (inside) {
+      mark.style.left = `${(100 * (c - f.min)) / (f.max - f.min)}%`;
+      mark.textContent = fmt4(c);
+    }
+  }
+
+  async play() {
+    if (this.playing) return;
+    const token = (this.playing = {});
+    this.updatePlayButton();
+    const last = this.store.count - 1;
+    try {
+      if (this.frame >= last) {
+        await this.setFrame(0); // play again from the start
+        await sleep(FRAME_MS);
+      }
+      while (this.playing === token && this.frame < last) {
+        const t0 = performance.now();
+        await this.setFrame(this.frame + 1); // waits for the frame's file
+        await sleep(Math.max(0, FRAME_MS - (performance.now() - t0)));
+      }
+    } catch (e) {
+      this.onError(e);
+    }
+    if (this.playing === token) this.pause();
+  }
+
+  pause() {
+    this.playing = null;
+    this.updatePlayButton();
+  }
+
+  toggle() {
+    if (this.playing) this.pause();
+    else this.play();
+  }
+
+  updatePlayButton() {
+    if (!this.ui) return;
+    this.ui.play.textContent = this.playing ? '❚❚ Pause' : '▶ Play';
+    this.ui.play.setAttribute('aria-pressed', this.playing ? 'true' : 'false');
+  }
+
+  /** Steps to frame i from a control or a key (errors are shown and recorded, not thrown). */
+  go(i) {
+    const j = Math.min(Math.max(i, 0), this.store.count - 1);
+    this.setFrame(j).catch((e) => this.onError(e));
+  }
+
+  /** The controls under the view, for the normal page. */
+  buildControls(initial) {
+    const last = this.store.count - 1;
+    const ui = {};
+    ui.prev = el('button', { type: 'button', class: 'snh-btn', id: 'snh-prev', title: 'previous frame (←)', onclick: () => this.go(this.target - 1) }, '◀');
+    ui.play = el('button', { type: 'button', class: 'snh-btn snh-btn-play', id: 'snh-play', title: 'play / pause (space)', onclick: () => this.toggle() });
+    ui.next = el('button', { type: 'button', class: 'snh-btn', id: 'snh-next', title: 'next frame (→)', onclick: () => this.go(this.target + 1) }, '▶');
+    ui.slider = el('input', { type: 'range', id: 'snh-frame-slider', min: 0, max: last, step: 1, value: initial.frame, 'aria-label': 'frame' });
+    ui.slider.addEventListener('input', () => this.go(Number(ui.slider.value)));
+    ui.label = el('span', { id: 'snh-frame-label', class: 'snh-frame-label' }, '…');
+    ui.field = el('select', { id: 'snh-field', 'aria-label': 'field' },
+      this.mesh.fields.map((f) => el('option', { value: f.name }, f.label || f.name)));
+    ui.field.addEventListener('change', () => this.setField(ui.field.value).catch((e) => this.onError(e)));
+    ui.wire = el('input', { type: 'checkbox', id: 'snh-wireframe', checked: initial.wireframe });
+    ui.wire.addEventListener('change', () => { this.view.setWireframe(ui.wire.checked); this.view.render(); });
+    ui.pins = el('input', { type: 'checkbox', id: 'snh-pins', checked: initial.pins, disabled: !this.view.pinIndex.length });
+    ui.pins.addEventListener('change', () => { this.view.setPinsVisible(ui.pins.checked); this.view.render(); });
+    this.ui = ui;
+    this.updatePlayButton();
+    document.addEventListener('keydown', (e) => this.onKey(e));
+    return el('div', { class: 'snh-controls' },
+      el('div', { class: 'snh-controls-row' }, ui.prev, ui.play, ui.next, ui.slider, ui.label),
+      el('div', { class: 'snh-controls-row' },
+        el('label', { class: 'snh-control' }, 'Colour by ', ui.field),
+        el('label', { class: 'snh-control' }, ui.wire, ' wireframe'),
+        el('label', { class: 'snh-control' }, ui.pins, ` pinned vertices (${this.view.pinIndex.length})`)));
+  }
+
+  onKey(e) {
+    if (e.ctrlKey || e.metaKey || e.altKey) return;
+    const t = e.target;
+    const onSlider = t === this.ui.slider;
+    const inInput = !onSlider && t instanceof Element && t.matches('input, select, textarea, [contenteditable]');
+    if (inInput) return;
+    if (e.key === ' ') {
+      if (t instanceof Element && t.matches('button, a')) return; // they act on space themselves
+      e.preventDefault();
+      this.toggle();
+      return;
+    }
+    if (onSlider) return; // the slider steps on arrows, Home and End by itself
+    const step = { ArrowLeft: this.target - 1, ArrowRight: this.target + 1, Home: 0, End: this.store.count - 1 }[e.key];
+    if (step === undefined) return;
+    e.preventDefault();
+    this.go(step);
+  }
+}
+
+/** The legend element (filled by Player.updateLegend). */
+export function legendElement() {
+  return el('div', { id: 'snh-legend', class: 'snh-legend', hidden: true },
+    el('div', { class: 'snh-legend-label' }),
+    el('div', { class: 'snh-legend-scale' },
+      el('div', { class: 'snh-legend-bar' }),
+      el('span', { class: 'snh-legend-center', hidden: true })),
+    el('div', { class: 'snh-legend-numbers' },
+      el('span', { class: 'snh-legend-min' }), el('span', { class: 'snh-legend-max' })));
+}

@@ -1,0 +1,195 @@
+// The 3D view: the run's boundary surface, coloured by a field, with orbit controls.
+// The geometry is non-indexed (3 vertices per triangle) so that cell colours and normals stay flat.
+import {
+  AmbientLight, BufferAttribute, BufferGeometry, Color, DirectionalLight, DoubleSide, LineBasicMaterial,
+  LineSegments, Mesh, MeshBasicMaterial, MeshLambertMaterial, Object3D, PerspectiveCamera, Points, PointsMaterial,
+  Scene, Vector3, WebGLRenderer,
+} from 'three';
+import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
+import { decodeBase64 } from './util.js';
+
+/** The background colour (sRGB 0-255); tests compare pixels against it. */
+export const BACKGROUND = [224, 228, 233];
+const FOV = 30; // degrees, vertical
+const VIEW_DIR = new Vector3(0.9, 0.55, 1.35).normalize(); // from front-right, above; y is up
+const CREASE_COS = Math.cos((35 * Math.PI) / 180); // feature edges: where the surface bends more
+
+/** The surface's edges as [a, b, t1, t2] (vertices, triangles; t2 = -1 on an open edge). */
+function surfaceEdges(tris, n) {
+  const seen = new Map();
+  const edges = [];
+  for (let t = 0; t < tris.length / 3; t++) {
+    for (let k = 0; k < 3; k++) {
+      const a = tris[3 * t + k];
+      const b = tris[3 * t + ((k + 1) % 3)];
+      const key = Math.min(a, b) * n + Math.max(a, b);
+      const e = seen.get(key);
+      if (e === undefined) {
+        seen.set(key, edges.length);
+        edges.push([a, b, t, -1]);
+      } else edges[e][3] = t;
+    }
+  }
+  return edges;
+}
+
+export class MeshView {
+  constructor(container, mesh) {
+    const s = mesh.surface;
+    const n = s.vertex_count;
+    this.tris = decodeBase64(s.triangles, Uint32Array, 'surface triangles');
+    this.triCells = decodeBase64(s.triangle_cells, Uint32Array, 'surface triangle_cells');
+    const pinned = decodeBase64(s.pinned, Uint8Array, 'surface pinned');
+    const rest = decodeBase64(s.rest, Float32Array, 'surface rest');
+    const F = this.tris.length / 3;
+    if (F !== s.triangle_count || this.triCells.length !== F) throw new Error('surface: triangle counts do not match');
+    if (rest.length !== 3 * n || pinned.length !== n) throw new Error('surface: vertex counts do not match');
+    if (this.tris.some((v) => v >= n)) throw new Error('surface: a triangle refers to a vertex past the surface');
+    if (this.triCells.some((c) => c >= s.cell_count)) throw new Error('surface: a triangle refers to a cell past the surface');
+    this.pinIndex = [];
+    pinned.forEach((p, i) => p && this.pinIndex.push(i));
+
+    this.container = container;
+    this.renderer = new WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(window.devicePixelRatio || 1);
+    container.append(this.renderer.domElement);
+
+    this.scene = new Scene();
+    this.scene.background = new Color().setRGB(...BACKGROUND.map((c) => c / 255), 'srgb');
+    this.camera = new PerspectiveCamera(FOV, 1, 0.01, 100);
+    this.scene.add(this.camera);
+    this.scene.add(new AmbientLight(0xffffff, 2.2));
+    // A head light: it moves with the camera, so the side in view is always lit.
+    const light = new DirectionalLight(0xffffff, 1.15);
+    light.position.set(0.6, 1.0, 0.4);
+    light.target = new Object3D();
+    light.target.position.set(0, 0, -1);
+    this.camera.add(light, light.target);
+
+    // The surface and its wireframe, sharing one geometry.
+    this.geometry = new BufferGeometry();
+    this.geometry.setAttribute('position', new BufferAttribute(new Float32Array(9 * F), 3));
+    this.geometry.setAttribute('normal', new BufferAttribute(new Float32Array(9 * F), 3));
+    this.geometry.setAttribute('color', new BufferAttribute(new Float32Array(9 * F).fill(0.7), 3));
+    this.solid = new Mesh(this.geometry, new MeshLambertMaterial({
+      vertexColors: true, side: DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+    }));
+    this.wire = new Mesh(this.geometry, new MeshBasicMaterial({
+      color: 0x202020, wireframe: true, transparent: true, opacity: 0.35,
+    }));
+    this.wire.visible = false;
+    // Feature edges, so that shapes read clearly even where a face is as light as the background.
+    this.edges = surfaceEdges(this.tris, n);
+    this.edgeGeometry = new BufferGeometry();
+    this.edgeGeometry.setAttribute('position', new BufferAttribute(new Float32Array(3 * n), 3));
+    this.edgeGeometry.setIndex(new BufferAttribute(new Uint32Array(2 * this.edges.length), 1));
+    this.creases = new LineSegments(this.edgeGeometry, new LineBasicMaterial({ color: 0x303030, transparent: true, opacity: 0.55 }));
+    this.pinGeometry = new BufferGeometry();
+    this.pinGeometry.setAttribute('position', new BufferAttribute(new Float32Array(3 * this.pinIndex.length), 3));
+    this.pins = new Points(this.pinGeometry, new PointsMaterial({ color: 0xe0158a, size: 5, sizeAttenuation: false }));
+    for (const o of [this.solid, this.wire, this.creases, this.pins]) {
+      o.frustumCulled = false; // the positions change every frame
+      this.scene.add(o);
+    }
+    this.setPositions(rest);
+
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.addEventListener('change', () => this.render());
+    this.controls.addEventListener('start', () => { this.userMoved = true; });
+    this.bounds = mesh.bounds;
+    this.userMoved = false;
+    this.resize();
+    new ResizeObserver(() => requestAnimationFrame(() => this.resize())).observe(container);
+  }
+
+  /** Surface vertex positions (Float32Array of 3n). */
+  setPositions(x) {
+    const pos = this.geometry.attributes.position.array;
+    const t = this.tris;
+    for (let i = 0; i < t.length; i++) {
+      const v = 3 * t[i];
+      pos[3 * i] = x[v];
+      pos[3 * i + 1] = x[v + 1];
+      pos[3 * i + 2] = x[v + 2];
+    }
+    this.geometry.attributes.position.needsUpdate = true;
+    this.geometry.computeVertexNormals(); // non-indexed: one normal per triangle
+    this.updateCreases(x);
+    const pp = this.pinGeometry.attributes.position.array;
+    this.pinIndex.forEach((v, k) => pp.set(x.subarray(3 * v, 3 * v + 3), 3 * k));
+    this.pinGeometry.attributes.position.needsUpdate = true;
+  }
+
+  /** The feature edges of the current shape: open edges and those between triangles at an angle. */
+  updateCreases(x) {
+    this.edgeGeometry.attributes.position.array.set(x);
+    this.edgeGeometry.attributes.position.needsUpdate = true;
+    const nrm = this.geometry.attributes.normal.array;
+    const index = this.edgeGeometry.index;
+    let count = 0;
+    for (const [a, b, t1, t2] of this.edges) {
+      const dot = t2 < 0 ? -1 : nrm[9 * t1] * nrm[9 * t2] + nrm[9 * t1 + 1] * nrm[9 * t2 + 1] + nrm[9 * t1 + 2] * nrm[9 * t2 + 2];
+      if (dot < CREASE_COS) {
+        index.array[count++] = a;
+        index.array[count++] = b;
+      }
+    }
+    index.needsUpdate = true;
+    this.edgeGeometry.setDrawRange(0, count);
+  }
+
+  /** Colours from a field's values: one per surface cell or one per surface vertex. */
+  setColors(field, values, colors) {
+    const col = this.geometry.attributes.color.array;
+    const t = this.tris;
+    if (field.per === 'cell') {
+      for (let f = 0; f < this.triCells.length; f++) {
+        const v = values[this.triCells[f]];
+        colors.fill(col, 9 * f, v);
+        col.copyWithin(9 * f + 3, 9 * f, 9 * f + 3);
+        col.copyWithin(9 * f + 6, 9 * f, 9 * f + 3);
+      }
+    } else {
+      for (let i = 0; i < t.length; i++) colors.fill(col, 3 * i, values[t[i]]);
+    }
+    this.geometry.attributes.color.needsUpdate = true;
+  }
+
+  setWireframe(on) {
+    this.wire.visible = !!on;
+  }
+
+  setPinsVisible(on) {
+    this.pins.visible = !!on;
+  }
+
+  /** Puts the camera where the whole of `bounds` is in view. */
+  frameBounds() {
+    const { min, max } = this.bounds || { min: [-1, -1, -1], max: [1, 1, 1] };
+    const center = new Vector3((min[0] + max[0]) / 2, (min[1] + max[1]) / 2, (min[2] + max[2]) / 2);
+    const radius = Math.max(new Vector3(...max).distanceTo(new Vector3(...min)) / 2, 1e-6);
+    const vfov = (FOV * Math.PI) / 180;
+    const hfov = 2 * Math.atan(Math.tan(vfov / 2) * this.camera.aspect);
+    const dist = (radius / Math.sin(Math.min(vfov, hfov) / 2)) * 1.1; // a margin for the overlays
+    this.camera.position.copy(center).addScaledVector(VIEW_DIR, dist);
+    this.camera.near = dist / 100;
+    this.camera.far = dist * 100;
+    this.camera.updateProjectionMatrix();
+    this.controls.target.copy(center);
+    this.controls.update();
+  }
+
+  resize() {
+    const w = Math.max(this.container.clientWidth, 1);
+    const h = Math.max(this.container.clientHeight, 1);
+    this.renderer.setSize(w, h);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    if (!this.userMoved) this.frameBounds();
+    this.render();
+  }
+
+  render() {
+    this.renderer.render(this.scene, this.camera);
+  }
+}

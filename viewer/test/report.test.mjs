@@ -1,0 +1,156 @@
+// Checks a report directory written by the C++ side (or by test/make-fixture.mjs) in Chromium.
+// Each part runs only when its variable is set:
+//   SNH_TEST_RUN_DIR        a stretch (or scene) run's directory: page, 3D view, slider, plots, legend
+//   SNH_TEST_CHECK_MIN_J=1  also: the legend's min for J = min over stats.json of min_J (and 1)
+//   SNH_TEST_LAB_DIR        a lab report's directory: tables and plots
+//   SNH_TEST_RENDER_PNG     a PNG taken in render mode, with SNH_TEST_RENDER_SIZE=WxH: size, not blank
+// Chromium: /usr/bin/chromium, or SNH_TEST_CHROMIUM.
+import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { after, before, test } from 'node:test';
+import { pathToFileURL } from 'node:url';
+import { chromium } from 'playwright-core';
+import { PNG } from 'pngjs';
+
+const env = process.env;
+const RUN = env.SNH_TEST_RUN_DIR;
+const LAB = env.SNH_TEST_LAB_DIR;
+const RENDER = env.SNH_TEST_RENDER_PNG;
+const TIMEOUT = 30000;
+let browser;
+
+before(async () => {
+  if (!RUN && !LAB) return;
+  browser = await chromium.launch({
+    executablePath: env.SNH_TEST_CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+      '--disable-component-update', '--disable-sync'],
+  });
+});
+after(async () => browser && browser.close());
+
+/** Opens DIR/index.html and waits for the report; `problems` collects console errors and page errors. */
+async function open(dir) {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
+  const problems = [];
+  page.on('console', (m) => m.type() === 'error' && problems.push(`console: ${m.text()}`));
+  page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
+  await page.goto(pathToFileURL(join(dir, 'index.html')).href);
+  await page.waitForFunction(() => window.snhReport && window.snhReport.ready, null, { timeout: TIMEOUT });
+  return { page, problems };
+}
+
+async function assertNoErrors(page, problems) {
+  const errors = await page.evaluate(() => window.snhReport.errors);
+  assert.deepEqual([...problems, ...errors.map((e) => `snhReport: ${e}`)], []);
+}
+
+const pixel = (png, x, y) => png.data.subarray(4 * (y * png.width + x), 4 * (y * png.width + x) + 3);
+const differs = (a, b) => Math.max(Math.abs(a[0] - b[0]), Math.abs(a[1] - b[1]), Math.abs(a[2] - b[2])) > 12;
+
+/** The fraction of pixels in [x0,x1)×[y0,y1) for which test(pixel) holds. */
+function fraction(png, test, [x0, y0, x1, y1] = [0, 0, png.width, png.height]) {
+  let hit = 0;
+  for (let y = y0; y < y1; y++) for (let x = x0; x < x1; x++) if (test(pixel(png, x, y), x, y)) hit++;
+  return hit / Math.max(1, (x1 - x0) * (y1 - y0));
+}
+
+function readReport(dir) {
+  const text = readFileSync(join(dir, 'report', 'data.js'), 'utf8').trim();
+  const prefix = 'window.SNH_REPORT = ';
+  assert.ok(text.startsWith(prefix), 'data.js starts with "window.SNH_REPORT = "');
+  return JSON.parse(text.slice(prefix.length).replace(/;$/, ''));
+}
+
+function readSteps(dir) {
+  const stats = JSON.parse(readFileSync(join(dir, 'stats.json'), 'utf8'));
+  const steps = stats.steps || stats.frames;
+  assert.ok(Array.isArray(steps), 'stats.json has "steps" or "frames"');
+  return steps;
+}
+
+test('stretch run report', { skip: !RUN && 'SNH_TEST_RUN_DIR is not set', timeout: 60000 }, async () => {
+  const report = readReport(RUN);
+  const steps = readSteps(RUN);
+  const { page, problems } = await open(RUN);
+  const canvasShot = async () => PNG.sync.read(await page.locator('.snh-view canvas').screenshot());
+
+  // The mesh is drawn: the middle third of the canvas is not all background. (The view is framed on every
+  // frame's bounds, so a first frame can be small: a bar at rest that later swings down covers ~6 %.)
+  const bg = await page.evaluate(() => window.snhReport.background);
+  const first = await canvasShot();
+  const w = first.width;
+  const h = first.height;
+  const middle = [Math.floor(w / 3), Math.floor(h / 3), Math.floor((2 * w) / 3), Math.floor((2 * h) / 3)];
+  const covered = fraction(first, (p) => differs(p, bg), middle);
+  assert.ok(covered > 0.03, `the mesh covers ${(100 * covered).toFixed(1)}% of the canvas' middle third`);
+
+  // The slider to the last frame: the frame and the picture change.
+  const count = await page.evaluate(() => window.snhReport.frameCount);
+  assert.equal(count, report.mesh.frames.length);
+  if (count > 1) {
+    await page.$eval('#snh-frame-slider', (el, v) => {
+      el.value = String(v);
+      el.dispatchEvent(new Event('input', { bubbles: true }));
+    }, count - 1);
+    await page.waitForFunction((last) => window.snhReport.frame === last, count - 1, { timeout: TIMEOUT });
+    const last = await canvasShot();
+    const changed = fraction(last, (p, x, y) => differs(p, pixel(first, x, y)));
+    assert.ok(changed > 0.005, `the last frame changes ${(100 * changed).toFixed(2)}% of the pixels`);
+  }
+
+  // One point per step in every plot.
+  const points = await page.$$eval('.snh-plot', (els) => els.map((e) => [e.dataset.plotId, Number(e.dataset.points)]));
+  assert.ok(points.length > 0, 'the page has plots');
+  for (const [id, n] of points) assert.equal(n, steps.length, `plot "${id}" has one point per step`);
+
+  // The legend shows the current field's range, exactly as in data.js.
+  const legend = async () => page.$eval('#snh-legend', (e) => ({ field: e.dataset.field, min: Number(e.dataset.min), max: Number(e.dataset.max) }));
+  const shown = await legend();
+  const field = report.mesh.fields.find((f) => f.name === shown.field);
+  assert.ok(field, `the legend's field "${shown.field}" is in data.js`);
+  assert.equal(shown.field, await page.evaluate(() => window.snhReport.field));
+  assert.equal(shown.min, field.min);
+  assert.equal(shown.max, field.max);
+
+  if (env.SNH_TEST_CHECK_MIN_J === '1') {
+    await page.evaluate(() => window.snhReport.setField('J'));
+    const j = await legend();
+    const expected = Math.min(1, ...steps.map((s) => s.min_J));
+    assert.equal(j.field, 'J');
+    assert.ok(Math.abs(j.min - expected) <= 1e-6 * Math.max(1, Math.abs(expected)),
+      `the legend's min J ${j.min} = min over stats.json of min_J (and 1) ${expected}`);
+  }
+  await assertNoErrors(page, problems);
+  await page.close();
+});
+
+test('lab report', { skip: !LAB && 'SNH_TEST_LAB_DIR is not set', timeout: 60000 }, async () => {
+  const { page, problems } = await open(LAB);
+  const rows = await page.$$eval('table.snh-table', (ts) => ts.map((t) => t.querySelectorAll('tbody tr').length));
+  assert.ok(rows.length >= 1 && rows.some((n) => n > 0), `tables with rows: ${JSON.stringify(rows)}`);
+  const points = await page.$$eval('.snh-plot', (els) => els.map((e) => Number(e.dataset.points)));
+  assert.ok(points.length >= 3, `${points.length} plots`);
+  assert.ok(points.every((n) => n > 0), `every plot has points: ${JSON.stringify(points)}`);
+  await assertNoErrors(page, problems);
+  await page.close();
+});
+
+test('render-mode PNG', { skip: !RENDER && 'SNH_TEST_RENDER_PNG is not set' }, () => {
+  const png = PNG.sync.read(readFileSync(RENDER));
+  const size = env.SNH_TEST_RENDER_SIZE;
+  assert.ok(/^\d+x\d+$/.test(size || ''), 'SNH_TEST_RENDER_SIZE is WxH');
+  assert.equal(`${png.width}x${png.height}`, size);
+  // The most common colour is the background; a clear part of the picture is something else.
+  const counts = new Map();
+  for (let i = 0; i < png.data.length; i += 4) {
+    const key = (png.data[i] << 16) | (png.data[i + 1] << 8) | png.data[i + 2];
+    counts.set(key, (counts.get(key) || 0) + 1);
+  }
+  const [key] = [...counts].reduce((a, b) => (b[1] > a[1] ? b : a));
+  const common = [key >> 16, (key >> 8) & 255, key & 255];
+  const other = fraction(png, (p) => differs(p, common));
+  assert.ok(other > 0.05, `${(100 * other).toFixed(1)}% of the pixels differ from the most common colour ${common}`);
+});
