@@ -48,6 +48,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       (void)snh::read_surface(scratch() / ("f." + format));  // tetgen itself is not fuzzed here
     } else {
       put(scratch() / ("f." + format), bytes);
+      // .vtu: also every data array (how the report reads frames back).
+      if (format == "vtu") (void)snh::read_vtu_data(scratch() / "f.vtu");
       (void)snh::read_mesh(scratch() / ("f." + format));
     }
   } catch (const snh::MeshError&) {

@@ -261,21 +261,26 @@ void ElasticSystem::scatter_add_free(const Eigen::VectorXd& free, double scale, 
 ElasticSystem::Deformation ElasticSystem::deformation(const Eigen::VectorXd& x) const {
   Deformation out;
   out.min_J.resize(mesh_.cell_count());
+  out.energy_density.resize(mesh_.cell_count());
   std::visit(
-      [&](const auto& rest) {
+      [&](const auto& m, const auto& rest) {
         using R = typename std::decay_t<decltype(rest)>::value_type;
         for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c) {
           const auto X = gather_nodes<R::nodes>(mesh_, c, x);
-          double lo = std::numeric_limits<double>::infinity();
+          double lo = std::numeric_limits<double>::infinity(), psi = 0.0, weight = 0.0;
           for (int q = 0; q < R::points; ++q) {
-            const double J = (X * rest[c].G[q]).determinant();
+            const Mat3 F = X * rest[c].G[q];
+            const double J = F.determinant();
             lo = std::min(lo, J);
             out.volume += rest[c].weight[q] * J;
+            psi += rest[c].weight[q] * m.psi(F);
+            weight += rest[c].weight[q];
           }
           out.min_J[c] = lo;
+          out.energy_density[c] = psi / weight;
         }
       },
-      rest_);
+      material_, rest_);
   return out;
 }
 

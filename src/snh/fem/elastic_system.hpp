@@ -57,10 +57,12 @@ class ElasticSystem final : public Objective {
   /// the cores, waiting at barriers) costs more than the work. Default 2048; 0 makes every loop parallel.
   void set_parallel_threshold(Eigen::Index t) { parallel_threshold_ = t; }
 
-  /// det F at every quadrature point, in one pass: each element's minimum and the deformed volume.
+  /// det F and ψ at every quadrature point, in one pass: each element's minimum det F and mean energy
+  /// density, and the deformed volume.
   struct Deformation {
-    Eigen::VectorXd min_J;  ///< per element, the smallest det F over its quadrature points
-    double volume = 0.0;    ///< Σ_e Σ_q w_q det F_q (signed)
+    Eigen::VectorXd min_J;           ///< per element, the smallest det F over its quadrature points
+    Eigen::VectorXd energy_density;  ///< per element, Σ_q w_q ψ(F_q) / Σ_q w_q (+∞ where ψ is undefined)
+    double volume = 0.0;             ///< Σ_e Σ_q w_q det F_q (signed)
   };
   [[nodiscard]] Deformation deformation(const Eigen::VectorXd& x) const;
 

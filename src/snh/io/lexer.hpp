@@ -65,13 +65,14 @@ class Lexer {
     if (n < 0 || n > max) fail(fmt::format("{} must be from 0 to {}, got {}", what, max, n));
     return n;
   }
-  double number(const char* what) {
+  /// The next number; `finite_only` refuses inf and nan (data arrays may hold them: an undefined energy).
+  double number(const char* what, bool finite_only = true) {
     const std::string_view t = word(what);
     double v = 0;
     const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
     if (ec == std::errc::result_out_of_range) fail(fmt::format("{} is out of range: '{}'", what, t));
     if (ec != std::errc() || end != t.data() + t.size()) fail(fmt::format("expected {} (a number), got '{}'", what, t));
-    if (!std::isfinite(v)) fail(fmt::format("{} is not finite: '{}'", what, t));
+    if (finite_only && !std::isfinite(v)) fail(fmt::format("{} is not finite: '{}'", what, t));
     return v;
   }
   void skip_line() {

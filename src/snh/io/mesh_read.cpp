@@ -451,7 +451,8 @@ std::size_t vtk_type_size(std::string_view type) {
   return 0;
 }
 
-MeshFile read_vtu(const fs::path& path) {
+/// Reads a .vtu file's mesh; when `data` is given, also every named array of <PointData> and <CellData>.
+MeshFile read_vtu(const fs::path& path, VtuData* data = nullptr) {
   const std::string text = read_all(path);
   const std::string file = path.string();
   auto line_of = [&](std::size_t pos) {
@@ -511,7 +512,8 @@ MeshFile read_vtu(const fs::path& path) {
         if (end == std::string::npos) fail(at, "unterminated DataArray");
         std::vector<double> out;
         Lexer lx(path, text.substr(start, end - start));
-        while (!lx.at_end()) out.push_back(lx.number(label.c_str()));
+        const bool data_array = std::strcmp(section, "PointData") == 0 || std::strcmp(section, "CellData") == 0;
+        while (!lx.at_end()) out.push_back(lx.number(label.c_str(), !data_array));
         if (static_cast<long long>(out.size()) != expected)
           fail(at, fmt::format("{} has {} values, expected {}", label, out.size(), expected));
         return out;
@@ -567,6 +569,7 @@ MeshFile read_vtu(const fs::path& path) {
   if (total < 0 || total > (1LL << 33)) fail(w_off, "implausible offsets");
   const std::vector<double> conn = array("Cells", "connectivity", total, w_conn);
   long long previous = 0;
+  std::vector<long long> kept;  // the tet and hex cells, by index in the file
   for (long long c = 0; c < n_cells; ++c) {
     const long long type = static_cast<long long>(types[c]), end = static_cast<long long>(offsets[c]);
     if (end < previous || end > total) fail(w_off, fmt::format("cell {}: offsets are not increasing", c));
@@ -574,6 +577,7 @@ MeshFile read_vtu(const fs::path& path) {
       previous = end;
       continue;
     }
+    kept.push_back(c);
     const int nodes = type == 10 ? 4 : type == 12 ? 8 : -1;
     if (nodes < 0) fail(w_types, fmt::format("cell {} has unsupported VTK type {} (tets 10 and hexes 12 only)", c, type));
     if (end - previous != nodes) fail(w_off, fmt::format("cell {}: offsets give {} nodes for a {}-node cell", c, end - previous, nodes));
@@ -583,6 +587,40 @@ MeshFile read_vtu(const fs::path& path) {
       if (id < 0 || id >= n_points) fail(w_conn, fmt::format("cell {} refers to point {}, which does not exist", c, id));
     b.cell(dummy, nodes == 4 ? CellType::tet4 : CellType::hex8, nodes == 4 ? v : hex_to_lattice(v), 0);
     previous = end;
+  }
+  if (data) {
+    // Every named array of the two data sections, by its NumberOfComponents (1 if not given).
+    for (const char* section : {"PointData", "CellData"}) {
+      const std::size_t sec = text.find(fmt::format("<{}", section), piece);
+      if (sec == std::string::npos) continue;
+      const std::size_t sec_end = text.find(fmt::format("</{}", section), sec);
+      const bool cells = std::strcmp(section, "CellData") == 0;
+      for (std::size_t at = text.find("<DataArray", sec); at != std::string::npos && at < sec_end;
+           at = text.find("<DataArray", at + 1)) {
+        const std::string_view tag = std::string_view(text).substr(at, text.find('>', at) - at);
+        const std::string name = attribute(tag, "Name");
+        if (name.empty()) continue;
+        const std::string nc = attribute(tag, "NumberOfComponents");
+        long long components = 1;
+        if (!nc.empty()) {
+          try {
+            components = std::stoll(nc);
+          } catch (const std::exception&) {
+            components = 0;
+          }
+          if (components < 1 || components > 9) fail(at, fmt::format("DataArray {}: bad NumberOfComponents \"{}\"", name, nc));
+        }
+        std::size_t w = 0;
+        std::vector<double> values = array(section, name.c_str(), (cells ? n_cells : n_points) * components, w);
+        if (cells && static_cast<long long>(kept.size()) != n_cells) {  // only the tet and hex cells' values
+          std::vector<double> selected;
+          for (long long c : kept)
+            selected.insert(selected.end(), values.begin() + c * components, values.begin() + (c + 1) * components);
+          values = std::move(selected);
+        }
+        (cells ? data->cell_data : data->point_data)[name] = std::move(values);
+      }
+    }
   }
   return b.finish(dummy);
 }
@@ -603,6 +641,12 @@ double cell_volume(const VolumeMesh& m, Eigen::Index c) {
 }
 
 }  // namespace
+
+VtuData read_vtu_data(const fs::path& path) {
+  VtuData out;
+  out.mesh = read_vtu(path, &out);
+  return out;
+}
 
 MeshFile read_mesh_file(const fs::path& path) {
   const std::string ext = path.extension().string();

@@ -10,7 +10,8 @@ namespace snh {
 
 void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const Eigen::Matrix3Xd& positions,
                const std::vector<std::pair<std::string, Eigen::Matrix3Xd>>& point_data,
-               const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data) {
+               const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data,
+               const std::vector<std::pair<std::string, Eigen::VectorXd>>& point_scalars) {
   // VTK_HEXAHEDRON walks the bottom face around; VolumeMesh has c2 = c0 + ŷ, c3 = c0 + x̂ + ŷ.
   static constexpr int kHexToVtk[8] = {0, 1, 3, 2, 4, 5, 7, 6};
   const int npc = nodes_per_cell(mesh.type);
@@ -39,6 +40,11 @@ void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const 
       fmt::format_to(o, "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">\n", name);
       for (Eigen::Index v = 0; v < field.cols(); ++v)
         fmt::format_to(o, "{:.10g} {:.10g} {:.10g}\n", field(0, v), field(1, v), field(2, v));
+      fmt::format_to(o, "</DataArray>\n");
+    }
+    for (const auto& [name, field] : point_scalars) {
+      fmt::format_to(o, "<DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">\n", name);
+      for (Eigen::Index v = 0; v < field.size(); ++v) fmt::format_to(o, "{:.10g}\n", field[v]);
       fmt::format_to(o, "</DataArray>\n");
     }
     fmt::format_to(o, "</PointData>\n<CellData>\n");

@@ -16,10 +16,12 @@ namespace snh {
 ///   mesh         cells (tet4 or hex8, VolumeMesh corner order; written in VTK's order)
 ///   positions    3 by #V deformed positions
 ///   point_data   named 3-vector fields, each 3 by #V (e.g. "displacement")
-///   cell_data    named scalar fields, each #C (e.g. "J")
+///   cell_data    named scalar fields, each #C (e.g. "J"); non-finite values are written as inf / nan
+///   point_scalars named scalar fields, each #V (e.g. "pinned")
 void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const Eigen::Matrix3Xd& positions,
                const std::vector<std::pair<std::string, Eigen::Matrix3Xd>>& point_data,
-               const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data);
+               const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data,
+               const std::vector<std::pair<std::string, Eigen::VectorXd>>& point_scalars = {});
 
 /// Writes a ParaView collection listing (time, file) pairs; files relative to the .pvd's directory.
 void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& frames);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace snh {
@@ -26,9 +27,9 @@ struct FaceHash {
   }
 };
 
-/// Faces (each with N corners) that occur in exactly one cell, in first-seen order.
+/// Faces (each with N corners) that occur in exactly one cell, in first-seen order, with that cell.
 template <std::size_t N, std::size_t F>
-std::vector<std::array<int, N>> unique_faces(const VolumeMesh& mesh, const int (&local)[F][N]) {
+std::vector<std::pair<std::array<int, N>, int>> unique_faces(const VolumeMesh& mesh, const int (&local)[F][N]) {
   std::unordered_map<FaceKey<N>, int, FaceHash<N>> count;
   std::vector<std::array<int, N>> faces;
   faces.reserve(static_cast<std::size_t>(mesh.cell_count()) * F);
@@ -41,30 +42,36 @@ std::vector<std::array<int, N>> unique_faces(const VolumeMesh& mesh, const int (
       ++count[key];
       faces.push_back(face);
     }
-  std::vector<std::array<int, N>> out;
-  for (const auto& face : faces) {
-    FaceKey<N> key{face};
+  std::vector<std::pair<std::array<int, N>, int>> out;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    FaceKey<N> key{faces[i]};
     std::sort(key.v.begin(), key.v.end());
-    if (count[key] == 1) out.push_back(face);
+    if (count[key] == 1) out.emplace_back(faces[i], static_cast<int>(i / F));
   }
   return out;
 }
 
 }  // namespace
 
-Eigen::Matrix3Xi boundary_triangles(const VolumeMesh& mesh) {
+Eigen::Matrix3Xi boundary_triangles(const VolumeMesh& mesh, std::vector<int>* cells) {
+  if (cells) cells->clear();
   if (mesh.type == CellType::tet4) {
     const auto faces = unique_faces(mesh, kTetFaces);
     Eigen::Matrix3Xi T(3, faces.size());
-    for (std::size_t f = 0; f < faces.size(); ++f) T.col(f) << faces[f][0], faces[f][1], faces[f][2];
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      const auto& [t, cell] = faces[f];
+      T.col(f) << t[0], t[1], t[2];
+      if (cells) cells->push_back(cell);
+    }
     return T;
   }
   const auto quads = unique_faces(mesh, kHexFaces);
   Eigen::Matrix3Xi T(3, 2 * quads.size());
   for (std::size_t f = 0; f < quads.size(); ++f) {
-    const auto& q = quads[f];
+    const auto& [q, cell] = quads[f];
     T.col(2 * f) << q[0], q[1], q[2];
     T.col(2 * f + 1) << q[0], q[2], q[3];
+    if (cells) cells->insert(cells->end(), {cell, cell});
   }
   return T;
 }

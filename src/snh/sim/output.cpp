@@ -26,8 +26,14 @@ std::string worst_element(const Eigen::VectorXd& min_J) {
   return fmt::format("; worst element {} (min det F = {:.4g})", worst, min_J[worst]);
 }
 
-FrameWriter::FrameWriter(std::filesystem::path out, const VolumeMesh& mesh, bool write_vtu)
-    : out_(std::move(out)), mesh_(mesh), surface_(boundary_triangles(mesh)), write_vtu_(write_vtu) {}
+FrameWriter::FrameWriter(std::filesystem::path out, const VolumeMesh& mesh, bool write_vtu, const std::vector<bool>& pinned)
+    : out_(std::move(out)),
+      mesh_(mesh),
+      surface_(boundary_triangles(mesh)),
+      write_vtu_(write_vtu),
+      pinned_(Eigen::VectorXd::Zero(mesh.vertex_count())) {
+  for (std::size_t v = 0; v < pinned.size() && static_cast<Eigen::Index>(v) < pinned_.size(); ++v) pinned_[v] = pinned[v];
+}
 
 void FrameWriter::adopt_written(int last, const std::function<double(int)>& time) {
   series_.clear();
@@ -35,12 +41,13 @@ void FrameWriter::adopt_written(int last, const std::function<double(int)>& time
   for (int i = 0; i <= last; ++i) series_.emplace_back(time(i), fmt::format("{:03d}.vtu", i));
 }
 
-void FrameWriter::write(int index, double time, const Eigen::VectorXd& x, const Eigen::VectorXd& min_J) {
+void FrameWriter::write(int index, double time, const Eigen::VectorXd& x, const ElasticSystem::Deformation& d) {
   const Eigen::Matrix3Xd X = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3);
   write_obj(out_ / fmt::format("{:03d}.obj", index), X, surface_);
   if (!write_vtu_) return;
   const std::string vtu = fmt::format("{:03d}.vtu", index);
-  write_vtu(out_ / vtu, mesh_, X, {{"displacement", X - mesh_.vertices}}, {{"J", min_J}});
+  write_vtu(out_ / vtu, mesh_, X, {{"displacement", X - mesh_.vertices}}, {{"J", d.min_J}, {"psi", d.energy_density}},
+            {{"pinned", pinned_}});
   series_.emplace_back(time, vtu);
   write_pvd(out_ / "frames.pvd", series_);
 }

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "snh/fem/elastic_system.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 
 namespace snh {
@@ -23,13 +24,14 @@ namespace snh {
 
 class FrameWriter {
  public:
-  /// mesh: the rest mesh (copied); write_vtu: also NNN.vtu frames and frames.pvd.
-  FrameWriter(std::filesystem::path out, const VolumeMesh& mesh, bool write_vtu);
-  /// Writes frame `index` at `time`: NNN.obj, and NNN.vtu (displacement; per-cell min det F as "J")
-  /// with the .pvd series rewritten to include it.
-  ///   x      deformed positions, 3 #V
-  ///   min_J  per cell
-  void write(int index, double time, const Eigen::VectorXd& x, const Eigen::VectorXd& min_J);
+  /// mesh: the rest mesh (copied); write_vtu: also NNN.vtu frames and frames.pvd; pinned: #V flags of
+  /// the vertices held or moved by the boundary conditions (written as the point field "pinned").
+  FrameWriter(std::filesystem::path out, const VolumeMesh& mesh, bool write_vtu, const std::vector<bool>& pinned);
+  /// Writes frame `index` at `time`: NNN.obj, and NNN.vtu (point fields displacement and pinned; cell
+  /// fields J, the min det F, and psi, the mean energy density) with the .pvd series rewritten to include it.
+  ///   x  deformed positions, 3 #V
+  ///   d  the deformation at x (ElasticSystem::deformation)
+  void write(int index, double time, const Eigen::VectorXd& x, const ElasticSystem::Deformation& d);
   /// Continues a series whose frames 0 … last are already on disk (a resumed run): lists them in the
   /// .pvd at time(i) without writing anything.
   void adopt_written(int last, const std::function<double(int)>& time);
@@ -40,6 +42,7 @@ class FrameWriter {
   VolumeMesh mesh_;
   Eigen::Matrix3Xi surface_;
   bool write_vtu_;
+  Eigen::VectorXd pinned_;
   std::vector<std::pair<double, std::string>> series_;
 };
 

@@ -284,6 +284,8 @@ std::vector<FrameStats> read_frames(const std::filesystem::path& dir, int count)
 void write_scene_stats(const Scene& s, const SceneResult& r) {
   json j;
   j["program"] = "snh run";
+  if (!s.command_line.empty()) j["command_line"] = s.command_line;
+  j["snh_version"] = SNH_VERSION;
   j["scene"] = s.source.string();
   j["element"] = std::string(to_string(r.element));
   if (s.mesh_file.empty()) j["resolution"] = s.resolution;
@@ -583,7 +585,10 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
                      dynamic ? fmt::format(" ({} substeps of {:g} per frame)", substeps, h) : "", s.gravity[0],
                      s.gravity[1], s.gravity[2], to_string(s.solver), s.out.string());
 
-  FrameWriter frames(s.out, mesh, s.write_vtu);
+  std::vector<bool> pinned(mesh.vertex_count(), false);
+  for (const auto& set : pin_vertices)
+    for (int v : set) pinned[v] = true;
+  FrameWriter frames(s.out, mesh, s.write_vtu, pinned);
   Eigen::VectorXd v = Eigen::VectorXd::Zero(x.size());
   auto record = [&](FrameStats& f) {
     const ElasticSystem::Deformation d = elastic.deformation(x);
@@ -595,7 +600,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
     f.gravity_energy = potential.gravity_energy(x);
     f.total_energy = f.elastic_energy + f.kinetic_energy + f.gravity_energy;
     try {
-      frames.write(f.frame, f.time, x, d.min_J);
+      frames.write(f.frame, f.time, x, d);
     } catch (const WriteError& e) {
       throw WriteError(fmt::format("frame {}: {} (the frames before it, stats.json and checkpoint.bin are kept)", f.frame,
                                    e.what()));

@@ -67,6 +67,7 @@ struct Scene {
   std::filesystem::path source;  ///< the file, for messages and stats
   std::string settings;          ///< the parsed file, canonical (checkpoint fingerprint); empty if built in code
   bool resume = false;           ///< continue the run in `out` from its checkpoint (the last completed frame)
+  std::string command_line;      ///< as the user typed it, for stats.json and the report
   // Mesh: a file (mesh_file, relative paths resolved against the scene file's directory), or else a box
   // of tets or hexes spanning [box_min, box_max].
   std::filesystem::path mesh_file;

@@ -63,6 +63,8 @@ std::vector<StepStats> read_steps(const std::filesystem::path& dir, int count) {
 void write_stats(const StretchConfig& c, const StretchResult& r) {
   nlohmann::json j;
   j["program"] = c.program;
+  if (!c.command_line.empty()) j["command_line"] = c.command_line;
+  j["snh_version"] = SNH_VERSION;
   j["element"] = std::string(to_string(r.element));
   if (c.mesh_file.empty()) j["resolution"] = c.resolution;
   j["material"] = c.material;
@@ -201,7 +203,10 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   log << "mesh: " << describe(mesh_quality(system.mesh(), system.rest()), mesh.type) << "\n";
 
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
-  FrameWriter frames(c.out, mesh, c.write_vtu);
+  std::vector<bool> pinned(mesh.vertex_count(), false);
+  for (const auto* layer : {&bottom, &top})
+    for (int v : *layer) pinned[v] = true;
+  FrameWriter frames(c.out, mesh, c.write_vtu, pinned);
   const double rest_volume = rest_volumes(system.rest()).sum();
   Eigen::VectorXd previous = x;  // the solution one step back, for extrapolation
   int first = 1;
@@ -214,7 +219,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     first = ck.step + 1;
     log << fmt::format("resuming after step {} (checkpoint in {})\n", ck.step, c.out.string());
   } else {
-    frames.write(0, 0.0, x, Eigen::VectorXd::Ones(mesh.cell_count()));
+    frames.write(0, 0.0, x, system.deformation(x));
   }
 
   for (int s = first; s <= c.steps; ++s) {
@@ -278,7 +283,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     if (!rep.converged) st.failure = rep.failure + worst_element(deformed.min_J);
     record_deformation(deformed, rest_volume, st);
     try {
-      frames.write(s, s, x, deformed.min_J);
+      frames.write(s, s, x, deformed);
     } catch (const WriteError& e) {
       throw WriteError(fmt::format("step {}: {} (frames 000 to {:03d}, stats.json and checkpoint.bin are kept: --resume "
                                    "continues once the output can be written)",
