@@ -10,7 +10,9 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include "../common/command_line.hpp"
 #include "../common/omp_env.hpp"
+#include "../common/run_report.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/stretch.hpp"
 
@@ -64,6 +66,7 @@ int main(int argc, char** argv) {
   }
   snh::StretchConfig config;
   config.program = program;
+  config.command_line = snh::cli::quoted_command_line(argc, argv);
   config.element = kHex ? snh::CellType::hex8 : snh::CellType::tet4;
   config.resolution = parse_int(program, "resolution", argv[1]);
   config.material = argv[2];
@@ -74,6 +77,7 @@ int main(int argc, char** argv) {
     snh::validate(config);
     snh::install_stop_handlers();
     const snh::StretchResult result = snh::run_stretch(config, std::cout);
+    (void)snh::cli::write_run_report(config.out, program);  // the browser report; a failure keeps the results
     if (result.interrupted_by) return 128 + result.interrupted_by;
     return result.all_converged ? 0 : 1;
   } catch (const std::exception& e) {

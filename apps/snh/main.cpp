@@ -5,15 +5,18 @@
 
 #include <CLI/CLI.hpp>
 
+#include "../common/command_line.hpp"
 #include "../common/omp_env.hpp"
 #include "lab_command.hpp"
 #include "material_command.hpp"
 #include "mesh_commands.hpp"
+#include "report_commands.hpp"
 #include "run_command.hpp"
 #include "stretch_command.hpp"
 
 int main(int argc, char** argv) {
   snh::cli::ensure_passive_omp_wait(argv);
+  snh::cli::invocation() = snh::cli::quoted_command_line(argc, argv);
   CLI::App app{"snh " SNH_VERSION ": Stable Neo-Hookean flesh simulation toolkit (Smith, de Goes & Kim 2018)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "snh " SNH_VERSION);
@@ -27,6 +30,7 @@ int main(int argc, char** argv) {
   snh::cli::add_run_command(app, exit_code);
   snh::cli::add_lab_command(app, exit_code);
   snh::cli::add_mesh_commands(app, exit_code);
+  snh::cli::add_report_commands(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

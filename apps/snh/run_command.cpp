@@ -6,6 +6,8 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include "../common/command_line.hpp"
+#include "../common/run_report.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/scene.hpp"
 
@@ -16,6 +18,7 @@ void add_run_command(CLI::App& app, int& exit_code) {
     std::string scene, out;
     int threads = 0;
     bool resume = false;
+    bool no_report = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -26,14 +29,17 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("scene", o->scene, "Scene file (.json)")->required();
   cmd->add_option("--out", o->out, "Output directory (default: the scene's output.dir, else output/<scene name>)");
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
+  cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
   cmd->callback([o, &exit_code]() {
     Scene scene = load_scene(o->scene);
     if (!o->out.empty()) scene.out = o->out;
     scene.resume = o->resume;
+    scene.command_line = invocation();
     if (o->threads > 0) omp_set_num_threads(o->threads);
     install_stop_handlers();
     const SceneResult r = run_scene(scene, std::cout, ::isatty(STDOUT_FILENO) != 0);
+    if (!o->no_report) (void)write_run_report(scene.out, "snh");
     exit_code = r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;
   });
 }

@@ -6,7 +6,9 @@
 #include <unistd.h>
 #include <omp.h>
 
+#include "../common/command_line.hpp"
 #include "parameter_options.hpp"
+#include "../common/run_report.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/stretch.hpp"
@@ -29,6 +31,7 @@ struct Options {
   bool projected_only = false;
   bool refactorize = false;
   bool resume = false;
+  bool no_report = false;
   std::string tet_split = "paper";
   std::string mesh, axis = "y";
 };
@@ -66,6 +69,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
                 "gradients on the next matrix, and a new factorization is made only when that converges slowly)");
   cmd->add_flag("--resume", o->resume,
                 "Continue a stopped run in --out from its last completed step (the other options must be the same)");
+  cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
   cmd->add_option("--tolerance", o->tolerance, "Newton stops when |f| < tolerance (default 1e-3: |f|^2 < 1e-6 as the paper)");
   cmd->add_option("--projection", o->projection, "PSD projection of element Hessians: clamp (default) or abs")
       ->check(CLI::IsMember({"clamp", "abs"}));
@@ -75,6 +79,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
   cmd->callback([o, &exit_code]() {
     StretchConfig c;
     c.program = "snh stretch";
+    c.command_line = invocation();
     c.element = o->element == "hex" ? CellType::hex8 : CellType::tet4;
     c.resolution = o->res;
     c.mesh_file = o->mesh;
@@ -97,6 +102,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     validate(c);
     install_stop_handlers();
     const StretchResult r = run_stretch(c, std::cout);
+    if (!o->no_report) (void)write_run_report(c.out, "snh");
     exit_code = r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;
   });
 }

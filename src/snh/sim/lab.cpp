@@ -1,6 +1,7 @@
 #include "snh/sim/lab.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <mutex>
@@ -84,7 +85,8 @@ std::vector<T> per_energy(const LabOptions& o, Body&& body) {
 LabRun simulate(Scene s, const std::string& experiment, const std::string& case_name, const LabOptions& o) {
   LabRun run{.experiment = experiment, .case_name = case_name, .energy = s.material};
   s.source = fmt::format("lab {} {} {}", experiment, case_name, s.material);
-  s.out = o.out / experiment / case_name / s.material;
+  run.dir = (std::filesystem::path(experiment) / case_name / s.material).generic_string();
+  s.out = o.out / run.dir;
   std::ostringstream log;
   const SceneResult r = run_scene(s, log);
   run.converged = r.all_converged;
@@ -107,6 +109,29 @@ LabRun simulate(Scene s, const std::string& experiment, const std::string& case_
   return run;
 }
 
+/// One of the lab's tables: printed as text (the first column left-aligned, the others right-aligned to
+/// their widths; a width of 0 is free text after two spaces) and stored in lab.json for the report.
+struct LabTable {
+  std::string title;
+  std::vector<std::pair<std::string, int>> columns;  ///< heading, width
+  std::vector<std::vector<std::string>> rows;
+  [[nodiscard]] std::string text() const {
+    auto line = [&](const std::vector<std::string>& cells) {
+      std::string out;
+      for (std::size_t i = 0; i < cells.size() && i < columns.size(); ++i) {
+        const int w = columns[i].second;
+        out += i == 0 ? fmt::format("{:<{}}", cells[i], w) : w == 0 ? "  " + cells[i] : fmt::format("{:>{}}", cells[i], w);
+      }
+      return out + "\n";
+    };
+    std::vector<std::string> head;
+    for (const auto& [name, width] : columns) head.push_back(name);
+    std::string out = title + "\n" + line(head);
+    for (const auto& r : rows) out += line(r);
+    return out;
+  }
+};
+
 std::string volume_cell(const LabRun& r) {
   if (!r.defined_at_start) return "undefined at start";
   if (!r.converged) return "Newton failed";
@@ -119,7 +144,7 @@ json to_json(const LabRun& r) {
           {"defined_at_start", r.defined_at_start}, {"converged", r.converged}, {"failure", r.failure},
           {"recovered", r.recovered()}, {"final_volume", num(r.final_volume)}, {"final_min_J", num(r.final_min_J)},
           {"final_inverted", r.final_inverted}, {"final_elastic_energy", num(r.final_elastic_energy)},
-          {"recovery_time", num(r.recovery_time)}, {"time", r.time},
+          {"recovery_time", num(r.recovery_time)}, {"dir", r.dir}, {"time", r.time},
           {"volume", [&] {
              json v = json::array();
              for (double x : r.volume) v.push_back(num(x));
@@ -245,7 +270,8 @@ std::vector<PoissonRow> lab_poisson(const LabOptions& o) {
         s.pins = {face(0, 0.0), face(1, 0.0), face(2, 0.0), face(0, length)};
         s.pins.back().motions.push_back({.kind = Motion::Kind::translate, .vector = Eigen::Vector3d(strain * length, 0, 0), .end = 1.0});
         s.source = fmt::format("lab poisson {} nu {} {}", e, nu, reparam ? "reparametrized" : "as given");
-        s.out = o.out / "poisson" / fmt::format("nu_{}_{}", nu, reparam ? "reparametrized" : "given") / e;
+        const std::string dir = fmt::format("poisson/nu_{}_{}/{}", nu, reparam ? "reparametrized" : "given", e);
+        s.out = o.out / dir;
         try {
           const AnyMaterial m = make_material(e, s.params, reparam);
           // An energy with stress at rest has no equilibrium at zero strain to measure a ratio against.
@@ -264,6 +290,7 @@ std::vector<PoissonRow> lab_poisson(const LabOptions& o) {
         std::ostringstream log;
         const SceneResult r = run_scene(s, log);
         row.ran = true;
+        row.dir = dir;
         if (!r.all_converged) {
           row.failure = r.failure;
         } else {
@@ -292,7 +319,8 @@ std::vector<StretchRow> lab_stretch(const LabOptions& o) {
       // slowly (README, stretch test): allow more iterations than the paper's 50.
       c.newton.max_iterations = 200;
       c.solver = LinearSolverKind::ldlt;  // as the scenes: no BLAS threads competing with the parallel runs
-      c.out = o.out / "stretch" / fmt::format("nu_{}", nu) / e;
+      row.dir = fmt::format("stretch/nu_{}/{}", nu, e);
+      c.out = o.out / row.dir;
       // Reparametrized where the energy has a reparametrization, so that ν means the same for all.
       try {
         (void)make_material(e, c.params, true);
@@ -334,6 +362,7 @@ json lab_psi_along_sI(const Lame& p, const std::vector<std::string>& energies) {
 }
 
 LabReport run_lab(const LabOptions& o) {
+  const auto t_start = std::chrono::steady_clock::now();
   ensure_writable_directory(o.out);
   const std::vector<std::string> energies = energies_of(o);
   const std::vector<LabRun> rest = lab_rest(o), inversion = lab_inversion(o), reflection = lab_reflection(o),
@@ -360,88 +389,115 @@ LabReport run_lab(const LabOptions& o) {
   for (const PoissonRow& r : poisson)
     pj.push_back({{"energy", r.energy}, {"nu", r.nu}, {"reparametrize", r.reparametrize}, {"ran", r.ran},
                   {"expected", r.expected}, {"measured", std::isfinite(r.measured) ? json(r.measured) : json(nullptr)},
-                  {"failure", r.failure}});
+                  {"failure", r.failure}, {"dir", r.dir}});
   j["poisson"] = pj;
   json sj = json::array();
   for (const StretchRow& r : stretch)
     sj.push_back({{"energy", r.energy}, {"nu", r.nu}, {"reparametrized", r.reparametrized}, {"converged", r.converged},
                   {"volume_ratio", std::isfinite(r.volume_ratio) ? json(r.volume_ratio) : json(nullptr)},
-                  {"failure", r.failure}});
+                  {"failure", r.failure}, {"dir", r.dir}});
   j["stretch"] = sj;
   j["psi_along_sI"] = lab_psi_along_sI({1.0, 10.0}, energies);
 
-  // The tables.
-  std::string& t = rep.text;
-  t += "1. Rest: a free cube starting at rest (mu 1, lambda 4: nu 0.4); volume ratio after settling\n";
-  t += fmt::format("{:<24}{:>10}  {}\n", "energy", "volume", "");
-  for (const LabRun& r : rest)
-    t += fmt::format("{:<24}{:>10}  {}\n", r.energy, volume_cell(r),
-                     !r.converged || !r.defined_at_start ? ""
-                     : std::abs(r.final_volume - 1.0) <= 1e-3
-                         ? "stays at rest"
-                         : fmt::format("drifts (s = {:.3f} per axis)", std::cbrt(r.final_volume)));
-  t += "\n2. Inversion (mu 1, lambda 10): volume ratio at the end; recovered = within 1 % of rest, nothing inverted\n";
-  t += fmt::format("{:<24}{:>20}{:>12}{:>20}{:>12}\n", "energy", "reflected cube", "", "pushed through", "");
-  for (const std::string& e : energies) {
-    const LabRun *a = find(inversion, "reflected", e), *b = find(inversion, "pushed_through", e);
-    t += fmt::format("{:<24}{:>20}{:>12}{:>20}{:>12}\n", e, volume_cell(*a), a->recovered() ? "recovered" : "no",
-                     volume_cell(*b), b->recovered() ? "recovered" : "no");
+  // The tables: one structure, printed as text and stored in lab.json for the report.
+  std::vector<LabTable> tables;
+  {
+    LabTable& t = tables.emplace_back();
+    t.title = "1. Rest: a free cube starting at rest (mu 1, lambda 4: nu 0.4); volume ratio after settling";
+    t.columns = {{"energy", 24}, {"volume", 10}, {"", 0}};
+    for (const LabRun& r : rest)
+      t.rows.push_back({r.energy, volume_cell(r),
+                        !r.converged || !r.defined_at_start ? ""
+                        : std::abs(r.final_volume - 1.0) <= 1e-3
+                            ? "stays at rest"
+                            : fmt::format("drifts (s = {:.3f} per axis)", std::cbrt(r.final_volume))});
   }
-  t += "\n3. Reflection: the inverted cube reflected in x, y or z (same perturbation); final volume ratios\n";
-  t += fmt::format("{:<24}{:>20}{:>20}{:>20}{:>16}\n", "energy", "x", "y", "z", "spread");
-  for (const std::string& e : energies) {
-    const LabRun *x = find(reflection, "reflect_x", e), *y = find(reflection, "reflect_y", e),
-                 *z = find(reflection, "reflect_z", e);
-    std::string spread = "-";
-    if (x->converged != y->converged || y->converged != z->converged) spread = "axis-dependent";
-    if (x->converged && y->converged && z->converged && x->defined_at_start) {
-      const double lo = std::min({x->final_volume, y->final_volume, z->final_volume});
-      const double hi = std::max({x->final_volume, y->final_volume, z->final_volume});
-      spread = fmt::format("{:.1e}", hi - lo);
+  {
+    LabTable& t = tables.emplace_back();
+    t.title = "2. Inversion (mu 1, lambda 10): volume ratio at the end; recovered = within 1 % of rest, nothing inverted";
+    t.columns = {{"energy", 24}, {"reflected cube", 20}, {"", 12}, {"pushed through", 20}, {"", 12}};
+    for (const std::string& e : energies) {
+      const LabRun *a = find(inversion, "reflected", e), *b = find(inversion, "pushed_through", e);
+      t.rows.push_back({e, volume_cell(*a), a->recovered() ? "recovered" : "no", volume_cell(*b),
+                        b->recovered() ? "recovered" : "no"});
     }
-    t += fmt::format("{:<24}{:>20}{:>20}{:>20}{:>16}\n", e, volume_cell(*x), volume_cell(*y), volume_cell(*z), spread);
   }
-  t += fmt::format("\n4. Degeneracy: crushed, then released (perturbation 1e-3); time to 99 % volume, or the volume at the end "
-                   "(trap size s = {:.4f}: below = {:.4f}, above = {:.4f})\n",
-                   trap, 0.5 * trap, 2.0 * trap);
-  t += fmt::format("{:<24}{:>16}{:>16}{:>16}{:>16}{:>16}\n", "energy", "plane", "line", "point", "below trap", "above trap");
-  for (const std::string& e : energies) {
-    t += fmt::format("{:<24}", e);
-    for (const char* c : {"plane", "line", "point", "below_trap", "above_trap"}) {
-      const LabRun* r = find(degeneracy, c, e);
-      const std::string cell = !r->defined_at_start ? "undefined"
-                               : !r->converged      ? "Newton failed"
-                               : std::isfinite(r->recovery_time) ? fmt::format("{:.2f} s", r->recovery_time)
-                                                                 : fmt::format("end {:.3f}", r->final_volume);
-      t += fmt::format("{:>16}", cell);
+  {
+    LabTable& t = tables.emplace_back();
+    t.title = "3. Reflection: the inverted cube reflected in x, y or z (same perturbation); final volume ratios";
+    t.columns = {{"energy", 24}, {"x", 20}, {"y", 20}, {"z", 20}, {"spread", 16}};
+    for (const std::string& e : energies) {
+      const LabRun *x = find(reflection, "reflect_x", e), *y = find(reflection, "reflect_y", e),
+                   *z = find(reflection, "reflect_z", e);
+      std::string spread = "-";
+      if (x->converged != y->converged || y->converged != z->converged) spread = "axis-dependent";
+      if (x->converged && y->converged && z->converged && x->defined_at_start) {
+        const double lo = std::min({x->final_volume, y->final_volume, z->final_volume});
+        const double hi = std::max({x->final_volume, y->final_volume, z->final_volume});
+        spread = fmt::format("{:.1e}", hi - lo);
+      }
+      t.rows.push_back({e, volume_cell(*x), volume_cell(*y), volume_cell(*z), spread});
     }
-    t += "\n";
   }
-  t += "\n5. Poisson's ratio: a bar under 0.1 % strain with sliding ends; measured nu (expected = nu, E = 1; "
-       "- where the energy has no reparametrization or is not stress-free at rest)\n";
-  t += fmt::format("{:<24}", "energy");
-  for (double nu : {0.3, 0.4, 0.45, 0.49}) t += fmt::format("{:>14}{:>14}", fmt::format("{} given", nu), "reparam.");
-  t += "\n";
-  for (const std::string& e : energies) {
-    t += fmt::format("{:<24}", e);
-    for (const PoissonRow& r : poisson)
-      if (r.energy == e)
-        t += fmt::format("{:>14}", !r.ran ? "-" : std::isfinite(r.measured) ? fmt::format("{:.4f}", r.measured) : "failed");
-    t += "\n";
+  {
+    LabTable& t = tables.emplace_back();
+    t.title = fmt::format("4. Degeneracy: crushed, then released (perturbation 1e-3); time to 99 % volume, or the volume at "
+                          "the end (trap size s = {:.4f}: below = {:.4f}, above = {:.4f})",
+                          trap, 0.5 * trap, 2.0 * trap);
+    t.columns = {{"energy", 24}, {"plane", 16}, {"line", 16}, {"point", 16}, {"below trap", 16}, {"above trap", 16}};
+    for (const std::string& e : energies) {
+      std::vector<std::string> row = {e};
+      for (const char* c : {"plane", "line", "point", "below_trap", "above_trap"}) {
+        const LabRun* r = find(degeneracy, c, e);
+        row.push_back(!r->defined_at_start ? "undefined"
+                      : !r->converged      ? "Newton failed"
+                      : std::isfinite(r->recovery_time) ? fmt::format("{:.2f} s", r->recovery_time)
+                                                        : fmt::format("end {:.3f}", r->final_volume));
+      }
+      t.rows.push_back(row);
+    }
   }
-  t += "\n6. Large stretch: the paper's stretch test (hexes) to 3.5x; volume ratio at the end (E = 1, reparametrized "
-       "where the energy has a reparametrization, * where not)\n";
-  t += fmt::format("{:<24}", "energy");
-  for (double nu : {0.3, 0.4, 0.45, 0.49, 0.495}) t += fmt::format("{:>12}", fmt::format("nu {}", nu));
-  t += "\n";
-  for (const std::string& e : energies) {
-    t += fmt::format("{:<24}", e);
-    for (const StretchRow& r : stretch)
-      if (r.energy == e)
-        t += fmt::format("{:>12}", r.converged ? fmt::format("{:.4f}{}", r.volume_ratio, r.reparametrized ? "" : "*")
-                                               : "failed");
-    t += "\n";
+  {
+    LabTable& t = tables.emplace_back();
+    t.title = "5. Poisson's ratio: a bar under 0.1 % strain with sliding ends; measured nu (expected = nu, E = 1; "
+              "- where the energy has no reparametrization or is not stress-free at rest)";
+    t.columns = {{"energy", 24}};
+    for (double nu : {0.3, 0.4, 0.45, 0.49}) {
+      t.columns.push_back({fmt::format("{} given", nu), 14});
+      t.columns.push_back({"reparam.", 14});
+    }
+    for (const std::string& e : energies) {
+      std::vector<std::string> row = {e};
+      for (const PoissonRow& r : poisson)
+        if (r.energy == e) row.push_back(!r.ran ? "-" : std::isfinite(r.measured) ? fmt::format("{:.4f}", r.measured) : "failed");
+      t.rows.push_back(row);
+    }
   }
+  {
+    LabTable& t = tables.emplace_back();
+    t.title = "6. Large stretch: the paper's stretch test (hexes) to 3.5x; volume ratio at the end (E = 1, reparametrized "
+              "where the energy has a reparametrization, * where not)";
+    t.columns = {{"energy", 24}};
+    for (double nu : {0.3, 0.4, 0.45, 0.49, 0.495}) t.columns.push_back({fmt::format("nu {}", nu), 12});
+    for (const std::string& e : energies) {
+      std::vector<std::string> row = {e};
+      for (const StretchRow& r : stretch)
+        if (r.energy == e)
+          row.push_back(r.converged ? fmt::format("{:.4f}{}", r.volume_ratio, r.reparametrized ? "" : "*") : "failed");
+      t.rows.push_back(row);
+    }
+  }
+  json tj = json::array();
+  for (const LabTable& t : tables) {
+    rep.text += (rep.text.empty() ? "" : "\n") + t.text();
+    json columns = json::array();
+    for (const auto& [name, width] : t.columns) columns.push_back(name);
+    tj.push_back({{"title", t.title}, {"columns", columns}, {"rows", t.rows}});
+  }
+  j["tables"] = tj;
+  j["command_line"] = o.command_line;
+  j["snh_version"] = SNH_VERSION;
+  j["total_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   write_atomically(o.out / "lab.json", [&](std::ostream& out) { out << j.dump(1) << "\n"; });
   return rep;
 }

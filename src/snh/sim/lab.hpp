@@ -26,6 +26,7 @@ struct LabOptions {
   std::filesystem::path out = "output/lab";
   std::vector<std::string> energies;         ///< empty: every registered energy
   std::ostream* progress = nullptr;          ///< one line per simulation when set
+  std::string command_line;                  ///< for lab.json and the report
 };
 
 /// One simulation of an experiment.
@@ -40,6 +41,7 @@ struct LabRun {
   double final_elastic_energy = std::numeric_limits<double>::quiet_NaN();
   double recovery_time = std::numeric_limits<double>::quiet_NaN();  ///< first time with volume ratio ≥ 0.99
   std::vector<double> time, volume;  ///< volume ratio over time (frame by frame)
+  std::string dir;                   ///< its output directory, relative to LabOptions::out
   /// Recovered: ran to the end, volume within 1 % of the rest volume, no inverted element.
   [[nodiscard]] bool recovered() const;
 };
@@ -52,6 +54,7 @@ struct PoissonRow {
   double expected = 0.0;      ///< λ/(2(λ+μ)) of the parameters given, = nu
   double measured = std::numeric_limits<double>::quiet_NaN();  ///< −lateral strain / axial strain
   std::string failure;
+  std::string dir;            ///< its output directory relative to LabOptions::out ("" if it did not run)
 };
 
 struct StretchRow {
@@ -61,6 +64,7 @@ struct StretchRow {
   bool converged = false;
   double volume_ratio = std::numeric_limits<double>::quiet_NaN();  ///< at 3.5×
   std::string failure;
+  std::string dir;            ///< its output directory relative to LabOptions::out
 };
 
 [[nodiscard]] std::vector<LabRun> lab_rest(const LabOptions& o);
@@ -76,7 +80,7 @@ struct StretchRow {
 [[nodiscard]] nlohmann::json lab_psi_along_sI(const Lame& p, const std::vector<std::string>& energies);
 
 struct LabReport {
-  nlohmann::json json;  ///< the tables and curves (also written to OUT/lab.json)
+  nlohmann::json json;  ///< the results, the tables ("tables": title, note, columns, rows) and curves (also OUT/lab.json)
   std::string text;     ///< the tables, for a terminal
 };
 

@@ -1,0 +1,64 @@
+#include "report_commands.hpp"
+
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "snh/report/render.hpp"
+#include "snh/report/report.hpp"
+
+namespace snh::cli {
+
+void add_report_commands(CLI::App& app, int& exit_code) {
+  auto dir = std::make_shared<std::string>();
+  CLI::App* report = app.add_subcommand(
+      "report",
+      "Writes (or rewrites) the browser report of an output directory of tetcli, hexcli, snh stretch, snh run or snh "
+      "lab: DIR/index.html, which opens from the file system in any browser (3D playback of the frames, plots of the "
+      "per-step stats, the run's settings; for the lab its tables and curves). Runs write it themselves unless given "
+      "--no-report.");
+  report->add_option("dir", *dir, "The run's output directory")->required();
+  report->callback([dir, &exit_code]() {
+    const ReportSummary s = write_report(*dir);
+    std::cout << fmt::format("{} report{}: {}\n", s.kind,
+                             s.kind == "lab" ? fmt::format(" (and {} simulations' reports)", s.runs)
+                                             : fmt::format(" ({} frames)", s.frames),
+                             std::filesystem::absolute(s.index).lexically_normal().string());
+    exit_code = 0;
+  });
+
+  struct RenderArgs {
+    std::string dir, out, field, browser;
+    int frame = -1, width = 1200, height = 900;
+    bool wireframe = false;
+  };
+  auto r = std::make_shared<RenderArgs>();
+  CLI::App* render = app.add_subcommand(
+      "render",
+      "Saves a picture of one frame of a run (the report's 3D view with its legend) as a PNG, through headless "
+      "Chromium (Debian package chromium; or set SNH_CHROMIUM). Writes the report first if the directory has none.");
+  render->add_option("dir", r->dir, "The run's output directory")->required();
+  render->add_option("--frame", r->frame, "The frame (default: the last)")->check(CLI::NonNegativeNumber);
+  render->add_option("--field", r->field, "Colour by J (default), psi (energy density) or displacement");
+  render->add_option("--out", r->out, "The PNG to write")->required();
+  render->add_option("--width", r->width, "Picture width in pixels (default 1200)");
+  render->add_option("--height", r->height, "Picture height in pixels (default 900)");
+  render->add_flag("--wireframe", r->wireframe, "Draw the triangle edges");
+  render->add_option("--browser", r->browser, "Chromium or Chrome binary (default: $SNH_CHROMIUM, else chromium on PATH)");
+  render->callback([r, &exit_code]() {
+    RenderOptions o;
+    o.frame = r->frame;
+    o.field = r->field;
+    o.wireframe = r->wireframe;
+    o.width = r->width;
+    o.height = r->height;
+    o.out = r->out;
+    o.browser = r->browser;
+    render_png(r->dir, o);
+    std::cout << fmt::format("{} ({}x{})\n", r->out, o.width, o.height);
+    exit_code = 0;
+  });
+}
+
+}  // namespace snh::cli

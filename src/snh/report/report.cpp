@@ -1,0 +1,567 @@
+#include "snh/report/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "snh/io/atomic_file.hpp"
+#include "snh/io/mesh_read.hpp"
+#include "snh/mesh/surface.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw ReportError(fmt::format("{}: cannot be opened", path.string()));
+  try {
+    return json::parse(in);
+  } catch (const json::exception& e) {
+    throw ReportError(fmt::format("{}: not valid JSON ({})", path.string(), e.what()));
+  }
+}
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+/// A value of stats.json as the page shows it.
+std::string show(const json& v) {
+  if (v.is_null()) return "–";
+  if (v.is_boolean()) return v.get<bool>() ? "yes" : "no";
+  if (v.is_number_integer()) return std::to_string(v.get<long long>());
+  if (v.is_number()) return fmt::format("{:.6g}", v.get<double>());
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_array()) {
+    std::string s = "(";
+    for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + show(v[i]);
+    return s + ")";
+  }
+  return v.dump();
+}
+
+/// Adds [label, shown value] to `meta` when `key` is in `stats`.
+void meta_from(json& meta, const json& stats, const char* key, const std::string& label, const std::string& unit = "") {
+  if (const auto it = stats.find(key); it != stats.end()) meta.push_back({label, show(*it) + unit});
+}
+
+/// The values of `key` in each row (null where missing or not a number).
+json column(const json& rows, const char* key) {
+  json out = json::array();
+  for (const json& r : rows) {
+    const auto it = r.find(key);
+    out.push_back(it != r.end() && it->is_number() ? *it : json(nullptr));
+  }
+  return out;
+}
+
+json plot(const std::string& id, const std::string& group, const std::string& title, const std::string& x_label,
+          const std::string& y_label, bool log_y, const json& x, const json& series, bool points_only = false) {
+  return {{"id", id}, {"group", group}, {"title", title}, {"x_label", x_label}, {"y_label", y_label}, {"log_y", log_y},
+          {"points_only", points_only}, {"x", x}, {"series", series}};
+}
+
+json series(const std::string& label, const json& y) { return {{"label", label}, {"y", y}}; }
+
+/// (time, file) of each DataSet of a ParaView collection, in order.
+std::vector<std::pair<double, std::string>> read_pvd(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw ReportError(fmt::format("{}: cannot be opened", path.string()));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto attribute = [](const std::string& tag, const std::string& name) -> std::optional<std::string> {
+    const std::string key = " " + name + "=\"";
+    const std::size_t at = tag.find(key);
+    if (at == std::string::npos) return std::nullopt;
+    const std::size_t end = tag.find('"', at + key.size());
+    if (end == std::string::npos) return std::nullopt;
+    return tag.substr(at + key.size(), end - at - key.size());
+  };
+  std::vector<std::pair<double, std::string>> out;
+  for (std::size_t at = text.find("<DataSet"); at != std::string::npos; at = text.find("<DataSet", at + 1)) {
+    const std::string tag = text.substr(at, text.find('>', at) - at);
+    const auto file = attribute(tag, "file");
+    const auto time = attribute(tag, "timestep");
+    double t = static_cast<double>(out.size());
+    if (time) {
+      try {
+        t = std::stod(*time);
+      } catch (const std::exception&) {
+        throw ReportError(fmt::format("{}: DataSet {}: timestep \"{}\" is not a number", path.string(), out.size(), *time));
+      }
+    }
+    if (!file || file->empty()) throw ReportError(fmt::format("{}: DataSet {} has no file", path.string(), out.size()));
+    out.emplace_back(t, *file);
+  }
+  if (out.empty()) throw ReportError(fmt::format("{}: lists no frames", path.string()));
+  return out;
+}
+
+template <class T>
+std::string encode(const std::vector<T>& v) { return base64_encode(v.data(), v.size() * sizeof(T)); }
+
+struct Range {
+  double lo = std::numeric_limits<double>::infinity(), hi = -std::numeric_limits<double>::infinity();
+  void add(double v) {
+    if (!std::isfinite(v)) return;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  [[nodiscard]] json to_json(double fallback) const {
+    return lo <= hi ? json::array({lo, hi}) : json::array({fallback, fallback});
+  }
+};
+
+/// The 3D part of a run's report: reads the .vtu frames listed in frames.pvd, writes report/frames/NNN.js
+/// (surface positions and fields of each frame) and returns the "mesh" object of data.js.
+json write_frames(const fs::path& dir, const std::string& frame_word) {
+  const auto pvd = read_pvd(dir / "frames.pvd");
+  const fs::path frames_dir = dir / "report" / "frames";
+  fs::create_directories(frames_dir);
+
+  auto read_frame = [&](std::size_t i) {
+    try {
+      return read_vtu_data(dir / pvd[i].second);
+    } catch (const MeshError& e) {
+      throw ReportError(fmt::format("frame {}: {}", i, e.what()));
+    }
+  };
+  VtuData first = read_frame(0);
+  const VolumeMesh& mesh0 = first.mesh.mesh;
+  const Eigen::Index nv = mesh0.vertex_count(), nc = mesh0.cell_count();
+  const fs::path file0 = dir / pvd[0].second;
+  if (nc == 0) throw ReportError(fmt::format("{}: no tet or hex cells", file0.string()));
+  // Rest positions: frame 0's points less its displacement (frame 0 may start deformed).
+  VolumeMesh rest = mesh0;
+  if (const auto it = first.point_data.find("displacement"); it != first.point_data.end() && it->second.size() == static_cast<std::size_t>(3 * nv))
+    rest.vertices -= Eigen::Map<const Eigen::Matrix3Xd>(it->second.data(), 3, nv);
+  std::vector<int> triangle_cell;
+  const Eigen::Matrix3Xi triangles = boundary_triangles(rest, &triangle_cell);
+
+  // The surface: its vertices and cells, numbered in order of first use.
+  std::vector<int> vertex_local(nv, -1), cell_local(nc, -1), surface_vertices, surface_cells;
+  std::vector<std::uint32_t> tri(3 * triangles.cols()), tri_cell(triangles.cols());
+  for (Eigen::Index t = 0; t < triangles.cols(); ++t) {
+    for (int a = 0; a < 3; ++a) {
+      int& local = vertex_local[triangles(a, t)];
+      if (local < 0) {
+        local = static_cast<int>(surface_vertices.size());
+        surface_vertices.push_back(triangles(a, t));
+      }
+      tri[3 * t + a] = static_cast<std::uint32_t>(local);
+    }
+    int& local = cell_local[triangle_cell[t]];
+    if (local < 0) {
+      local = static_cast<int>(surface_cells.size());
+      surface_cells.push_back(triangle_cell[t]);
+    }
+    tri_cell[t] = static_cast<std::uint32_t>(local);
+  }
+  const std::size_t ns = surface_vertices.size(), ms = surface_cells.size();
+  std::vector<float> rest_xyz(3 * ns);
+  std::vector<std::uint8_t> pinned(ns, 0);
+  const auto pin_it = first.point_data.find("pinned");
+  const bool has_pins = pin_it != first.point_data.end() && pin_it->second.size() == static_cast<std::size_t>(nv);
+  int pinned_count = 0;
+  if (has_pins)
+    for (double p : pin_it->second) pinned_count += p != 0.0;
+  for (std::size_t k = 0; k < ns; ++k) {
+    for (int a = 0; a < 3; ++a) rest_xyz[3 * k + a] = static_cast<float>(rest.vertices(a, surface_vertices[k]));
+    if (has_pins) pinned[k] = pin_it->second[surface_vertices[k]] != 0.0;
+  }
+
+  // Cell fields written by FrameWriter (older runs may lack psi), then the displacement magnitude.
+  struct Field {
+    std::string name, label, per, colormap;
+    Range range;
+  };
+  std::vector<Field> fields;
+  if (first.cell_data.count("J")) fields.push_back({"J", "volume change J (smallest det F per element)", "cell", "diverging", {}});
+  if (first.cell_data.count("psi")) fields.push_back({"psi", "energy density ψ (mean per element)", "cell", "sequential", {}});
+  fields.push_back({"displacement", "displacement |x − X|", "vertex", "sequential", {}});
+
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  json frames = json::array();
+  for (std::size_t i = 0; i < pvd.size(); ++i) {
+    const VtuData data = i == 0 ? std::move(first) : read_frame(i);
+    const fs::path file = dir / pvd[i].second;
+    const VolumeMesh& m = data.mesh.mesh;
+    if (m.vertex_count() != nv || m.cell_count() != nc)
+      throw ReportError(fmt::format("{}: {} points and {} cells, but frame 0 has {} and {}", file.string(), m.vertex_count(),
+                                    m.cell_count(), nv, nc));
+    json frame_json;
+    std::vector<float> xyz(3 * ns);
+    for (std::size_t k = 0; k < ns; ++k) {
+      const Eigen::Vector3d p = m.vertices.col(surface_vertices[k]);
+      for (int a = 0; a < 3; ++a) xyz[3 * k + a] = static_cast<float>(p[a]);
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    frame_json["x"] = encode(xyz);
+    for (Field& f : fields) {
+      std::vector<float> values;
+      if (f.per == "cell") {
+        const auto it = data.cell_data.find(f.name);
+        if (it == data.cell_data.end() || it->second.size() != static_cast<std::size_t>(nc))
+          throw ReportError(fmt::format("{}: no cell field {} with {} values, as frame 0 has", file.string(), f.name, nc));
+        for (double v : it->second) f.range.add(v);
+        for (int c : surface_cells) values.push_back(static_cast<float>(it->second[c]));
+      } else {
+        const Eigen::VectorXd d = (m.vertices - rest.vertices).colwise().norm();
+        for (Eigen::Index v = 0; v < nv; ++v) f.range.add(d[v]);
+        for (int v : surface_vertices) values.push_back(static_cast<float>(d[v]));
+      }
+      frame_json[f.name] = encode(values);
+    }
+    const std::string src = fmt::format("report/frames/{:03d}.js", i);
+    write_atomically(dir / src, [&](std::ostream& o) { o << "snhReportFrame(" << i << ", " << frame_json.dump() << ");\n"; });
+    frames.push_back({{"index", i}, {"time", pvd[i].first}, {"label", fmt::format("{} {}", frame_word, i)}, {"src", src}});
+  }
+  // Frame files of an earlier, longer report of this directory would only confuse: remove them.
+  for (std::size_t i = pvd.size();; ++i) {
+    std::error_code ec;
+    if (!fs::remove(frames_dir / fmt::format("{:03d}.js", i), ec)) break;
+  }
+
+  json field_list = json::array();
+  for (const Field& f : fields) {
+    const json r = f.range.to_json(0.0);
+    json entry = {{"name", f.name}, {"label", f.label}, {"per", f.per}, {"min", r[0]}, {"max", r[1]}, {"colormap", f.colormap}};
+    if (f.colormap == "diverging") entry["center"] = 1.0;
+    field_list.push_back(entry);
+  }
+  return {{"element", mesh0.type == CellType::tet4 ? "tet" : "hex"},
+          {"vertex_count", nv},
+          {"cell_count", nc},
+          {"pinned_count", pinned_count},
+          {"surface",
+           {{"vertex_count", ns},
+            {"cell_count", ms},
+            {"triangle_count", triangles.cols()},
+            {"triangles", encode(tri)},
+            {"triangle_cells", encode(tri_cell)},
+            {"rest", encode(rest_xyz)},
+            {"pinned", encode(pinned)}}},
+          {"bounds", {{"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}}},
+          {"fields", field_list},
+          {"default_field", fields.front().name},
+          {"frames", frames}};
+}
+
+/// The report data of a stretch run (tetcli, hexcli, snh stretch) or a scene (snh run).
+json run_data(const fs::path& dir, const json& stats) {
+  const bool scene = stats.contains("frames") && !stats.contains("steps");
+  json d;
+  d["format"] = 1;
+  d["kind"] = scene ? "scene" : "stretch";
+  const std::string program = stats.value("program", std::string(scene ? "snh run" : "snh stretch"));
+  d["title"] = stats.contains("command_line") ? stats["command_line"].get<std::string>()
+               : scene                        ? "snh run " + stats.value("scene", std::string())
+                                              : program;
+  d["generated_by"] = "snh " SNH_VERSION;
+
+  // Status: the run's own verdict.
+  const bool ok = stats.value("all_converged", false);
+  const int signal = stats.value("interrupted_by_signal", 0);
+  const json& rows = scene ? stats["frames"] : stats["steps"];
+  if (!rows.is_array()) throw ReportError(fmt::format("{}: \"{}\" is not an array", (dir / "stats.json").string(), scene ? "frames" : "steps"));
+  std::string status = ok ? (scene ? "finished" : "converged every step") : "";
+  if (!ok && signal) status = fmt::format("interrupted by signal {} after {} {}", signal, scene ? "frame" : "step", rows.empty() ? 0 : rows.back().value(scene ? "frame" : "step", 0));
+  else if (!ok && scene) status = "stopped: " + stats.value("failure", std::string("a frame failed"));
+  else if (!ok) {
+    status = "stopped: a step did not converge";
+    if (!rows.empty()) status = fmt::format("stopped: step {} did not converge ({})", rows.back().value("step", 0), rows.back().value("failure", std::string()));
+  }
+  d["status"] = {{"ok", ok}, {"text", status}};
+
+  json meta = json::array();
+  meta_from(meta, stats, "command_line", "command line");
+  meta_from(meta, stats, "program", "program");
+  meta_from(meta, stats, "scene", "scene file");
+  meta_from(meta, stats, "element", "element");
+  meta_from(meta, stats, "resolution", "resolution");
+  meta_from(meta, stats, "mesh_file", "mesh file");
+  meta_from(meta, stats, "vertices", "vertices");
+  meta_from(meta, stats, "cells", "cells");
+  meta_from(meta, stats, "material", "material");
+  meta_from(meta, stats, "mu", "μ");
+  meta_from(meta, stats, "lambda", "λ");
+  if (stats.contains("mu") && stats.contains("lambda") && stats["mu"].is_number() && stats["lambda"].is_number()) {
+    const double mu = stats["mu"].get<double>(), lambda = stats["lambda"].get<double>();
+    meta.push_back({"ν = λ / (2(λ + μ))", fmt::format("{:.6g}", lambda / (2.0 * (lambda + mu)))});
+  }
+  if (stats.contains("reparametrize"))
+    meta.push_back({"parameters", stats.value("reparametrize", false) ? "linear (μ_L, λ_L), reparametrized (MATH.md §2)"
+                                                                      : "used as given"});
+  meta_from(meta, stats, "density", "density");
+  meta_from(meta, stats, "integrator", "integrator");
+  meta_from(meta, stats, "dt", "dt");
+  meta_from(meta, stats, "end_time", "end time");
+  meta_from(meta, stats, "gravity", "gravity");
+  meta_from(meta, stats, "mass_damping", "mass damping");
+  meta_from(meta, stats, "stiffness_damping", "stiffness damping");
+  meta_from(meta, stats, "steps_requested", "steps");
+  meta_from(meta, stats, "stretch", "stretch", "×");
+  meta_from(meta, stats, "axis", "axis");
+  meta_from(meta, stats, "tet_split", "tet split");
+  meta_from(meta, stats, "solver", "linear solver");
+  meta_from(meta, stats, "reuse_factor", "factor reuse");
+  meta_from(meta, stats, "tolerance", "Newton tolerance");
+  meta_from(meta, stats, "newton_iterations", "Newton iterations");
+  meta_from(meta, stats, "factorizations", "factorizations");
+  meta_from(meta, stats, "total_seconds", "total time", " s");
+  meta_from(meta, stats, "peak_memory_mib", "peak memory", " MiB");
+  meta_from(meta, stats, "middle_width", "middle width");
+  meta_from(meta, stats, "snh_version", "snh version");
+  d["meta"] = meta;
+  d["tables"] = json::array();
+
+  // Plots, one point per step (stretch) or frame (scene).
+  json plots = json::array();
+  const std::string g = scene ? "Per frame" : "Per step";
+  const json x = scene ? column(rows, "time") : column(rows, "step");
+  const std::string xl = scene ? "time" : "step";
+  plots.push_back(plot("newton", g, "Newton iterations", xl, "iterations", false, x,
+                       json::array({series("Newton iterations", column(rows, "newton_iterations")),
+                        series("line-search halvings", column(rows, "line_search_steps"))})));
+  plots.push_back(plot("residual", g, scene ? "Residual ‖g‖ (largest of the substeps)" : "Residual ‖f‖", xl, "‖f‖", true, x,
+                       json::array({series("residual", column(rows, "residual"))})));
+  if (scene)
+    plots.push_back(plot("energy", g, "Energy", xl, "energy", false, x,
+                         json::array({series("elastic", column(rows, "elastic_energy")), series("kinetic", column(rows, "kinetic_energy")),
+                          series("gravity", column(rows, "gravity_energy")), series("total", column(rows, "total_energy"))})));
+  else
+    plots.push_back(plot("energy", g, "Elastic energy", xl, "energy", false, x, json::array({series("energy", column(rows, "energy"))})));
+  plots.push_back(plot("volume", g, "Volume ratio (deformed / rest)", xl, "ratio", false, x,
+                       json::array({series("volume ratio", column(rows, "volume_ratio"))})));
+  plots.push_back(plot("min_J", g, "Smallest det F", xl, "min J", false, x, json::array({series("min J", column(rows, "min_J"))})));
+  json wall = json::array({series("wall", column(rows, "wall_seconds"))});
+  if (!scene) {
+    wall.push_back(series("assembly", column(rows, "assembly_seconds")));
+    wall.push_back(series("linear solve", column(rows, "solve_seconds")));
+  }
+  plots.push_back(plot("wall", g, "Wall time", xl, "seconds", false, x, wall));
+  d["plots"] = plots;
+
+  d["mesh"] = nullptr;
+  if (fs::exists(dir / "frames.pvd")) d["mesh"] = write_frames(dir, scene ? "frame" : "step");
+  else d["meta"].push_back({"3D view", "none: the run wrote no .vtu frames (frames.pvd is missing)"});
+  return d;
+}
+
+/// Table cells from a lab.json table: strings as they are.
+json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_src, int& runs) {
+  json d;
+  d["format"] = 1;
+  d["kind"] = "lab";
+  d["title"] = lab.value("command_line", std::string("snh lab"));
+  d["generated_by"] = "snh " SNH_VERSION;
+  d["status"] = {{"ok", true}, {"text", "every experiment ran"}};
+  json meta = json::array();
+  meta_from(meta, lab, "command_line", "command line");
+  meta_from(meta, lab, "quick", "quick");
+  meta_from(meta, lab, "energies", "energies");
+  meta_from(meta, lab, "trap_size", "trap size (production SNH, μ 1, λ 10)");
+  meta_from(meta, lab, "total_seconds", "total time", " s");
+  meta_from(meta, lab, "snh_version", "snh version");
+  d["meta"] = meta;
+  json tables = lab.value("tables", json::array());
+
+  // Every simulation, with a link to its own report.
+  json run_rows = json::array();
+  runs = 0;
+  auto add_run = [&](const json& r, const std::string& what, const std::string& outcome) {
+    const std::string sub = r.value("dir", std::string());
+    json link = nullptr;
+    if (!sub.empty() && fs::exists(dir / sub / "stats.json")) {
+      std::string up;
+      for (const auto& part : fs::path(sub)) up += part.empty() ? "" : "../";
+      ReportOptions o{.bundle_src = up + bundle_src, .write_bundle = false};
+      (void)write_report(dir / sub, o);
+      ++runs;
+      link = {{"text", "report"}, {"href", sub + "/index.html"}};
+    }
+    run_rows.push_back({what, r.value("energy", std::string()), outcome, link});
+  };
+  json plots = json::array();
+  for (const char* experiment : {"rest", "inversion", "reflection", "degeneracy"}) {
+    if (!lab.contains(experiment)) continue;
+    const json& list = lab[experiment];
+    // One plot per case: the volume ratio over time, a series per energy.
+    std::vector<std::string> cases;
+    for (const json& r : list) {
+      const std::string c = r.value("case", std::string());
+      if (std::find(cases.begin(), cases.end(), c) == cases.end()) cases.push_back(c);
+    }
+    for (const std::string& c : cases) {
+      json x = json::array(), ser = json::array();
+      for (const json& r : list)
+        if (r.value("case", std::string()) == c && r.contains("time") && r["time"].size() > x.size()) x = r["time"];
+      for (const json& r : list) {
+        if (r.value("case", std::string()) != c) continue;
+        json y = r.value("volume", json::array());
+        while (y.size() < x.size()) y.push_back(nullptr);
+        ser.push_back(series(r.value("energy", std::string()), y));
+        add_run(r, std::string(experiment) + " / " + c,
+                !r.value("defined_at_start", true) ? "undefined at the start"
+                : !r.value("converged", true)      ? "Newton failed"
+                                                   : fmt::format("volume {}{}", show(r.value("final_volume", json(nullptr))),
+                                                                 r.value("recovered", false) ? ", recovered" : ""));
+      }
+      plots.push_back(plot(fmt::format("{}_{}", experiment, c), "Volume over time", fmt::format("{}: {}", experiment, c),
+                           "time", "volume ratio", false, x, ser));
+    }
+  }
+  // Poisson's ratio: measured against expected, a series per energy and parametrization.
+  if (lab.contains("poisson")) {
+    std::vector<double> nus;
+    for (const json& r : lab["poisson"]) {
+      const double e = r.value("expected", 0.0);
+      if (std::find(nus.begin(), nus.end(), e) == nus.end()) nus.push_back(e);
+    }
+    std::sort(nus.begin(), nus.end());
+    json ser = json::array({series("expected", json(nus))});
+    std::vector<std::pair<std::string, bool>> keys;
+    for (const json& r : lab["poisson"]) {
+      if (!r.value("ran", false)) continue;
+      const std::pair<std::string, bool> k{r.value("energy", std::string()), r.value("reparametrize", false)};
+      if (std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(k);
+      add_run(r, fmt::format("poisson / nu {} {}", show(r["nu"]), k.second ? "reparametrized" : "given"),
+              fmt::format("measured ν {}", show(r.value("measured", json(nullptr)))));
+    }
+    for (const auto& [energy, reparam] : keys) {
+      json y = json::array();
+      for (double nu : nus) {
+        json v = nullptr;
+        for (const json& r : lab["poisson"])
+          if (r.value("energy", std::string()) == energy && r.value("reparametrize", false) == reparam &&
+              r.value("expected", 0.0) == nu && r.value("ran", false))
+            v = r.value("measured", json(nullptr));
+        y.push_back(v);
+      }
+      ser.push_back(series(energy + (reparam ? " (reparametrized)" : " (given)"), y));
+    }
+    plots.push_back(plot("poisson", "Poisson's ratio", "Measured against expected ν", "expected ν", "measured ν", false,
+                         json(nus), ser, true));
+  }
+  // Large stretch: volume ratio at 3.5× against ν.
+  if (lab.contains("stretch")) {
+    std::vector<double> nus;
+    std::vector<std::string> energies;
+    for (const json& r : lab["stretch"]) {
+      const double nu = r.value("nu", 0.0);
+      if (std::find(nus.begin(), nus.end(), nu) == nus.end()) nus.push_back(nu);
+      const std::string e = r.value("energy", std::string());
+      if (std::find(energies.begin(), energies.end(), e) == energies.end()) energies.push_back(e);
+      add_run(r, fmt::format("stretch / nu {}", show(r["nu"])), fmt::format("volume {}", show(r.value("volume_ratio", json(nullptr)))));
+    }
+    std::sort(nus.begin(), nus.end());
+    json ser = json::array();
+    for (const std::string& e : energies) {
+      json y = json::array();
+      for (double nu : nus) {
+        json v = nullptr;
+        for (const json& r : lab["stretch"])
+          if (r.value("energy", std::string()) == e && r.value("nu", 0.0) == nu) v = r.value("volume_ratio", json(nullptr));
+        y.push_back(v);
+      }
+      ser.push_back(series(e, y));
+    }
+    plots.push_back(plot("stretch", "Large stretch", "Volume ratio at 3.5× stretch", "ν", "volume ratio", false, json(nus), ser));
+  }
+  // ψ along F = sI.
+  if (lab.contains("psi_along_sI")) {
+    const json& p = lab["psi_along_sI"];
+    json ser = json::array();
+    const json psi = p.value("psi", json::object());
+    for (const auto& [energy, values] : psi.items()) ser.push_back(series(energy, values));
+    plots.push_back(plot("psi_sI", "Energy along F = sI",
+                         fmt::format("ψ(sI), μ {}, λ {} (gaps: undefined)", show(p.value("mu", json(nullptr))),
+                                     show(p.value("lambda", json(nullptr)))),
+                         "s", "ψ", false, p.value("s", json::array()), ser));
+  }
+  tables.push_back({{"title", "Every simulation"},
+                    {"note", "each with its own report: 3D playback of its frames and its per-frame plots"},
+                    {"columns", {"experiment", "energy", "outcome", "report"}},
+                    {"rows", run_rows}});
+  d["tables"] = tables;
+  d["plots"] = plots;
+  d["mesh"] = nullptr;
+  return d;
+}
+
+}  // namespace
+
+std::string base64_encode(const void* data, std::size_t size) {
+  static constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  const auto* b = static_cast<const unsigned char*>(data);
+  std::string out;
+  out.reserve(4 * ((size + 2) / 3));
+  for (std::size_t i = 0; i < size; i += 3) {
+    const unsigned v = (b[i] << 16) | (i + 1 < size ? b[i + 1] << 8 : 0) | (i + 2 < size ? b[i + 2] : 0);
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += i + 1 < size ? kAlphabet[(v >> 6) & 63] : '=';
+    out += i + 2 < size ? kAlphabet[v & 63] : '=';
+  }
+  return out;
+}
+
+ReportSummary write_report(const fs::path& dir, const ReportOptions& options) {
+  if (!fs::is_directory(dir)) throw ReportError(fmt::format("{}: no such directory", dir.string()));
+  ReportSummary summary;
+  json data;
+  try {
+    if (fs::exists(dir / "lab.json")) {
+      data = lab_data(dir, read_json(dir / "lab.json"), options.bundle_src, summary.runs);
+    } else if (fs::exists(dir / "stats.json")) {
+      fs::create_directories(dir / "report");
+      data = run_data(dir, read_json(dir / "stats.json"));
+    } else {
+      throw ReportError(fmt::format("{}: no stats.json or lab.json here: not the output directory of an snh run", dir.string()));
+    }
+    fs::create_directories(dir / "report");
+    summary.kind = data["kind"].get<std::string>();
+    if (!data["mesh"].is_null()) summary.frames = static_cast<int>(data["mesh"]["frames"].size());
+    write_atomically(dir / "report" / "data.js", [&](std::ostream& o) {
+      o << "window.SNH_REPORT = " << data.dump(-1, ' ', false, json::error_handler_t::replace) << ";\n";
+    });
+    if (options.write_bundle) {
+      const std::string_view bundle = report_bundle();
+      write_atomically(dir / "report" / "snh-report.js",
+                       [&](std::ostream& o) { o.write(bundle.data(), static_cast<std::streamsize>(bundle.size())); });
+    }
+  } catch (const fs::filesystem_error& e) {
+    throw ReportError(fmt::format("{}: {}", dir.string(), e.what()));
+  }
+  summary.index = dir / "index.html";
+  const std::string title = html_escape(data["title"].get<std::string>());
+  write_atomically(summary.index, [&](std::ostream& o) {
+    o << "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>snh report: "
+      << title << "</title></head>\n<body><div id=\"snh-report\"></div>\n<noscript>This report needs JavaScript.</noscript>\n"
+      << "<script src=\"report/data.js\"></script>\n<script src=\"" << html_escape(options.bundle_src)
+      << "\"></script>\n</body></html>\n";
+  });
+  return summary;
+}
+
+}  // namespace snh

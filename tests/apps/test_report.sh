@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# The browser report end to end: runs write index.html (unless --no-report), `snh report` rewrites it
+# and reports bad directories in one line, `snh render` checks its arguments and (with Chromium) saves
+# a PNG; then the pages are opened in headless Chromium by Playwright (viewer/test/report.test.mjs): a
+# stretch run, a scene and a lab report, and the rendered PNG.
+# Usage: test_report.sh SNH TETCLI VIEWER_DIR SCENES_DIR
+set -u
+SNH="$1" TETCLI="$2" VIEWER="$3" SCENES="$4"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+pass=0 fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+
+# Runs write their report and say where it is.
+out="$("$SNH" stretch --res 4 --steps 6 --stretch 2 --out "$work/run" 2>&1)"; code=$?
+[ "$code" -eq 0 ] && printf '%s' "$out" | grep -q "^report: $work/run/index.html$" && [ -f "$work/run/report/snh-report.js" ] \
+  && [ -f "$work/run/report/frames/006.js" ] && ok || bad "snh stretch writes its report (exit $code): $out"
+out="$("$TETCLI" 3 stable_neo_hookean 1.0 10.0 "$work/tetcli" 2>&1)"; code=$?
+[ "$code" -eq 0 ] && [ -f "$work/tetcli/index.html" ] && grep -q '"title":"[^"]*tetcli 3 stable_neo_hookean 1.0 10.0' \
+  "$work/tetcli/report/data.js" && ok || bad "tetcli writes its report (exit $code): $out"
+out="$("$SNH" run "$SCENES/hanging_bar.json" --out "$work/scene" 2>&1)"; code=$?
+[ "$code" -eq 0 ] && [ -f "$work/scene/index.html" ] && ok || bad "snh run writes its report (exit $code): $out"
+"$SNH" stretch --res 2 --steps 2 --no-report --out "$work/quiet" > "$work/quiet.log" 2>&1
+[ -f "$work/quiet/stats.json" ] && [ ! -e "$work/quiet/index.html" ] && ! grep -q "^report:" "$work/quiet.log" \
+  && ok || bad "--no-report writes no report"
+out="$("$SNH" lab --quick --energy stable_neo_hookean --energy neo_hookean --out "$work/lab" 2>&1)"; code=$?
+[ "$code" -eq 0 ] && [ -f "$work/lab/index.html" ] && [ -f "$work/lab/rest/free_cube/neo_hookean/index.html" ] \
+  && grep -q 'src="../../../report/snh-report.js"' "$work/lab/rest/free_cube/neo_hookean/index.html" \
+  && [ ! -e "$work/lab/rest/free_cube/neo_hookean/report/snh-report.js" ] && ok || bad "snh lab writes its reports (exit $code): $out"
+
+# snh report rewrites a report, and names what is wrong with a directory in one line (exit 2).
+rm -rf "$work/quiet/report"
+out="$("$SNH" report "$work/quiet" 2>&1)"; code=$?
+[ "$code" -eq 0 ] && [ "$out" = "stretch report (3 frames): $work/quiet/index.html" ] && ok || bad "snh report (exit $code): $out"
+out="$("$SNH" report "$work/none" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/none: no such directory" ] && ok || bad "report of a missing dir (exit $code): $out"
+mkdir -p "$work/empty"
+out="$("$SNH" report "$work/empty" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -q "no stats.json or lab.json here" \
+  && ok || bad "report of an empty dir (exit $code): $out"
+cp -r "$work/quiet" "$work/broken" && rm "$work/broken/001.vtu"
+out="$("$SNH" report "$work/broken" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: frame 1: $work/broken/001.vtu: cannot open the mesh file" ] \
+  && ok || bad "report with a missing frame (exit $code): $out"
+
+# snh render: arguments checked before any browser starts; a clear error without a browser.
+out="$("$SNH" render "$work/run" --frame 9 --out "$work/x.png" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: frame 9 does not exist: $work/run has frames 0 to 6" ] && ok || bad "render bad frame: $out"
+out="$("$SNH" render "$work/run" --field sigma --out "$work/x.png" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "unknown field 'sigma' (this run has: J, psi, displacement)" && ok || bad "render bad field: $out"
+out="$(PATH=/nonexistent SNH_CHROMIUM= "$SNH" render "$work/run" --out "$work/x.png" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "snh render needs Chromium, and none was found on PATH: install the Debian package chromium" \
+  && [ ! -e "$work/x.png" ] && ok || bad "render without a browser (exit $code): $out"
+
+# In the browser (Debian's chromium, Playwright from viewer/node_modules).
+if ! command -v chromium > /dev/null; then
+  bad "chromium is not installed (scripts/install-deps installs it)"
+else
+  out="$("$SNH" render "$work/run" --frame 4 --field psi --width 640 --height 480 --out "$work/run4.png" 2>&1)"; code=$?
+  [ "$code" -eq 0 ] && [ "$out" = "$work/run4.png (640x480)" ] && ok || bad "snh render (exit $code): $out"
+  run_node() {  # run_node LABEL ENV...: the Playwright checks with these variables
+    local label="$1"
+    shift
+    if (cd "$VIEWER" && env "$@" node --test test/report.test.mjs > "$work/node.log" 2>&1); then ok
+    else bad "browser checks, $label:"; grep -E "not ok|Error|assert|expected|actual|%" "$work/node.log" | head -20; fi
+  }
+  run_node "stretch run, lab and render" SNH_TEST_RUN_DIR="$work/run" SNH_TEST_CHECK_MIN_J=1 SNH_TEST_LAB_DIR="$work/lab" \
+    SNH_TEST_RENDER_PNG="$work/run4.png" SNH_TEST_RENDER_SIZE=640x480
+  run_node "scene" SNH_TEST_RUN_DIR="$work/scene"
+  run_node "a lab simulation's own report" SNH_TEST_RUN_DIR="$work/lab/inversion/reflected/stable_neo_hookean"
+fi
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]

@@ -1,0 +1,354 @@
+// The browser report's data, checked against the run it describes: base64, the .vtu data arrays read
+// back, the surface (counts, cells, rest positions), every frame's positions and fields against the
+// .vtu frames, the legend ranges against stats.json, the plots' lengths, the lab's tables and links,
+// and one-line errors for directories it cannot describe.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "snh/io/mesh_read.hpp"
+#include "snh/io/vtu.hpp"
+#include "snh/mesh/box.hpp"
+#include "snh/report/render.hpp"
+#include "snh/report/report.hpp"
+#include "snh/sim/scene.hpp"
+#include "snh/sim/stretch.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("snh_report_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  return dir;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// The JSON of `prefix ... suffix` in a file (data.js: "window.SNH_REPORT = {...};").
+json js_payload(const fs::path& p, const std::string& prefix, const std::string& suffix) {
+  const std::string text = slurp(p);
+  EXPECT_EQ(text.compare(0, prefix.size(), prefix), 0) << p;
+  const std::size_t end = text.rfind(suffix);
+  return json::parse(text.substr(prefix.size(), end - prefix.size()));
+}
+
+std::vector<unsigned char> base64_decode(const std::string& s) {
+  auto value = [](char c) -> int {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    return c == '+' ? 62 : c == '/' ? 63 : -1;
+  };
+  std::vector<unsigned char> out;
+  unsigned buffer = 0;
+  int bits = 0;
+  for (char c : s) {
+    if (c == '=') break;
+    buffer = (buffer << 6) | static_cast<unsigned>(value(c));
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<unsigned char>((buffer >> bits) & 0xFF));
+    }
+  }
+  return out;
+}
+
+template <class T>
+std::vector<T> decode(const json& b64) {
+  const auto bytes = base64_decode(b64.get<std::string>());
+  EXPECT_EQ(bytes.size() % sizeof(T), 0u);
+  std::vector<T> out(bytes.size() / sizeof(T));
+  std::memcpy(out.data(), bytes.data(), out.size() * sizeof(T));
+  return out;
+}
+
+TEST(Base64, Rfc4648Vectors) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"", ""}, {"f", "Zg=="}, {"fo", "Zm8="}, {"foo", "Zm9v"}, {"foob", "Zm9vYg=="}, {"fooba", "Zm9vYmE="}, {"foobar", "Zm9vYmFy"}};
+  for (const auto& [in, out] : cases) EXPECT_EQ(base64_encode(in.data(), in.size()), out) << in;
+  const unsigned char high[] = {0xFF, 0xFE, 0x00, 0x80};
+  EXPECT_EQ(base64_encode(high, 4), "//4AgA==");
+}
+
+TEST(VtuData, ReadsBackEveryArrayOfAFrame) {
+  const fs::path dir = fresh_dir("vtu");
+  fs::create_directories(dir);
+  const VolumeMesh m = box_hexes(2);
+  const Eigen::Matrix3Xd X = m.vertices * 1.25;
+  Eigen::VectorXd J(m.cell_count()), psi(m.cell_count()), pinned = Eigen::VectorXd::Zero(m.vertex_count());
+  for (Eigen::Index c = 0; c < m.cell_count(); ++c) J[c] = 0.5 + 0.125 * c, psi[c] = c;
+  psi[3] = std::numeric_limits<double>::infinity();
+  pinned[4] = 1;
+  write_vtu(dir / "f.vtu", m, X, {{"displacement", X - m.vertices}}, {{"J", J}, {"psi", psi}}, {{"pinned", pinned}});
+  const VtuData d = read_vtu_data(dir / "f.vtu");
+  ASSERT_EQ(d.mesh.mesh.cell_count(), m.cell_count());
+  EXPECT_TRUE(d.mesh.mesh.cells == m.cells);  // VTK's hex order turned back into ours
+  ASSERT_EQ(d.point_data.at("displacement").size(), 3u * m.vertex_count());
+  EXPECT_DOUBLE_EQ(d.point_data.at("displacement")[3 * 26 + 2], 0.25);
+  ASSERT_EQ(d.point_data.at("pinned").size(), static_cast<std::size_t>(m.vertex_count()));
+  EXPECT_EQ(d.point_data.at("pinned")[4], 1.0);
+  ASSERT_EQ(d.cell_data.at("J").size(), static_cast<std::size_t>(m.cell_count()));
+  EXPECT_DOUBLE_EQ(d.cell_data.at("J")[7], 1.375);
+  EXPECT_TRUE(std::isinf(d.cell_data.at("psi")[3]));  // an undefined energy density survives the round trip
+  fs::remove_all(dir);
+}
+
+/// A small stretch run and its report.
+struct StretchRun {
+  fs::path dir;
+  StretchResult result;
+  json data;
+};
+
+StretchRun stretch_run(CellType element, const std::string& name) {
+  StretchRun r;
+  StretchConfig c;
+  c.element = element;
+  c.resolution = 3;
+  c.steps = 5;
+  c.stretch = 2.0;
+  c.out = r.dir = fresh_dir(name);
+  c.command_line = "snh stretch --res 3 --steps 5 --stretch 2";
+  std::ostringstream log;
+  r.result = run_stretch(c, log);
+  const ReportSummary s = write_report(r.dir);
+  EXPECT_EQ(s.kind, "stretch");
+  EXPECT_EQ(s.frames, 6);
+  EXPECT_EQ(s.index, r.dir / "index.html");
+  r.data = js_payload(r.dir / "report" / "data.js", "window.SNH_REPORT = ", ";");
+  return r;
+}
+
+TEST(RunReport, StretchRunSurfaceFramesAndRanges) {
+  for (CellType element : {CellType::tet4, CellType::hex8}) {
+    const StretchRun run = stretch_run(element, element == CellType::tet4 ? "tet" : "hex");
+    ASSERT_TRUE(run.result.all_converged);
+    const json& d = run.data;
+    EXPECT_EQ(d["kind"], "stretch");
+    EXPECT_EQ(d["title"], "snh stretch --res 3 --steps 5 --stretch 2");
+    EXPECT_TRUE(d["status"]["ok"].get<bool>());
+    const json& mesh = d["mesh"];
+    const int res = 3, nv = (res + 1) * (res + 1) * (res + 1);
+    EXPECT_EQ(mesh["vertex_count"], nv);
+    EXPECT_EQ(mesh["cell_count"], element == CellType::tet4 ? 6 * 27 : 27);
+    EXPECT_EQ(mesh["pinned_count"], 2 * (res + 1) * (res + 1));  // the two pulled layers
+    const json& surf = mesh["surface"];
+    const int tris = 12 * res * res, ns = nv - (res - 1) * (res - 1) * (res - 1);
+    EXPECT_EQ(surf["triangle_count"], tris);
+    EXPECT_EQ(surf["vertex_count"], ns);
+    const auto tri = decode<std::uint32_t>(surf["triangles"]);
+    const auto tri_cell = decode<std::uint32_t>(surf["triangle_cells"]);
+    const auto rest = decode<float>(surf["rest"]);
+    const auto pinned = decode<std::uint8_t>(surf["pinned"]);
+    ASSERT_EQ(tri.size(), 3u * tris);
+    ASSERT_EQ(tri_cell.size(), static_cast<std::size_t>(tris));
+    ASSERT_EQ(rest.size(), 3u * ns);
+    ASSERT_EQ(pinned.size(), static_cast<std::size_t>(ns));
+    const int m = surf["cell_count"];
+    for (std::uint32_t t : tri) ASSERT_LT(t, static_cast<std::uint32_t>(ns));
+    for (std::uint32_t c : tri_cell) ASSERT_LT(c, static_cast<std::uint32_t>(m));
+    // Pinned surface vertices are exactly those at rest y = ±1, and the rest box is [-1, 1]^3.
+    int pinned_seen = 0;
+    for (int k = 0; k < ns; ++k) {
+      EXPECT_EQ(pinned[k] != 0, std::abs(std::abs(rest[3 * k + 1]) - 1.0f) < 1e-6f) << k;
+      pinned_seen += pinned[k];
+      for (int a = 0; a < 3; ++a) EXPECT_LE(std::abs(rest[3 * k + a]), 1.0f + 1e-6f);
+    }
+    EXPECT_EQ(pinned_seen, 2 * (res + 1) * (res + 1));
+
+    // Frames: the positions are the .vtu frame's surface points; the fields its cell values.
+    const json& frames = mesh["frames"];
+    ASSERT_EQ(frames.size(), 6u);
+    double min_J = 1.0, max_J = -1e300, max_disp = 0.0;
+    for (const json& f : frames) {
+      const int i = f["index"];
+      EXPECT_EQ(f["label"], fmt::format("step {}", i));
+      EXPECT_EQ(f["time"].get<double>(), i);
+      const json fd = js_payload(run.dir / f["src"].get<std::string>(), fmt::format("snhReportFrame({}, ", i), ");");
+      const VtuData vtu = read_vtu_data(run.dir / fmt::format("{:03d}.vtu", i));
+      const auto x = decode<float>(fd["x"]), J = decode<float>(fd["J"]), psi = decode<float>(fd["psi"]),
+                 disp = decode<float>(fd["displacement"]);
+      ASSERT_EQ(x.size(), 3u * ns);
+      ASSERT_EQ(J.size(), static_cast<std::size_t>(m));
+      ASSERT_EQ(psi.size(), static_cast<std::size_t>(m));
+      ASSERT_EQ(disp.size(), static_cast<std::size_t>(ns));
+      // Each surface vertex: find it among the .vtu points by its rest position (x − displacement).
+      const auto& D = vtu.point_data.at("displacement");
+      for (int k = 0; k < ns; ++k) {
+        int found = -1;
+        for (Eigen::Index v = 0; v < vtu.mesh.mesh.vertex_count(); ++v) {
+          const Eigen::Vector3d X = vtu.mesh.mesh.vertices.col(v) - Eigen::Vector3d(D[3 * v], D[3 * v + 1], D[3 * v + 2]);
+          if ((X - Eigen::Vector3d(rest[3 * k], rest[3 * k + 1], rest[3 * k + 2])).norm() < 1e-6) found = static_cast<int>(v);
+        }
+        ASSERT_GE(found, 0) << "frame " << i << " surface vertex " << k;
+        for (int a = 0; a < 3; ++a) EXPECT_NEAR(x[3 * k + a], vtu.mesh.mesh.vertices(a, found), 1e-6);
+        const double d = Eigen::Vector3d(D[3 * found], D[3 * found + 1], D[3 * found + 2]).norm();
+        EXPECT_NEAR(disp[k], d, 1e-6);
+      }
+      for (double v : vtu.cell_data.at("J")) min_J = std::min(min_J, v), max_J = std::max(max_J, v);
+      for (std::size_t v = 0; v < D.size() / 3; ++v)
+        max_disp = std::max(max_disp, Eigen::Vector3d(D[3 * v], D[3 * v + 1], D[3 * v + 2]).norm());
+      for (float j : J) EXPECT_GT(j, 0.0f);
+    }
+    // The legend ranges cover every cell of every frame: J's minimum is stats.json's smallest min_J.
+    double stats_min_J = 1.0;
+    for (const StepStats& s : run.result.steps) stats_min_J = std::min(stats_min_J, s.min_J);
+    const json& J = mesh["fields"][0];
+    ASSERT_EQ(J["name"], "J");
+    EXPECT_NEAR(J["min"].get<double>(), stats_min_J, 1e-9);
+    EXPECT_NEAR(J["min"].get<double>(), min_J, 1e-12);
+    EXPECT_NEAR(J["max"].get<double>(), max_J, 1e-12);
+    EXPECT_EQ(mesh["fields"][1]["name"], "psi");
+    EXPECT_EQ(mesh["fields"][1]["min"].get<double>(), mesh["fields"][1]["min"].get<double>());  // finite
+    EXPECT_NEAR(mesh["fields"][2]["max"].get<double>(), max_disp, 1e-9);
+    EXPECT_NEAR(mesh["fields"][2]["max"].get<double>(), 1.0, 1e-9);  // the pulled layers move by (2 − 1) · 1
+
+    // Plots: one point per step.
+    for (const json& p : d["plots"]) {
+      EXPECT_EQ(p["x"].size(), 5u) << p["id"];
+      for (const json& s : p["series"]) EXPECT_EQ(s["y"].size(), 5u) << p["id"];
+    }
+    // The page loads the data, then the bundle, which is written beside it.
+    const std::string html = slurp(run.dir / "index.html");
+    EXPECT_LT(html.find("report/data.js"), html.find("report/snh-report.js"));
+    EXPECT_EQ(slurp(run.dir / "report" / "snh-report.js"), std::string(report_bundle()));
+    EXPECT_GT(report_bundle().size(), 10000u);
+    fs::remove_all(run.dir);
+  }
+}
+
+TEST(RunReport, RewritingForFewerFramesRemovesStaleFrameFiles) {
+  StretchRun run = stretch_run(CellType::hex8, "stale");
+  // Keep only frames 0 to 2 in the series, as after a shorter run in the same directory.
+  write_pvd(run.dir / "frames.pvd", {{0.0, "000.vtu"}, {1.0, "001.vtu"}, {2.0, "002.vtu"}});
+  const ReportSummary s = write_report(run.dir);
+  EXPECT_EQ(s.frames, 3);
+  EXPECT_TRUE(fs::exists(run.dir / "report" / "frames" / "002.js"));
+  EXPECT_FALSE(fs::exists(run.dir / "report" / "frames" / "003.js"));
+  fs::remove_all(run.dir);
+}
+
+TEST(RunReport, SceneReportUsesTimeAndItsPins) {
+  Scene s;
+  s.element = CellType::hex8;
+  s.resolution = 2;
+  s.end_time = 0.2;
+  s.frames = 4;
+  s.gravity = Eigen::Vector3d(0, -9.8, 0);
+  PinSet pin;
+  pin.select.region = Eigen::AlignedBox3d(Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d(1, 1, 1));  // the top face
+  s.pins.push_back(pin);
+  s.out = fresh_dir("scene");
+  s.command_line = "snh run hanging.json";
+  std::ostringstream log;
+  const SceneResult r = run_scene(s, log);
+  ASSERT_TRUE(r.all_converged);
+  const ReportSummary sum = write_report(s.out);
+  EXPECT_EQ(sum.kind, "scene");
+  EXPECT_EQ(sum.frames, 5);
+  const json d = js_payload(s.out / "report" / "data.js", "window.SNH_REPORT = ", ";");
+  EXPECT_EQ(d["title"], "snh run hanging.json");
+  EXPECT_EQ(d["mesh"]["pinned_count"], 9);
+  EXPECT_EQ(d["mesh"]["frames"][4]["label"], "frame 4");
+  EXPECT_NEAR(d["mesh"]["frames"][4]["time"].get<double>(), 0.2, 1e-12);
+  for (const json& p : d["plots"]) {
+    EXPECT_EQ(p["x"].size(), 5u);  // frame 0 included
+    EXPECT_EQ(p["x_label"], "time");
+  }
+  fs::remove_all(s.out);
+}
+
+TEST(RunReport, RunWithoutVtuFramesHasPlotsButNo3DView) {
+  StretchConfig c;
+  c.resolution = 2;
+  c.steps = 2;
+  c.write_vtu = false;
+  c.out = fresh_dir("novtu");
+  std::ostringstream log;
+  (void)run_stretch(c, log);
+  const ReportSummary s = write_report(c.out);
+  EXPECT_EQ(s.frames, 0);
+  const json d = js_payload(c.out / "report" / "data.js", "window.SNH_REPORT = ", ";");
+  EXPECT_TRUE(d["mesh"].is_null());
+  EXPECT_EQ(d["plots"][0]["x"].size(), 2u);
+  fs::remove_all(c.out);
+}
+
+TEST(RunReport, OneLineErrors) {
+  const fs::path dir = fresh_dir("errors");
+  fs::create_directories(dir);
+  auto message = [&](const fs::path& d) {
+    try {
+      (void)write_report(d);
+    } catch (const ReportError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message(dir / "missing"), (dir / "missing").string() + ": no such directory");
+  EXPECT_EQ(message(dir), dir.string() + ": no stats.json or lab.json here: not the output directory of an snh run");
+  std::ofstream(dir / "stats.json") << "{\"steps\": [";
+  EXPECT_NE(message(dir).find((dir / "stats.json").string() + ": not valid JSON"), std::string::npos);
+  std::ofstream(dir / "stats.json") << "{\"steps\": [], \"all_converged\": true}";
+  write_pvd(dir / "frames.pvd", {{0.0, "000.vtu"}});
+  const std::string m = message(dir);
+  EXPECT_EQ(m.rfind("frame 0: " + (dir / "000.vtu").string() + ": cannot open", 0), 0u) << m;
+  EXPECT_EQ(m.find('\n'), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(Render, ChecksFrameFieldAndBrowserBeforeStartingIt) {
+  StretchRun run = stretch_run(CellType::hex8, "render");
+  auto message = [&](RenderOptions o) {
+    o.out = run.dir / "x.png";
+    try {
+      render_png(run.dir, o);
+    } catch (const ReportError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message({.frame = 6}), fmt::format("frame 6 does not exist: {} has frames 0 to 5", run.dir.string()));
+  EXPECT_EQ(message({.field = "stress"}), "unknown field 'stress' (this run has: J, psi, displacement)");
+  EXPECT_EQ(message({.width = 8}), "the picture size must be from 16 to 8192 pixels each way, got 8x900");
+  EXPECT_EQ(message({.browser = "/nonexistent/chromium"}),
+            "the browser /nonexistent/chromium cannot be run (from SNH_CHROMIUM or --browser)");
+  EXPECT_FALSE(fs::exists(run.dir / "x.png"));
+  fs::remove_all(run.dir);
+}
+
+TEST(Render, PngSizeReadsTheHeader) {
+  const fs::path dir = fresh_dir("png");
+  fs::create_directories(dir);
+  const unsigned char png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R',
+                               0, 0, 0x04, 0xB0, 0, 0, 0x03, 0x84, 8, 6, 0, 0, 0};
+  std::ofstream(dir / "a.png", std::ios::binary).write(reinterpret_cast<const char*>(png), sizeof png);
+  EXPECT_EQ(png_size(dir / "a.png"), (std::pair<int, int>{1200, 900}));
+  std::ofstream(dir / "b.png") << "not a png at all, really";
+  EXPECT_EQ(png_size(dir / "b.png"), (std::pair<int, int>{0, 0}));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace snh
