@@ -1,5 +1,6 @@
 # Thin wrapper over the CMake presets. The two commands the README names first:
-#   make demo   installs what is missing, builds, and runs the main job (the thesis' tetcli example) and the bunny scene
+#   make demo   installs what is missing, builds, and runs the main job (the thesis' tetcli example) and the bunny scene,
+#               each with its browser report (index.html)
 #   make test   installs what is missing, builds, and runs every test
 PRESET ?= release
 JOBS   ?= $(shell nproc)
@@ -23,6 +24,8 @@ demo: build
 	$(BUILD)/apps/snh run scenes/bunny_squash.json --out output/bunny_squash
 	@echo "demo output: $(CURDIR)/output (the stretch test: frames 000.obj ... 025.obj, 000.vtu ... 025.vtu + frames.pvd for ParaView, stats.json, stats.csv)"
 	@echo "             $(CURDIR)/output/bunny_squash (the bunny squashed and released: the same files)"
+	@echo "open in a browser: $(CURDIR)/output/index.html"
+	@echo "                   $(CURDIR)/output/bunny_squash/index.html"
 
 test: build
 	ctest --preset $(PRESET)

@@ -30,7 +30,8 @@ try {
     sourcemap: args.includes('--sourcemap'),
     treeShaking: true,
     loader: { '.css': 'text' },
-    legalComments: 'none',
+    legalComments: 'eof', // three.js and uPlot are MIT: their notices stay in the bundle
+    banner: { js: '/*! snh report viewer. Bundles three.js (MIT License, Copyright 2010-2026 Three.js Authors) and uPlot (MIT License, Copyright (c) 2025 Leon Sorokin). */' },
     logLevel: 'warning',
   });
   if (result.errors.length) throw new Error(`${result.errors.length} error(s)`);

@@ -52,8 +52,9 @@ int main(int argc, char** argv) {
   const std::string usage = fmt::format(
       "usage: {} resolution material_model mu lambda [output_directory]\n"
       "  The paper's stretch test on a [-1,1]^3 {} lattice with resolution^3 cells: the y = -1 and y = +1 layers\n"
-      "  move apart in 25 quasi-static steps to a 3.5x stretch; frames 000.obj .. 025.obj, stats.json and\n"
-      "  stats.csv go to output_directory (default: output). mu and lambda are used as given.\n"
+      "  move apart in 25 quasi-static steps to a 3.5x stretch; frames 000.obj .. 025.obj (and .vtu), stats.json,\n"
+      "  stats.csv and index.html (the browser report) go to output_directory (default: output). mu and lambda\n"
+      "  are used as given.\n"
       "  example: {} 10 stable_neo_hookean 1.0 10.0 output\n",
       program, kHex ? "hexahedral (trilinear, 2x2x2 Gauss points)" : "tetrahedral (6 tets per cell)", program);
   if (argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {

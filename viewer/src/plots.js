@@ -31,11 +31,21 @@ const INT_INCRS = [1, 2, 5, 10, 20, 50, 100, 200, 500, 1e3, 2e3, 5e3, 1e4, 2e4, 
 // The y axis is as wide as its longest tick label.
 const ySize = (u, values) => (values && values.length ? Math.max(...values.map((v) => String(v).length)) * 7 + 18 : 40);
 
+/** A linear y scale: automatic, or clipped where the plot gives y_range [lo, hi] (null = automatic). */
+function yScale(p) {
+  const r = Array.isArray(p.y_range) ? p.y_range : null;
+  if (!r) return { auto: true };
+  return {
+    auto: false,
+    range: (u, lo, hi) => [typeof r[0] === 'number' ? r[0] : lo, typeof r[1] === 'number' ? r[1] : hi],
+  };
+}
+
 function options(p, width, log) {
   const only = !!p.points_only;
   return {
     width, height: HEIGHT,
-    scales: { x: { time: false }, y: log ? { distr: 3, log: 10 } : { auto: true } },
+    scales: { x: { time: false }, y: log ? { distr: 3, log: 10 } : yScale(p) },
     axes: [
       axis(p.x_label, { values: tickValues, ...(p.x.every(Number.isInteger) ? { incrs: INT_INCRS } : {}) }),
       axis(p.y_label, { values: tickValues, size: ySize }),

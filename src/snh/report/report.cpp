@@ -292,18 +292,26 @@ json run_data(const fs::path& dir, const json& stats) {
   }
   d["status"] = {{"ok", ok}, {"text", status}};
 
+  // Settings, in this order, each where stats.json has it.
+  struct Setting {
+    const char* key;
+    const char* label;
+    const char* unit = "";
+  };
+  static constexpr Setting kRunAndMaterial[] = {
+      {"command_line", "command line"}, {"program", "program"}, {"scene", "scene file"}, {"element", "element"},
+      {"resolution", "resolution"}, {"mesh_file", "mesh file"}, {"vertices", "vertices"}, {"cells", "cells"},
+      {"material", "material"}, {"mu", "μ"}, {"lambda", "λ"}};
+  static constexpr Setting kSolverAndTotals[] = {
+      {"density", "density"}, {"integrator", "integrator"}, {"dt", "dt"}, {"end_time", "end time"},
+      {"gravity", "gravity"}, {"mass_damping", "mass damping"}, {"stiffness_damping", "stiffness damping"},
+      {"steps_requested", "steps"}, {"stretch", "stretch", "×"}, {"axis", "axis"}, {"tet_split", "tet split"},
+      {"solver", "linear solver"}, {"reuse_factor", "factor reuse"}, {"tolerance", "Newton tolerance"},
+      {"newton_iterations", "Newton iterations"}, {"factorizations", "factorizations"},
+      {"total_seconds", "total time", " s"}, {"peak_memory_mib", "peak memory", " MiB"},
+      {"middle_width", "middle width"}, {"snh_version", "snh version"}};
   json meta = json::array();
-  meta_from(meta, stats, "command_line", "command line");
-  meta_from(meta, stats, "program", "program");
-  meta_from(meta, stats, "scene", "scene file");
-  meta_from(meta, stats, "element", "element");
-  meta_from(meta, stats, "resolution", "resolution");
-  meta_from(meta, stats, "mesh_file", "mesh file");
-  meta_from(meta, stats, "vertices", "vertices");
-  meta_from(meta, stats, "cells", "cells");
-  meta_from(meta, stats, "material", "material");
-  meta_from(meta, stats, "mu", "μ");
-  meta_from(meta, stats, "lambda", "λ");
+  for (const Setting& m : kRunAndMaterial) meta_from(meta, stats, m.key, m.label, m.unit);
   if (stats.contains("mu") && stats.contains("lambda") && stats["mu"].is_number() && stats["lambda"].is_number()) {
     const double mu = stats["mu"].get<double>(), lambda = stats["lambda"].get<double>();
     meta.push_back({"ν = λ / (2(λ + μ))", fmt::format("{:.6g}", lambda / (2.0 * (lambda + mu)))});
@@ -311,26 +319,7 @@ json run_data(const fs::path& dir, const json& stats) {
   if (stats.contains("reparametrize"))
     meta.push_back({"parameters", stats.value("reparametrize", false) ? "linear (μ_L, λ_L), reparametrized (MATH.md §2)"
                                                                       : "used as given"});
-  meta_from(meta, stats, "density", "density");
-  meta_from(meta, stats, "integrator", "integrator");
-  meta_from(meta, stats, "dt", "dt");
-  meta_from(meta, stats, "end_time", "end time");
-  meta_from(meta, stats, "gravity", "gravity");
-  meta_from(meta, stats, "mass_damping", "mass damping");
-  meta_from(meta, stats, "stiffness_damping", "stiffness damping");
-  meta_from(meta, stats, "steps_requested", "steps");
-  meta_from(meta, stats, "stretch", "stretch", "×");
-  meta_from(meta, stats, "axis", "axis");
-  meta_from(meta, stats, "tet_split", "tet split");
-  meta_from(meta, stats, "solver", "linear solver");
-  meta_from(meta, stats, "reuse_factor", "factor reuse");
-  meta_from(meta, stats, "tolerance", "Newton tolerance");
-  meta_from(meta, stats, "newton_iterations", "Newton iterations");
-  meta_from(meta, stats, "factorizations", "factorizations");
-  meta_from(meta, stats, "total_seconds", "total time", " s");
-  meta_from(meta, stats, "peak_memory_mib", "peak memory", " MiB");
-  meta_from(meta, stats, "middle_width", "middle width");
-  meta_from(meta, stats, "snh_version", "snh version");
+  for (const Setting& m : kSolverAndTotals) meta_from(meta, stats, m.key, m.label, m.unit);
   d["meta"] = meta;
   d["tables"] = json::array();
 
@@ -493,10 +482,12 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
     json ser = json::array();
     const json psi = p.value("psi", json::object());
     for (const auto& [energy, values] : psi.items()) ser.push_back(series(energy, values));
-    plots.push_back(plot("psi_sI", "Energy along F = sI",
-                         fmt::format("ψ(sI), μ {}, λ {} (gaps: undefined)", show(p.value("mu", json(nullptr))),
+    json psi_plot = plot("psi_sI", "Energy along F = sI",
+                         fmt::format("ψ(sI), μ {}, λ {} (gaps: undefined; clipped at 60)", show(p.value("mu", json(nullptr))),
                                      show(p.value("lambda", json(nullptr)))),
-                         "s", "ψ", false, p.value("s", json::array()), ser));
+                         "s", "ψ", false, p.value("s", json::array()), ser);
+    psi_plot["y_range"] = {-5.0, 60.0};  // the log J energies reach ~1e3 near s = 0, which would flatten the rest
+    plots.push_back(psi_plot);
   }
   tables.push_back({{"title", "Every simulation"},
                     {"note", "each with its own report: 3D playback of its frames and its per-frame plots"},
