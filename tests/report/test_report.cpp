@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -22,6 +23,7 @@
 #include "snh/mesh/box.hpp"
 #include "snh/report/render.hpp"
 #include "snh/report/report.hpp"
+#include "snh/sim/lab.hpp"
 #include "snh/sim/scene.hpp"
 #include "snh/sim/stretch.hpp"
 
@@ -316,6 +318,52 @@ TEST(RunReport, OneLineErrors) {
   EXPECT_EQ(m.rfind("frame 0: " + (dir / "000.vtu").string() + ": cannot open", 0), 0u) << m;
   EXPECT_EQ(m.find('\n'), std::string::npos);
   fs::remove_all(dir);
+}
+
+TEST(LabReport, TablesCurvesAndAReportPerSimulation) {
+  LabOptions o;
+  o.quick = true;
+  o.energies = {"stable_neo_hookean"};
+  o.out = fresh_dir("lab");
+  o.command_line = "snh lab --quick";
+  const LabReport lab = run_lab(o);
+  // One simulation's output broken: only its own page is missing.
+  fs::remove(o.out / "rest" / "free_cube" / "stable_neo_hookean" / "001.vtu");
+  const ReportSummary s = write_report(o.out);
+  EXPECT_EQ(s.kind, "lab");
+  const json d = js_payload(o.out / "report" / "data.js", "window.SNH_REPORT = ", ";");
+  EXPECT_EQ(d["title"], "snh lab --quick");
+  ASSERT_EQ(d["tables"].size(), 7u);  // the six of the text, then every simulation
+  EXPECT_EQ(d["tables"][0]["rows"], lab.json["tables"][0]["rows"]);
+  EXPECT_EQ(d["tables"][5]["rows"][0][0], "stable_neo_hookean");
+  const json& runs = d["tables"][6]["rows"];
+  int linked = 0, broken = 0;
+  for (const json& r : runs) {
+    if (r[3].is_object()) {
+      ++linked;
+      const std::string href = r[3]["href"];
+      EXPECT_TRUE(fs::exists(o.out / href)) << href;
+      const std::string html = slurp(o.out / href);
+      EXPECT_NE(html.find("src=\"../../../report/snh-report.js\""), std::string::npos) << href;
+      EXPECT_FALSE(fs::exists((o.out / href).parent_path() / "report" / "snh-report.js")) << href;
+    } else {
+      ++broken;
+      EXPECT_NE(r[3].get<std::string>().find("no report: frame 1: "), std::string::npos) << r[3];
+    }
+  }
+  EXPECT_EQ(broken, 1);
+  EXPECT_EQ(linked, s.runs);
+  EXPECT_EQ(static_cast<int>(runs.size()), linked + broken);
+  EXPECT_GE(linked, 20);
+  // Curves: a volume-over-time plot per case, Poisson, the large stretch and psi(sI).
+  std::set<std::string> ids;
+  for (const json& p : d["plots"]) {
+    ids.insert(p["id"].get<std::string>());
+    for (const json& ser : p["series"]) EXPECT_EQ(ser["y"].size(), p["x"].size()) << p["id"];
+  }
+  for (const char* id : {"rest_free_cube", "inversion_reflected", "degeneracy_point", "poisson", "stretch", "psi_sI"})
+    EXPECT_TRUE(ids.count(id)) << id;
+  fs::remove_all(o.out);
 }
 
 TEST(Render, ChecksFrameFieldAndBrowserBeforeStartingIt) {
