@@ -101,6 +101,39 @@ test('stretch run report', { skip: !RUN && 'SNH_TEST_RUN_DIR is not set', timeou
     assert.ok(changed > 0.005, `the last frame changes ${(100 * changed).toFixed(2)}% of the pixels`);
   }
 
+  // Step keys: Home, then → (the body has the focus); play runs to the last frame and stops there.
+  if (count > 2) {
+    await page.keyboard.press('Home');
+    await page.waitForFunction(() => window.snhReport.frame === 0, null, { timeout: TIMEOUT });
+    await page.keyboard.press('ArrowRight');
+    await page.waitForFunction(() => window.snhReport.frame === 1, null, { timeout: TIMEOUT });
+    await page.click('#snh-play');
+    await page.waitForFunction((last) => window.snhReport.frame === last, count - 1, { timeout: TIMEOUT });
+    await page.waitForFunction(() => document.querySelector('#snh-play').getAttribute('aria-pressed') === 'false',
+      null, { timeout: TIMEOUT });
+    assert.equal(await page.$eval('#snh-frame-slider', (e) => Number(e.value)), count - 1);
+  }
+
+  // Another field and the wireframe each change the picture; the legend follows the field.
+  const names = report.mesh.fields.map((f) => f.name);
+  const before = await canvasShot();
+  const current = await page.evaluate(() => window.snhReport.field);
+  const other = names.find((n) => n !== current);
+  if (other) {
+    await page.selectOption('#snh-field', other);
+    await page.waitForFunction((n) => window.snhReport.field === n, other, { timeout: TIMEOUT });
+    assert.equal(await page.$eval('#snh-legend', (e) => e.dataset.field), other);
+    const recoloured = await canvasShot();
+    const changed = fraction(recoloured, (p, x, y) => differs(p, pixel(before, x, y)));
+    assert.ok(changed > 0.005, `colouring by ${other} changes ${(100 * changed).toFixed(2)}% of the pixels`);
+  }
+  const plain = await canvasShot();
+  await page.check('#snh-wireframe');
+  const wired = await canvasShot();
+  const wireChange = fraction(wired, (p, x, y) => differs(p, pixel(plain, x, y)));
+  assert.ok(wireChange > 0.001, `the wireframe changes ${(100 * wireChange).toFixed(2)}% of the pixels`);
+  await page.uncheck('#snh-wireframe');
+
   // One point per step in every plot.
   const points = await page.$$eval('.snh-plot', (els) => els.map((e) => [e.dataset.plotId, Number(e.dataset.points)]));
   assert.ok(points.length > 0, 'the page has plots');
