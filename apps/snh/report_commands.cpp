@@ -7,6 +7,7 @@
 
 #include "snh/report/render.hpp"
 #include "snh/report/report.hpp"
+#include "snh/sim/interrupt.hpp"
 
 namespace snh::cli {
 
@@ -55,7 +56,14 @@ void add_report_commands(CLI::App& app, int& exit_code) {
     o.height = r->height;
     o.out = r->out;
     o.browser = r->browser;
-    render_png(r->dir, o);
+    install_stop_handlers();  // Ctrl-C stops the browser and removes what it left
+    try {
+      render_png(r->dir, o);
+    } catch (const RenderInterrupted& e) {
+      std::cerr << "snh: " << e.what() << "\n";
+      exit_code = 128 + e.signal;
+      return;
+    }
     std::cout << fmt::format("{} ({}x{})\n", r->out, o.width, o.height);
     exit_code = 0;
   });

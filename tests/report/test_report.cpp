@@ -39,6 +39,18 @@ fs::path fresh_dir(const std::string& name) {
   return dir;
 }
 
+/// Removes every directory made by fresh_dir when the test program ends, also after a failed ASSERT.
+struct CleanUp : ::testing::Environment {
+  void TearDown() override {
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(fs::temp_directory_path(), ec))
+      if (e.path().filename().string().rfind("snh_report_", 0) == 0 &&
+          e.path().filename().string().ends_with("_" + std::to_string(::getpid())))
+        fs::remove_all(e.path(), ec);
+  }
+};
+[[maybe_unused]] const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::stringstream s;
@@ -197,6 +209,7 @@ TEST(RunReport, StretchRunSurfaceFramesAndRanges) {
       ASSERT_EQ(disp.size(), static_cast<std::size_t>(ns));
       // Each surface vertex: find it among the .vtu points by its rest position (x − displacement).
       const auto& D = vtu.point_data.at("displacement");
+      std::vector<int> global(ns, -1);
       for (int k = 0; k < ns; ++k) {
         int found = -1;
         for (Eigen::Index v = 0; v < vtu.mesh.mesh.vertex_count(); ++v) {
@@ -204,9 +217,24 @@ TEST(RunReport, StretchRunSurfaceFramesAndRanges) {
           if ((X - Eigen::Vector3d(rest[3 * k], rest[3 * k + 1], rest[3 * k + 2])).norm() < 1e-6) found = static_cast<int>(v);
         }
         ASSERT_GE(found, 0) << "frame " << i << " surface vertex " << k;
+        global[k] = found;
         for (int a = 0; a < 3; ++a) EXPECT_NEAR(x[3 * k + a], vtu.mesh.mesh.vertices(a, found), 1e-6);
         const double d = Eigen::Vector3d(D[3 * found], D[3 * found + 1], D[3 * found + 2]).norm();
         EXPECT_NEAR(disp[k], d, 1e-6);
+      }
+      // Each triangle shows the fields of the one cell that has all three of its corners.
+      const VolumeMesh& vm = vtu.mesh.mesh;
+      for (int t = 0; t < tris; ++t) {
+        int owner = -1, owners = 0;
+        for (Eigen::Index c = 0; c < vm.cell_count(); ++c) {
+          int corners = 0;
+          for (int a = 0; a < 3; ++a)
+            for (Eigen::Index n = 0; n < vm.cells.rows(); ++n) corners += vm.cells(n, c) == global[tri[3 * t + a]];
+          if (corners == 3) owner = static_cast<int>(c), ++owners;
+        }
+        ASSERT_EQ(owners, 1) << "frame " << i << " triangle " << t;
+        EXPECT_NEAR(J[tri_cell[t]], vtu.cell_data.at("J")[owner], 1e-6) << "frame " << i << " triangle " << t;
+        EXPECT_NEAR(psi[tri_cell[t]], vtu.cell_data.at("psi")[owner], 1e-6 * (1 + std::abs(psi[tri_cell[t]])));
       }
       for (double v : vtu.cell_data.at("J")) min_J = std::min(min_J, v), max_J = std::max(max_J, v);
       for (std::size_t v = 0; v < D.size() / 3; ++v)
@@ -312,6 +340,13 @@ TEST(RunReport, OneLineErrors) {
   EXPECT_EQ(message(dir), dir.string() + ": no stats.json or lab.json here: not the output directory of an snh run");
   std::ofstream(dir / "stats.json") << "{\"steps\": [";
   EXPECT_NE(message(dir).find((dir / "stats.json").string() + ": not valid JSON"), std::string::npos);
+  std::ofstream(dir / "stats.json") << "[]";
+  EXPECT_EQ(message(dir), (dir / "stats.json").string() + ": not a JSON object");
+  std::ofstream(dir / "stats.json") << "{\"frames\": 3}";
+  EXPECT_EQ(message(dir), (dir / "stats.json").string() + ": no \"frames\" array");
+  std::ofstream(dir / "stats.json") << "{\"command_line\": 5, \"steps\": []}";
+  EXPECT_EQ(message(dir).rfind((dir / "stats.json").string() + ": unexpected content ([json.exception.type_error", 0), 0u)
+      << message(dir);
   std::ofstream(dir / "stats.json") << "{\"steps\": [], \"all_converged\": true}";
   write_pvd(dir / "frames.pvd", {{0.0, "000.vtu"}});
   const std::string m = message(dir);

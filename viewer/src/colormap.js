@@ -44,7 +44,9 @@ export function fieldColors(field) {
     hi = c + span;
   }
   const width = hi - lo;
-  const toT = (v) => (width > 0 ? (v - lo) / width : 0.5);
+  // A range within rounding of zero (ψ of a run that only rests: ±1e-16) is drawn as constant, not as noise.
+  const flat = !(width > 1e-12 * Math.max(1, Math.abs(lo), Math.abs(hi)));
+  const toT = (v) => (flat ? (name === 'diverging' ? 0.5 : 0) : (v - lo) / width);
 
   const lut = new Float32Array(LUT_SIZE * 3);
   for (let i = 0; i < LUT_SIZE; i++) {

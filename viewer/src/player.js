@@ -179,12 +179,16 @@ export class Player {
 
   onKey(e) {
     if (e.ctrlKey || e.metaKey || e.altKey) return;
+    // Only while the 3D view is on screen: elsewhere the keys scroll the page as usual.
+    const box = this.view.container.getBoundingClientRect();
+    if (box.bottom <= 0 || box.top >= window.innerHeight) return;
     const t = e.target;
     const onSlider = t === this.ui.slider;
-    const inInput = !onSlider && t instanceof Element && t.matches('input, select, textarea, [contenteditable]');
+    // Checkboxes (wireframe, pins) do nothing with these keys, so they do not keep them from the player.
+    const inInput = !onSlider && t instanceof Element && t.matches('input:not([type=checkbox]), select, textarea, [contenteditable]');
     if (inInput) return;
     if (e.key === ' ') {
-      if (t instanceof Element && t.matches('button, a')) return; // they act on space themselves
+      if (t instanceof Element && t.matches('button, a, input[type=checkbox]')) return; // they act on space themselves
       e.preventDefault();
       this.toggle();
       return;

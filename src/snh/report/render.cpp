@@ -1,6 +1,6 @@
 #include "snh/report/render.hpp"
 
-#include <array>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "snh/report/report.hpp"
+#include "snh/sim/interrupt.hpp"
 
 extern char** environ;
 
@@ -36,18 +37,37 @@ std::string read_text(const fs::path& p) {
   return s.str();
 }
 
-/// The browser to use: the option, $SNH_CHROMIUM, or the first of the usual names on PATH.
-std::string find_browser(const std::string& given) {
-  if (!given.empty()) return given;
-  if (const char* env = std::getenv("SNH_CHROMIUM"); env && *env) return env;
+/// `name` found on PATH ("" if not there); a name with a slash is returned as it is.
+std::string on_path(const std::string& name) {
+  if (name.find('/') != std::string::npos) return name;
   const char* path = std::getenv("PATH");
   std::stringstream dirs(path ? path : "/usr/bin:/bin");
-  std::vector<std::string> entries;
-  for (std::string d; std::getline(dirs, d, ':');) entries.push_back(d.empty() ? "." : d);
-  for (const char* name : {"chromium", "chromium-browser", "google-chrome", "google-chrome-stable"})
-    for (const std::string& d : entries)
-      if (::access((fs::path(d) / name).c_str(), X_OK) == 0) return (fs::path(d) / name).string();
+  for (std::string d; std::getline(dirs, d, ':');) {
+    const fs::path candidate = fs::path(d.empty() ? "." : d) / name;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate.string();
+  }
   return "";
+}
+
+/// The browser to use: the option, $SNH_CHROMIUM (either a path or a name on PATH), or the first of the
+/// usual names on PATH. "" when none is found.
+std::string find_browser(const std::string& given) {
+  if (!given.empty()) return on_path(given).empty() ? given : on_path(given);
+  if (const char* env = std::getenv("SNH_CHROMIUM"); env && *env) return on_path(env).empty() ? env : on_path(env);
+  for (const char* name : {"chromium", "chromium-browser", "google-chrome", "google-chrome-stable"})
+    if (const std::string found = on_path(name); !found.empty()) return found;
+  return "";
+}
+
+/// A file:// URL of an absolute path: every byte but the unreserved characters and '/' percent-encoded
+/// (a '#', '%' or '?' in a directory name would otherwise end or change the path).
+std::string file_url(const fs::path& absolute) {
+  std::string out = "file://";
+  for (unsigned char c : absolute.string()) {
+    if (std::isalnum(c) || c == '/' || c == '-' || c == '.' || c == '_' || c == '~') out += static_cast<char>(c);
+    else out += fmt::format("%{:02X}", c);
+  }
+  return out;
 }
 
 /// A temporary directory, removed when this goes out of scope.
@@ -65,7 +85,7 @@ struct TempDir {
 };
 
 /// Runs the browser with `args` (its output to `log`); returns its exit status. Kills it (and what it
-/// started) after `timeout` seconds.
+/// started) after `timeout` seconds, or when a stop is requested (SIGINT, SIGTERM: RenderInterrupted).
 int run_browser(const std::string& browser, const std::vector<std::string>& args, const fs::path& log, double timeout) {
   std::vector<char*> argv;
   std::vector<std::string> all = {browser};
@@ -92,6 +112,11 @@ int run_browser(const std::string& browser, const std::vector<std::string>& args
     const pid_t r = ::waitpid(pid, &status, WNOHANG);
     if (r == pid) break;
     if (r < 0 && errno != EINTR) throw ReportError(fmt::format("waiting for the browser: {}", std::strerror(errno)));
+    if (stop_requested()) {
+      ::kill(-pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      throw RenderInterrupted(stop_signal());
+    }
     if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > timeout) {
       ::kill(-pid, SIGKILL);
       ::waitpid(pid, &status, 0);
@@ -103,12 +128,13 @@ int run_browser(const std::string& browser, const std::vector<std::string>& args
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
-/// The last non-empty line of a log that is not one of Chromium's routine complaints (D-Bus, GPU).
-std::string last_log_line(const fs::path& log) {
+/// The last non-empty line of a log that is not one of Chromium's routine complaints (D-Bus) or a
+/// complaint of the shell script that starts it (Debian's /usr/bin/chromium: "NAME: LINE: ...").
+std::string last_log_line(const fs::path& log, const std::string& browser) {
   std::istringstream in(read_text(log));
   std::string last;
   for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line.find("dbus") == std::string::npos) last = line;
+    if (!line.empty() && line.find("dbus") == std::string::npos && line.rfind(browser + ":", 0) != 0) last = line;
   return last.empty() ? "(no output)" : last;
 }
 
@@ -167,8 +193,8 @@ void render_png(const fs::path& dir, const RenderOptions& o) {
     throw ReportError(fmt::format("{}: the directory does not exist", out.parent_path().string()));
 
   TempDir tmp;
-  const std::string url = fmt::format("file://{}#render&frame={}&field={}{}", fs::absolute(dir / "index.html").string(),
-                                      frame, field, o.wireframe ? "&wireframe=1" : "");
+  const std::string url = fmt::format("{}#render&frame={}&field={}{}", file_url(fs::absolute(dir / "index.html")), frame,
+                                      field, o.wireframe ? "&wireframe=1" : "");
   const std::vector<std::string> common = {
       "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--disable-quic", "--no-first-run",
       "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-extensions",
@@ -185,19 +211,25 @@ void render_png(const fs::path& dir, const RenderOptions& o) {
     const std::size_t at = dom.find("<title>snh-render-error: ");
     if (at != std::string::npos)
       throw ReportError("the report page: " + dom.substr(at + 25, dom.find("</title>", at) - at - 25));
-    throw ReportError(fmt::format("the browser did not draw the frame (exit status {}): {}", status, last_log_line(log)));
+    throw ReportError(fmt::format("the browser did not draw the frame (exit status {}): {}", status, last_log_line(log, browser)));
   }
   // 2. The picture, to a temporary name beside the output, then renamed.
   const fs::path partial = out.string() + fmt::format(".partial.{}.png", ::getpid());
   args = common;
   args.push_back("--screenshot=" + partial.string());
   args.push_back(url);
-  status = run_browser(browser, args, log, o.timeout_seconds);
+  try {
+    status = run_browser(browser, args, log, o.timeout_seconds);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(partial, ec);
+    throw;
+  }
   const auto [w, h] = fs::exists(partial) ? png_size(partial) : std::pair<int, int>{0, 0};
   if (w != o.width || h != o.height) {
     std::error_code ec;
     fs::remove(partial, ec);
-    throw ReportError(w == 0 ? fmt::format("the browser wrote no picture (exit status {}): {}", status, last_log_line(log))
+    throw ReportError(w == 0 ? fmt::format("the browser wrote no picture (exit status {}): {}", status, last_log_line(log, browser))
                              : fmt::format("the browser's picture is {}x{}, not {}x{}", w, h, o.width, o.height));
   }
   std::error_code ec;

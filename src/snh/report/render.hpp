@@ -3,6 +3,9 @@
 // filling the window, the legend and a caption over it) saved as a PNG by headless Chromium.
 #include <filesystem>
 #include <string>
+#include <utility>
+
+#include "snh/report/report.hpp"
 
 namespace snh {
 
@@ -14,6 +17,16 @@ struct RenderOptions {
   std::filesystem::path out;       ///< the PNG to write
   std::string browser;       ///< Chromium's path ("": $SNH_CHROMIUM, else chromium or google-chrome on PATH)
   double timeout_seconds = 120.0;  ///< per browser run
+};
+
+/// SIGINT or SIGTERM arrived (snh::install_stop_handlers) while the browser ran: it was stopped, and
+/// nothing was written.
+class RenderInterrupted : public ReportError {
+ public:
+  explicit RenderInterrupted(int signal)
+      : ReportError("interrupted by signal " + std::to_string(signal) + ": the browser was stopped, nothing was written"),
+        signal(signal) {}
+  int signal;
 };
 
 /// Renders a frame of the run in `dir` (writing its report first if it has none) to options.out,

@@ -273,7 +273,7 @@ json run_data(const fs::path& dir, const json& stats) {
   d["format"] = 1;
   d["kind"] = scene ? "scene" : "stretch";
   const std::string program = stats.value("program", std::string(scene ? "snh run" : "snh stretch"));
-  d["title"] = stats.contains("command_line") ? stats["command_line"].get<std::string>()
+  d["title"] = stats.contains("command_line") ? stats.at("command_line").get<std::string>()
                : scene                        ? "snh run " + stats.value("scene", std::string())
                                               : program;
   d["generated_by"] = "snh " SNH_VERSION;
@@ -281,8 +281,10 @@ json run_data(const fs::path& dir, const json& stats) {
   // Status: the run's own verdict.
   const bool ok = stats.value("all_converged", false);
   const int signal = stats.value("interrupted_by_signal", 0);
-  const json& rows = scene ? stats["frames"] : stats["steps"];
-  if (!rows.is_array()) throw ReportError(fmt::format("{}: \"{}\" is not an array", (dir / "stats.json").string(), scene ? "frames" : "steps"));
+  const auto rows_at = stats.find(scene ? "frames" : "steps");
+  if (rows_at == stats.end() || !rows_at->is_array())
+    throw ReportError(fmt::format("{}: no \"{}\" array", (dir / "stats.json").string(), scene ? "frames" : "steps"));
+  const json& rows = *rows_at;
   std::string status = ok ? (scene ? "finished" : "converged every step") : "";
   if (!ok && signal) status = fmt::format("interrupted by signal {} after {} {}", signal, scene ? "frame" : "step", rows.empty() ? 0 : rows.back().value(scene ? "frame" : "step", 0));
   else if (!ok && scene) status = "stopped: " + stats.value("failure", std::string("a frame failed"));
@@ -312,8 +314,8 @@ json run_data(const fs::path& dir, const json& stats) {
       {"middle_width", "middle width"}, {"snh_version", "snh version"}};
   json meta = json::array();
   for (const Setting& m : kRunAndMaterial) meta_from(meta, stats, m.key, m.label, m.unit);
-  if (stats.contains("mu") && stats.contains("lambda") && stats["mu"].is_number() && stats["lambda"].is_number()) {
-    const double mu = stats["mu"].get<double>(), lambda = stats["lambda"].get<double>();
+  if (stats.contains("mu") && stats.contains("lambda") && stats.at("mu").is_number() && stats.at("lambda").is_number()) {
+    const double mu = stats.at("mu").get<double>(), lambda = stats.at("lambda").get<double>();
     meta.push_back({"ν = λ / (2(λ + μ))", fmt::format("{:.6g}", lambda / (2.0 * (lambda + mu)))});
   }
   if (stats.contains("reparametrize"))
@@ -388,7 +390,7 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
         (void)write_report(dir / sub, {.bundle_src = up + bundle_src, .write_bundle = false});
         ++runs;
         link = {{"text", "report"}, {"href", sub + "/index.html"}};
-      } catch (const ReportError& e) {
+      } catch (const std::exception& e) {
         link = std::string("no report: ") + e.what();
       }
     }
@@ -407,7 +409,7 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
     for (const std::string& c : cases) {
       json x = json::array(), ser = json::array();
       for (const json& r : list)
-        if (r.value("case", std::string()) == c && r.contains("time") && r["time"].size() > x.size()) x = r["time"];
+        if (r.value("case", std::string()) == c && r.contains("time") && r.at("time").size() > x.size()) x = r.at("time");
       for (const json& r : list) {
         if (r.value("case", std::string()) != c) continue;
         json y = r.value("volume", json::array());
@@ -426,25 +428,25 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
   // Poisson's ratio: measured against expected, a series per energy and parametrization.
   if (lab.contains("poisson")) {
     std::vector<double> nus;
-    for (const json& r : lab["poisson"]) {
+    for (const json& r : lab.at("poisson")) {
       const double e = r.value("expected", 0.0);
       if (std::find(nus.begin(), nus.end(), e) == nus.end()) nus.push_back(e);
     }
     std::sort(nus.begin(), nus.end());
     json ser = json::array({series("expected", json(nus))});
     std::vector<std::pair<std::string, bool>> keys;
-    for (const json& r : lab["poisson"]) {
+    for (const json& r : lab.at("poisson")) {
       if (!r.value("ran", false)) continue;
       const std::pair<std::string, bool> k{r.value("energy", std::string()), r.value("reparametrize", false)};
       if (std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(k);
-      add_run(r, fmt::format("poisson / nu {} {}", show(r["nu"]), k.second ? "reparametrized" : "given"),
+      add_run(r, fmt::format("poisson / nu {} {}", show(r.value("nu", json(nullptr))), k.second ? "reparametrized" : "given"),
               fmt::format("measured ν {}", show(r.value("measured", json(nullptr)))));
     }
     for (const auto& [energy, reparam] : keys) {
       json y = json::array();
       for (double nu : nus) {
         json v = nullptr;
-        for (const json& r : lab["poisson"])
+        for (const json& r : lab.at("poisson"))
           if (r.value("energy", std::string()) == energy && r.value("reparametrize", false) == reparam &&
               r.value("expected", 0.0) == nu && r.value("ran", false))
             v = r.value("measured", json(nullptr));
@@ -459,12 +461,12 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
   if (lab.contains("stretch")) {
     std::vector<double> nus;
     std::vector<std::string> energies;
-    for (const json& r : lab["stretch"]) {
+    for (const json& r : lab.at("stretch")) {
       const double nu = r.value("nu", 0.0);
       if (std::find(nus.begin(), nus.end(), nu) == nus.end()) nus.push_back(nu);
       const std::string e = r.value("energy", std::string());
       if (std::find(energies.begin(), energies.end(), e) == energies.end()) energies.push_back(e);
-      add_run(r, fmt::format("stretch / nu {}", show(r["nu"])), fmt::format("volume {}", show(r.value("volume_ratio", json(nullptr)))));
+      add_run(r, fmt::format("stretch / nu {}", show(r.value("nu", json(nullptr)))), fmt::format("volume {}", show(r.value("volume_ratio", json(nullptr)))));
     }
     std::sort(nus.begin(), nus.end());
     json ser = json::array();
@@ -472,7 +474,7 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
       json y = json::array();
       for (double nu : nus) {
         json v = nullptr;
-        for (const json& r : lab["stretch"])
+        for (const json& r : lab.at("stretch"))
           if (r.value("energy", std::string()) == e && r.value("nu", 0.0) == nu) v = r.value("volume_ratio", json(nullptr));
         y.push_back(v);
       }
@@ -482,7 +484,7 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
   }
   // ψ along F = sI.
   if (lab.contains("psi_along_sI")) {
-    const json& p = lab["psi_along_sI"];
+    const json& p = lab.at("psi_along_sI");
     json ser = json::array();
     const json psi = p.value("psi", json::object());
     for (const auto& [energy, values] : psi.items()) ser.push_back(series(energy, values));
@@ -524,14 +526,18 @@ ReportSummary write_report(const fs::path& dir, const ReportOptions& options) {
   if (!fs::is_directory(dir)) throw ReportError(fmt::format("{}: no such directory", dir.string()));
   ReportSummary summary;
   json data;
+  const bool lab = fs::exists(dir / "lab.json");
+  const fs::path source = dir / (lab ? "lab.json" : "stats.json");
   try {
-    if (fs::exists(dir / "lab.json")) {
-      data = lab_data(dir, read_json(dir / "lab.json"), options.bundle_src, summary.runs);
-    } else if (fs::exists(dir / "stats.json")) {
-      fs::create_directories(dir / "report");
-      data = run_data(dir, read_json(dir / "stats.json"));
-    } else {
+    if (!lab && !fs::exists(source))
       throw ReportError(fmt::format("{}: no stats.json or lab.json here: not the output directory of an snh run", dir.string()));
+    const json in = read_json(source);
+    if (!in.is_object()) throw ReportError(fmt::format("{}: not a JSON object", source.string()));
+    fs::create_directories(dir / "report");
+    try {
+      data = lab ? lab_data(dir, in, options.bundle_src, summary.runs) : run_data(dir, in);
+    } catch (const json::exception& e) {  // a key of an unexpected type
+      throw ReportError(fmt::format("{}: unexpected content ({})", source.string(), e.what()));
     }
     fs::create_directories(dir / "report");
     summary.kind = data["kind"].get<std::string>();
