@@ -333,7 +333,8 @@ json run_data(const fs::path& dir, const json& stats) {
   plots.push_back(plot("newton", g, "Newton iterations", xl, "iterations", false, x,
                        json::array({series("Newton iterations", column(rows, "newton_iterations")),
                         series("line-search halvings", column(rows, "line_search_steps"))})));
-  plots.push_back(plot("residual", g, scene ? "Residual ‖g‖ (largest of the substeps)" : "Residual ‖f‖", xl, "‖f‖", true, x,
+  plots.push_back(plot("residual", g, scene ? "Residual ‖g‖ (largest of the substeps)" : "Residual ‖f‖", xl,
+                       scene ? "‖g‖" : "‖f‖", true, x,
                        json::array({series("residual", column(rows, "residual"))})));
   if (scene)
     plots.push_back(plot("energy", g, "Energy", xl, "energy", false, x,
