@@ -1,9 +1,6 @@
 #pragma once
 // `snh report DIR` (writes a run's browser report) and `snh render DIR` (a frame as a PNG through
 // headless Chromium).
-#include <filesystem>
-#include <string>
-
 #include <CLI/CLI.hpp>
 
 namespace snh::cli {

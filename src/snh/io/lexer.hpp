@@ -28,6 +28,15 @@ inline std::string read_all(const fs::path& path) {
   return s.str();
 }
 
+/// The value of attribute `name` in the XML tag that starts at `tag` (up to its '>'), or "".
+inline std::string xml_attribute(std::string_view tag, std::string_view name) {
+  const std::string key = fmt::format(" {}=\"", name);
+  const std::size_t at = tag.find(key);
+  if (at == std::string_view::npos) return "";
+  const std::size_t start = at + key.size(), end = tag.find('"', start);
+  return end == std::string_view::npos ? "" : std::string(tag.substr(start, end - start));
+}
+
 /// Whitespace-separated tokens with line numbers; `comment` starts a comment to the end of the line.
 class Lexer {
  public:

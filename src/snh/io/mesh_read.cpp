@@ -23,6 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 using detail::Lexer;
 using detail::read_all;
+using detail::xml_attribute;
 
 /// Collects vertices and cells of one type; maps file vertex ids to indices.
 struct Builder {
@@ -376,15 +377,6 @@ MeshFile read_gmsh(const fs::path& path) {
 
 // ---- VTK .vtu (ASCII data arrays) -----------------------------------------------------------------
 
-/// The value of attribute `name` in the tag that starts at `tag`, or "".
-std::string attribute(std::string_view tag, std::string_view name) {
-  const std::string key = fmt::format(" {}=\"", name);
-  const std::size_t at = tag.find(key);
-  if (at == std::string_view::npos) return "";
-  const std::size_t start = at + key.size(), end = tag.find('"', start);
-  return end == std::string_view::npos ? "" : std::string(tag.substr(start, end - start));
-}
-
 /// Decodes base64, allowing several padded streams one after another (VTK encodes the length header
 /// and the data separately). Returns false on a character outside the alphabet.
 bool decode_base64(std::string_view in, std::string& out) {
@@ -465,10 +457,10 @@ MeshFile read_vtu(const fs::path& path, VtuData* data = nullptr) {
   if (root == std::string::npos || text.find("UnstructuredGrid") == std::string::npos)
     fail(0, "not a VTK UnstructuredGrid (.vtu) file");
   const std::string_view root_tag = std::string_view(text).substr(root, text.find('>', root) - root);
-  if (const std::string c = attribute(root_tag, "compressor"); !c.empty())
+  if (const std::string c = xml_attribute(root_tag, "compressor"); !c.empty())
     fail(root, fmt::format("compressed data ({}) is not supported: write the file uncompressed", c));
-  if (attribute(root_tag, "byte_order") == "BigEndian") fail(root, "big-endian data is not supported");
-  const std::string header_type = attribute(root_tag, "header_type");
+  if (xml_attribute(root_tag, "byte_order") == "BigEndian") fail(root, "big-endian data is not supported");
+  const std::string header_type = xml_attribute(root_tag, "header_type");
   const std::size_t header_size = header_type == "UInt64" ? 8 : 4;
   if (!header_type.empty() && header_type != "UInt32" && header_type != "UInt64")
     fail(root, fmt::format("unknown header_type \"{}\"", header_type));
@@ -477,7 +469,7 @@ MeshFile read_vtu(const fs::path& path, VtuData* data = nullptr) {
   bool appended_base64 = false;
   if (const std::size_t ad = text.find("<AppendedData"); ad != std::string::npos) {
     const std::string_view tag = std::string_view(text).substr(ad, text.find('>', ad) - ad);
-    appended_base64 = attribute(tag, "encoding") == "base64";
+    appended_base64 = xml_attribute(tag, "encoding") == "base64";
     const std::size_t underscore = text.find('_', text.find('>', ad));
     if (underscore == std::string::npos) fail(ad, "<AppendedData> without the '_' that starts the data");
     appended = std::string_view(text).substr(underscore + 1);
@@ -487,8 +479,8 @@ MeshFile read_vtu(const fs::path& path, VtuData* data = nullptr) {
   const std::string_view piece_tag = std::string_view(text).substr(piece, text.find('>', piece) - piece);
   long long n_points = -1, n_cells = -1;
   try {
-    n_points = std::stoll(attribute(piece_tag, "NumberOfPoints"));
-    n_cells = std::stoll(attribute(piece_tag, "NumberOfCells"));
+    n_points = std::stoll(xml_attribute(piece_tag, "NumberOfPoints"));
+    n_cells = std::stoll(xml_attribute(piece_tag, "NumberOfCells"));
   } catch (const std::exception&) {
     fail(piece, "<Piece> needs NumberOfPoints and NumberOfCells");
   }
@@ -503,10 +495,10 @@ MeshFile read_vtu(const fs::path& path, VtuData* data = nullptr) {
       at = text.find("<DataArray", at + 1);
       if (at == std::string::npos || at > sec_end) fail(sec, fmt::format("no DataArray {} in <{}>", name ? name : "", section));
       const std::string_view tag = std::string_view(text).substr(at, text.find('>', at) - at);
-      if (name && attribute(tag, "Name") != name) continue;
+      if (name && xml_attribute(tag, "Name") != name) continue;
       where = at;
       const std::string label = name ? name : section;
-      const std::string format = attribute(tag, "format"), type = attribute(tag, "type");
+      const std::string format = xml_attribute(tag, "format"), type = xml_attribute(tag, "type");
       if (format == "ascii") {
         const std::size_t start = text.find('>', at) + 1, end = text.find("</DataArray>", start);
         if (end == std::string::npos) fail(at, "unterminated DataArray");
@@ -529,7 +521,7 @@ MeshFile read_vtu(const fs::path& path, VtuData* data = nullptr) {
         if (appended.empty()) fail(at, fmt::format("DataArray {} is appended, but the file has no <AppendedData>", label));
         std::size_t offset = 0;
         try {
-          offset = std::stoull(attribute(tag, "offset"));
+          offset = std::stoull(xml_attribute(tag, "offset"));
         } catch (const std::exception&) {
           fail(at, fmt::format("DataArray {} is appended but has no offset", label));
         }
@@ -598,9 +590,9 @@ MeshFile read_vtu(const fs::path& path, VtuData* data = nullptr) {
       for (std::size_t at = text.find("<DataArray", sec); at != std::string::npos && at < sec_end;
            at = text.find("<DataArray", at + 1)) {
         const std::string_view tag = std::string_view(text).substr(at, text.find('>', at) - at);
-        const std::string name = attribute(tag, "Name");
+        const std::string name = xml_attribute(tag, "Name");
         if (name.empty()) continue;
-        const std::string nc = attribute(tag, "NumberOfComponents");
+        const std::string nc = xml_attribute(tag, "NumberOfComponents");
         long long components = 1;
         if (!nc.empty()) {
           try {

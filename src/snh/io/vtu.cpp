@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "snh/io/atomic_file.hpp"
+#include "snh/io/lexer.hpp"
 
 namespace snh {
 
@@ -65,6 +66,27 @@ void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<do
       out << fmt::format("<DataSet timestep=\"{:g}\" group=\"\" part=\"0\" file=\"{}\"/>\n", t, file);
     out << "</Collection>\n</VTKFile>\n";
   });
+}
+
+std::vector<std::pair<double, std::string>> read_pvd(const std::filesystem::path& path) {
+  const std::string text = detail::read_all(path);
+  std::vector<std::pair<double, std::string>> out;
+  for (std::size_t at = text.find("<DataSet"); at != std::string::npos; at = text.find("<DataSet", at + 1)) {
+    const std::string_view tag = std::string_view(text).substr(at, text.find('>', at) - at);
+    const std::string file = detail::xml_attribute(tag, "file"), time = detail::xml_attribute(tag, "timestep");
+    double t = static_cast<double>(out.size());
+    if (!time.empty()) {
+      try {
+        t = std::stod(time);
+      } catch (const std::exception&) {
+        throw MeshError(fmt::format("{}: DataSet {}: timestep \"{}\" is not a number", path.string(), out.size(), time));
+      }
+    }
+    if (file.empty()) throw MeshError(fmt::format("{}: DataSet {} has no file", path.string(), out.size()));
+    out.emplace_back(t, file);
+  }
+  if (out.empty()) throw MeshError(fmt::format("{}: lists no frames", path.string()));
+  return out;
 }
 
 }  // namespace snh

@@ -26,4 +26,9 @@ void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const 
 /// Writes a ParaView collection listing (time, file) pairs; files relative to the .pvd's directory.
 void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& frames);
 
+/// Reads a ParaView collection back: (time, file) of each DataSet in order (a missing timestep is the
+/// DataSet's index). Throws MeshError ("FILE: what is wrong") for an unreadable file, a DataSet without
+/// a file or with a timestep that is not a number, or no DataSet at all.
+[[nodiscard]] std::vector<std::pair<double, std::string>> read_pvd(const std::filesystem::path& path);
+
 }  // namespace snh

@@ -156,28 +156,18 @@ void render_png(const fs::path& dir, const RenderOptions& o) {
   if (o.out.empty()) throw ReportError("no output file given");
   if (!fs::exists(dir / "index.html") || !fs::exists(dir / "report" / "data.js")) (void)write_report(dir);
   // The frame and field are checked here, so that the page is only asked for what it has.
-  std::string text = read_text(dir / "report" / "data.js");
-  const std::string prefix = "window.SNH_REPORT = ";
-  json data;
-  try {
-    if (text.compare(0, prefix.size(), prefix) != 0) throw std::runtime_error("no window.SNH_REPORT");
-    while (!text.empty() && (text.back() == '\n' || text.back() == ';')) text.pop_back();
-    data = json::parse(text.substr(prefix.size()));
-  } catch (const std::exception& e) {
-    throw ReportError(fmt::format("{}: not a report's data ({}): run snh report {} again",
-                                  (dir / "report" / "data.js").string(), e.what(), dir.string()));
-  }
-  if (!data.contains("mesh") || data["mesh"].is_null())
+  const json data = read_report_data(dir);
+  if (!data.contains("mesh") || data.at("mesh").is_null())
     throw ReportError(fmt::format("{}: the run has no 3D frames to render (no frames.pvd)", dir.string()));
-  const json& mesh = data["mesh"];
-  const int frames = static_cast<int>(mesh["frames"].size());
+  const json& mesh = data.at("mesh");
+  const int frames = static_cast<int>(mesh.at("frames").size());
   const int frame = o.frame < 0 ? frames - 1 : o.frame;
   if (frame >= frames)
     throw ReportError(fmt::format("frame {} does not exist: {} has frames 0 to {}", o.frame, dir.string(), frames - 1));
   std::string field = o.field.empty() ? mesh.value("default_field", std::string("J")) : o.field;
   std::string known;
   bool found = false;
-  for (const json& f : mesh["fields"]) {
+  for (const json& f : mesh.at("fields")) {
     known += (known.empty() ? "" : ", ") + f.value("name", std::string());
     found = found || f.value("name", std::string()) == field;
   }

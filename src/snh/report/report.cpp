@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <limits>
+#include <functional>
 #include <optional>
+#include <limits>
 #include <vector>
 
 #include <fmt/format.h>
@@ -12,6 +13,7 @@
 
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/mesh_read.hpp"
+#include "snh/io/vtu.hpp"
 #include "snh/mesh/surface.hpp"
 
 namespace snh {
@@ -19,6 +21,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
+
+/// data.js is this, the JSON, then ";\n": a classic script the page loads from file://.
+constexpr std::string_view kDataPrefix = "window.SNH_REPORT = ";
 
 json read_json(const fs::path& path) {
   std::ifstream in(path);
@@ -82,39 +87,6 @@ json plot(const std::string& id, const std::string& group, const std::string& ti
 
 json series(const std::string& label, const json& y) { return {{"label", label}, {"y", y}}; }
 
-/// (time, file) of each DataSet of a ParaView collection, in order.
-std::vector<std::pair<double, std::string>> read_pvd(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw ReportError(fmt::format("{}: cannot be opened", path.string()));
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  auto attribute = [](const std::string& tag, const std::string& name) -> std::optional<std::string> {
-    const std::string key = " " + name + "=\"";
-    const std::size_t at = tag.find(key);
-    if (at == std::string::npos) return std::nullopt;
-    const std::size_t end = tag.find('"', at + key.size());
-    if (end == std::string::npos) return std::nullopt;
-    return tag.substr(at + key.size(), end - at - key.size());
-  };
-  std::vector<std::pair<double, std::string>> out;
-  for (std::size_t at = text.find("<DataSet"); at != std::string::npos; at = text.find("<DataSet", at + 1)) {
-    const std::string tag = text.substr(at, text.find('>', at) - at);
-    const auto file = attribute(tag, "file");
-    const auto time = attribute(tag, "timestep");
-    double t = static_cast<double>(out.size());
-    if (time) {
-      try {
-        t = std::stod(*time);
-      } catch (const std::exception&) {
-        throw ReportError(fmt::format("{}: DataSet {}: timestep \"{}\" is not a number", path.string(), out.size(), *time));
-      }
-    }
-    if (!file || file->empty()) throw ReportError(fmt::format("{}: DataSet {} has no file", path.string(), out.size()));
-    out.emplace_back(t, *file);
-  }
-  if (out.empty()) throw ReportError(fmt::format("{}: lists no frames", path.string()));
-  return out;
-}
-
 template <class T>
 std::string encode(const std::vector<T>& v) { return base64_encode(v.data(), v.size() * sizeof(T)); }
 
@@ -133,7 +105,12 @@ struct Range {
 /// The 3D part of a run's report: reads the .vtu frames listed in frames.pvd, writes report/frames/NNN.js
 /// (surface positions and fields of each frame) and returns the "mesh" object of data.js.
 json write_frames(const fs::path& dir, const std::string& frame_word) {
-  const auto pvd = read_pvd(dir / "frames.pvd");
+  std::vector<std::pair<double, std::string>> pvd;
+  try {
+    pvd = read_pvd(dir / "frames.pvd");
+  } catch (const MeshError& e) {
+    throw ReportError(e.what());
+  }
   const fs::path frames_dir = dir / "report" / "frames";
   fs::create_directories(frames_dir);
 
@@ -144,36 +121,30 @@ json write_frames(const fs::path& dir, const std::string& frame_word) {
       throw ReportError(fmt::format("frame {}: {}", i, e.what()));
     }
   };
-  VtuData first = read_frame(0);
-  const VolumeMesh& mesh0 = first.mesh.mesh;
-  const Eigen::Index nv = mesh0.vertex_count(), nc = mesh0.cell_count();
-  const fs::path file0 = dir / pvd[0].second;
-  if (nc == 0) throw ReportError(fmt::format("{}: no tet or hex cells", file0.string()));
+  VtuData first = read_frame(0);  // moved into the frame loop below: keep what is needed of it here
+  VolumeMesh rest = first.mesh.mesh;
+  const Eigen::Index nv = rest.vertex_count(), nc = rest.cell_count();
+  if (nc == 0) throw ReportError(fmt::format("{}: no tet or hex cells", (dir / pvd[0].second).string()));
   // Rest positions: frame 0's points less its displacement (frame 0 may start deformed).
-  VolumeMesh rest = mesh0;
   if (const auto it = first.point_data.find("displacement"); it != first.point_data.end() && it->second.size() == static_cast<std::size_t>(3 * nv))
     rest.vertices -= Eigen::Map<const Eigen::Matrix3Xd>(it->second.data(), 3, nv);
   std::vector<int> triangle_cell;
   const Eigen::Matrix3Xi triangles = boundary_triangles(rest, &triangle_cell);
 
-  // The surface: its vertices and cells, numbered in order of first use.
+  // The surface: its vertices and cells, numbered in order of first use (`local` maps a mesh index to
+  // its surface index, −1 until used; `used` lists the mesh indices in surface order).
   std::vector<int> vertex_local(nv, -1), cell_local(nc, -1), surface_vertices, surface_cells;
+  auto number = [](int index, std::vector<int>& local, std::vector<int>& used) {
+    if (local[index] < 0) {
+      local[index] = static_cast<int>(used.size());
+      used.push_back(index);
+    }
+    return static_cast<std::uint32_t>(local[index]);
+  };
   std::vector<std::uint32_t> tri(3 * triangles.cols()), tri_cell(triangles.cols());
   for (Eigen::Index t = 0; t < triangles.cols(); ++t) {
-    for (int a = 0; a < 3; ++a) {
-      int& local = vertex_local[triangles(a, t)];
-      if (local < 0) {
-        local = static_cast<int>(surface_vertices.size());
-        surface_vertices.push_back(triangles(a, t));
-      }
-      tri[3 * t + a] = static_cast<std::uint32_t>(local);
-    }
-    int& local = cell_local[triangle_cell[t]];
-    if (local < 0) {
-      local = static_cast<int>(surface_cells.size());
-      surface_cells.push_back(triangle_cell[t]);
-    }
-    tri_cell[t] = static_cast<std::uint32_t>(local);
+    for (int a = 0; a < 3; ++a) tri[3 * t + a] = number(triangles(a, t), vertex_local, surface_vertices);
+    tri_cell[t] = number(triangle_cell[t], cell_local, surface_cells);
   }
   const std::size_t ns = surface_vertices.size(), ms = surface_cells.size();
   std::vector<float> rest_xyz(3 * ns);
@@ -248,7 +219,7 @@ json write_frames(const fs::path& dir, const std::string& frame_word) {
     if (f.colormap == "diverging") entry["center"] = 1.0;
     field_list.push_back(entry);
   }
-  return {{"element", mesh0.type == CellType::tet4 ? "tet" : "hex"},
+  return {{"element", rest.type == CellType::tet4 ? "tet" : "hex"},
           {"vertex_count", nv},
           {"cell_count", nc},
           {"pinned_count", pinned_count},
@@ -359,6 +330,36 @@ json run_data(const fs::path& dir, const json& stats) {
   return d;
 }
 
+struct Curves {
+  std::vector<double> x;
+  json series = json::array();
+};
+
+/// Curves of one value of a lab table's rows against another: x is the sorted distinct values of `x_key`
+/// over every row; a row that `label` names adds its `y_key` at its x to the series of that name (series
+/// in order of first appearance; null where a series has no row at an x).
+Curves curves(const json& rows, const char* x_key, const char* y_key,
+              const std::function<std::optional<std::string>(const json&)>& label) {
+  Curves c;
+  for (const json& r : rows)
+    if (const double v = r.value(x_key, 0.0); std::find(c.x.begin(), c.x.end(), v) == c.x.end()) c.x.push_back(v);
+  std::sort(c.x.begin(), c.x.end());
+  std::vector<std::string> names;
+  for (const json& r : rows) {
+    const std::optional<std::string> name = label(r);
+    if (!name) continue;
+    auto it = std::find(names.begin(), names.end(), *name);
+    if (it == names.end()) {
+      names.push_back(*name);
+      c.series.push_back(series(*name, json(std::vector<std::nullptr_t>(c.x.size(), nullptr))));
+      it = names.end() - 1;
+    }
+    const auto at = std::find(c.x.begin(), c.x.end(), r.value(x_key, 0.0)) - c.x.begin();
+    c.series[it - names.begin()]["y"][at] = r.value(y_key, json(nullptr));
+  }
+  return c;
+}
+
 /// The report data of a lab (lab.json): its tables, curves and a table of every simulation, each of
 /// whose own report is written on the way (`runs` counts them).
 json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_src, int& runs) {
@@ -400,7 +401,7 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
   json plots = json::array();
   for (const char* experiment : {"rest", "inversion", "reflection", "degeneracy"}) {
     if (!lab.contains(experiment)) continue;
-    const json& list = lab[experiment];
+    const json& list = lab.at(experiment);
     // One plot per case: the volume ratio over time, a series per energy.
     std::vector<std::string> cases;
     for (const json& r : list) {
@@ -428,60 +429,29 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
   }
   // Poisson's ratio: measured against expected, a series per energy and parametrization.
   if (lab.contains("poisson")) {
-    std::vector<double> nus;
-    for (const json& r : lab.at("poisson")) {
-      const double e = r.value("expected", 0.0);
-      if (std::find(nus.begin(), nus.end(), e) == nus.end()) nus.push_back(e);
-    }
-    std::sort(nus.begin(), nus.end());
-    json ser = json::array({series("expected", json(nus))});
-    std::vector<std::pair<std::string, bool>> keys;
-    for (const json& r : lab.at("poisson")) {
-      if (!r.value("ran", false)) continue;
-      const std::pair<std::string, bool> k{r.value("energy", std::string()), r.value("reparametrize", false)};
-      if (std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(k);
-      add_run(r, fmt::format("poisson / nu {} {}", show(r.value("nu", json(nullptr))), k.second ? "reparametrized" : "given"),
-              fmt::format("measured ν {}", show(r.value("measured", json(nullptr)))));
-    }
-    for (const auto& [energy, reparam] : keys) {
-      json y = json::array();
-      for (double nu : nus) {
-        json v = nullptr;
-        for (const json& r : lab.at("poisson"))
-          if (r.value("energy", std::string()) == energy && r.value("reparametrize", false) == reparam &&
-              r.value("expected", 0.0) == nu && r.value("ran", false))
-            v = r.value("measured", json(nullptr));
-        y.push_back(v);
-      }
-      ser.push_back(series(energy + (reparam ? " (reparametrized)" : " (given)"), y));
-    }
+    for (const json& r : lab.at("poisson"))
+      if (r.value("ran", false))
+        add_run(r,
+                fmt::format("poisson / nu {} {}", show(r.value("nu", json(nullptr))),
+                            r.value("reparametrize", false) ? "reparametrized" : "given"),
+                fmt::format("measured ν {}", show(r.value("measured", json(nullptr)))));
+    const Curves c = curves(lab.at("poisson"), "expected", "measured", [](const json& r) -> std::optional<std::string> {
+      if (!r.value("ran", false)) return std::nullopt;
+      return r.value("energy", std::string()) + (r.value("reparametrize", false) ? " (reparametrized)" : " (given)");
+    });
+    json ser = json::array({series("expected", json(c.x))});
+    ser.insert(ser.end(), c.series.begin(), c.series.end());
     plots.push_back(plot("poisson", "Poisson's ratio", "Measured against expected ν", "expected ν", "measured ν", false,
-                         json(nus), ser, true));
+                         json(c.x), ser, true));
   }
   // Large stretch: volume ratio at 3.5× against ν.
   if (lab.contains("stretch")) {
-    std::vector<double> nus;
-    std::vector<std::string> energies;
-    for (const json& r : lab.at("stretch")) {
-      const double nu = r.value("nu", 0.0);
-      if (std::find(nus.begin(), nus.end(), nu) == nus.end()) nus.push_back(nu);
-      const std::string e = r.value("energy", std::string());
-      if (std::find(energies.begin(), energies.end(), e) == energies.end()) energies.push_back(e);
-      add_run(r, fmt::format("stretch / nu {}", show(r.value("nu", json(nullptr)))), fmt::format("volume {}", show(r.value("volume_ratio", json(nullptr)))));
-    }
-    std::sort(nus.begin(), nus.end());
-    json ser = json::array();
-    for (const std::string& e : energies) {
-      json y = json::array();
-      for (double nu : nus) {
-        json v = nullptr;
-        for (const json& r : lab.at("stretch"))
-          if (r.value("energy", std::string()) == e && r.value("nu", 0.0) == nu) v = r.value("volume_ratio", json(nullptr));
-        y.push_back(v);
-      }
-      ser.push_back(series(e, y));
-    }
-    plots.push_back(plot("stretch", "Large stretch", "Volume ratio at 3.5× stretch", "ν", "volume ratio", false, json(nus), ser));
+    for (const json& r : lab.at("stretch"))
+      add_run(r, fmt::format("stretch / nu {}", show(r.value("nu", json(nullptr)))),
+              fmt::format("volume {}", show(r.value("volume_ratio", json(nullptr)))));
+    const Curves c = curves(lab.at("stretch"), "nu", "volume_ratio",
+                            [](const json& r) -> std::optional<std::string> { return r.value("energy", std::string()); });
+    plots.push_back(plot("stretch", "Large stretch", "Volume ratio at 3.5× stretch", "ν", "volume ratio", false, json(c.x), c.series));
   }
   // ψ along F = sI.
   if (lab.contains("psi_along_sI")) {
@@ -507,6 +477,21 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
 }
 
 }  // namespace
+
+json read_report_data(const fs::path& dir) {
+  const fs::path path = dir / "report" / "data.js";
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ReportError(fmt::format("{}: cannot be opened: run snh report {}", path.string(), dir.string()));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  try {
+    if (text.compare(0, kDataPrefix.size(), kDataPrefix) != 0) throw std::runtime_error("no window.SNH_REPORT");
+    while (!text.empty() && (text.back() == '\n' || text.back() == ';')) text.pop_back();
+    return json::parse(text.substr(kDataPrefix.size()));
+  } catch (const std::exception& e) {
+    throw ReportError(fmt::format("{}: not a report's data ({}): run snh report {} again", path.string(), e.what(),
+                                  dir.string()));
+  }
+}
 
 std::string base64_encode(const void* data, std::size_t size) {
   static constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -544,7 +529,7 @@ ReportSummary write_report(const fs::path& dir, const ReportOptions& options) {
     summary.kind = data["kind"].get<std::string>();
     if (!data["mesh"].is_null()) summary.frames = static_cast<int>(data["mesh"]["frames"].size());
     write_atomically(dir / "report" / "data.js", [&](std::ostream& o) {
-      o << "window.SNH_REPORT = " << data.dump(-1, ' ', false, json::error_handler_t::replace) << ";\n";
+      o << kDataPrefix << data.dump(-1, ' ', false, json::error_handler_t::replace) << ";\n";
     });
     if (options.write_bundle) {
       const std::string_view bundle = report_bundle();

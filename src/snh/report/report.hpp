@@ -13,6 +13,9 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+
+#include <nlohmann/json_fwd.hpp>
 
 namespace snh {
 
@@ -38,6 +41,9 @@ struct ReportSummary {
 /// Writes the report of the run or lab in `dir` (a lab when dir/lab.json exists, else dir/stats.json).
 /// A lab's report also writes one for every simulation under it. Throws ReportError.
 ReportSummary write_report(const std::filesystem::path& dir, const ReportOptions& options = {});
+
+/// The data of the report in `dir` (DIR/report/data.js) read back. Throws ReportError.
+[[nodiscard]] nlohmann::json read_report_data(const std::filesystem::path& dir);
 
 /// The viewer script embedded at build time (viewer/ bundled by esbuild).
 [[nodiscard]] std::string_view report_bundle();
