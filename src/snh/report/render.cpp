@@ -190,30 +190,37 @@ void render_png(const fs::path& dir, const RenderOptions& o) {
       "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-extensions",
       "--mute-audio", "--user-data-dir=" + (tmp.path / "profile").string(),
       fmt::format("--window-size={},{}", o.width, o.height), "--virtual-time-budget=20000"};
-  // 1. Let the page draw the frame and say whether it could (its title).
+  // One browser run loads the page, lets it draw the frame, dumps the DOM (whose title says whether the
+  // page drew it) and then takes the picture, to a temporary name beside the output. The page's work runs
+  // in virtual time while the GPU process draws in real time, so on a busy machine the budget can run out
+  // before the page is done (its title is then still the report's): that run is repeated, up to 4 times.
+  const fs::path partial = out.string() + fmt::format(".partial.{}.png", ::getpid());
+  const fs::path log = tmp.path / "browser.log";
   std::vector<std::string> args = common;
   args.push_back("--dump-dom");
+  args.push_back("--screenshot=" + partial.string());
   args.push_back(url);
-  const fs::path log = tmp.path / "browser.log";
-  int status = run_browser(browser, args, log, o.timeout_seconds);
-  const std::string dom = read_text(log);
-  if (dom.find("<title>snh-render-ready</title>") == std::string::npos) {
+  auto discard = [&] {
+    std::error_code ec;
+    fs::remove(partial, ec);
+  };
+  int status = 0;
+  for (int attempt = 1;; ++attempt) {
+    try {
+      status = run_browser(browser, args, log, o.timeout_seconds);
+    } catch (...) {
+      discard();
+      throw;
+    }
+    const std::string dom = read_text(log);
+    if (dom.find("<title>snh-render-ready</title>") != std::string::npos) break;
+    discard();
     const std::size_t at = dom.find("<title>snh-render-error: ");
     if (at != std::string::npos)
       throw ReportError("the report page: " + dom.substr(at + 25, dom.find("</title>", at) - at - 25));
-    throw ReportError(fmt::format("the browser did not draw the frame (exit status {}): {}", status, last_log_line(log, browser)));
-  }
-  // 2. The picture, to a temporary name beside the output, then renamed.
-  const fs::path partial = out.string() + fmt::format(".partial.{}.png", ::getpid());
-  args = common;
-  args.push_back("--screenshot=" + partial.string());
-  args.push_back(url);
-  try {
-    status = run_browser(browser, args, log, o.timeout_seconds);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove(partial, ec);
-    throw;
+    if (attempt == 4)
+      throw ReportError(fmt::format("the browser did not draw the frame in {} tries (exit status {}): {}", attempt, status,
+                                    last_log_line(log, browser)));
   }
   const auto [w, h] = fs::exists(partial) ? png_size(partial) : std::pair<int, int>{0, 0};
   if (w != o.width || h != o.height) {
