@@ -1,5 +1,7 @@
 #include "stretch_command.hpp"
 
+#include <fmt/format.h>
+
 #include <iostream>
 #include <memory>
 
@@ -12,8 +14,20 @@
 #include "snh/material/registry.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/stretch.hpp"
+#include "snh/solve/linear_solver.hpp"
 
 namespace snh::cli {
+namespace {
+
+/// "Linear solver (default cholmod): NAME: what it is; ..." from the registry.
+std::string linear_solver_help() {
+  std::string out = "Linear solver (default cholmod)";
+  for (const auto& s : linear_solvers()) out += fmt::format("; {}: {}", s.name, s.description);
+  return out;
+}
+
+}  // namespace
+
 namespace {
 
 struct Options {
@@ -62,8 +76,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--stretch", o->stretch, "Final length / rest length along y (default 3.5)");
   cmd->add_option("--out", o->out, "Output directory (default output)");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
-  cmd->add_option("--solver", o->solver, "Linear solver: cholmod (default), ldlt or pcg")
-      ->check(CLI::IsMember({"cholmod", "ldlt", "pcg"}));
+  cmd->add_option("--solver", o->solver, linear_solver_help())->check(CLI::IsMember(linear_solver_names()));
   cmd->add_flag("--refactorize", o->refactorize,
                 "Direct solvers: factorize every Newton matrix (by default the last factor preconditions conjugate "
                 "gradients on the next matrix, and a new factorization is made only when that converges slowly)");
@@ -91,7 +104,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     c.steps = o->steps;
     c.stretch = o->stretch;
     c.out = o->out;
-    c.solver = *parse_linear_solver(o->solver);
+    c.solver = o->solver;
     c.reuse_factor = !o->refactorize;
     c.resume = o->resume;
     c.newton.tolerance = o->tolerance;

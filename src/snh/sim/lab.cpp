@@ -43,7 +43,7 @@ Scene cube(const std::string& energy, const Lame& p, int res, double end_time, i
   s.end_time = end_time;
   s.frames = frames;
   s.mass_damping = damping;
-  s.solver = LinearSolverKind::ldlt;  // small meshes: a simplicial factorization, no BLAS threads to wake
+  s.solver = "ldlt";  // small meshes: a simplicial factorization, no BLAS threads to wake
   return s;
 }
 
@@ -318,7 +318,7 @@ std::vector<StretchRow> lab_stretch(const LabOptions& o) {
       // Near incompressibility the symmetric state at 3.5x can be a saddle that projected Newton leaves only
       // slowly (README, stretch test): allow more iterations than the paper's 50.
       c.newton.max_iterations = 200;
-      c.solver = LinearSolverKind::ldlt;  // as the scenes: no BLAS threads competing with the parallel runs
+      c.solver = "ldlt";  // as the scenes: no BLAS threads competing with the parallel runs
       row.dir = fmt::format("stretch/nu_{}/{}", nu, e);
       c.out = o.out / row.dir;
       // Reparametrized where the energy has a reparametrization, so that ν means the same for all.

@@ -301,7 +301,7 @@ void write_scene_stats(const Scene& s, const SceneResult& r) {
   j["gravity"] = {s.gravity[0], s.gravity[1], s.gravity[2]};
   j["mass_damping"] = s.mass_damping;
   j["stiffness_damping"] = s.stiffness_damping;
-  j["solver"] = std::string(to_string(s.solver));
+  j["solver"] = s.solver;
   j["tolerance"] = s.newton.tolerance;
   j["vertices"] = r.vertices;
   j["cells"] = r.cells;
@@ -438,7 +438,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
   s.newton.tolerance = 1e-6;
   if (const json* solver = top.get("solver")) {
     Keys k(*solver, "solver", file);
-    s.solver = *parse_linear_solver(k.choice("linear", "cholmod", {"cholmod", "ldlt", "pcg"}));
+    s.solver = k.choice("linear", "cholmod", linear_solver_names());
     s.reuse_factor = !k.boolean("refactorize", false);
     s.newton.tolerance = k.positive("tolerance", s.newton.tolerance);
     s.newton.max_iterations = static_cast<int>(k.integer("max_iterations", s.newton.max_iterations, 1, 100000));
@@ -570,7 +570,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
   StepTerms terms{.dt = dynamic ? h : 0.0, .gravity = s.gravity, .mass_damping = s.mass_damping,
                   .stiffness_damping = s.stiffness_damping};
   TimeStepPotential potential(elastic, lumped_mass(elastic, s.density), terms);
-  auto solver = make_linear_solver({.kind = s.solver, .reuse_factor = s.reuse_factor});
+  auto solver = make_linear_solver({.name = s.solver, .reuse_factor = s.reuse_factor});
 
   SceneResult result;
   result.element = mesh.type;
@@ -583,7 +583,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
   log << fmt::format("{}, {} frames to t = {:g}{}, gravity ({:g}, {:g}, {:g}), solver {}, output {}\n",
                      dynamic ? "backward Euler" : "quasi-static", s.frames, s.end_time,
                      dynamic ? fmt::format(" ({} substeps of {:g} per frame)", substeps, h) : "", s.gravity[0],
-                     s.gravity[1], s.gravity[2], to_string(s.solver), s.out.string());
+                     s.gravity[1], s.gravity[2], s.solver, s.out.string());
 
   std::vector<bool> pinned(mesh.vertex_count(), false);
   for (const auto& set : pin_vertices)

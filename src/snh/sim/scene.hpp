@@ -90,7 +90,7 @@ struct Scene {
   std::vector<PinSet> pins;
   std::vector<InitialOp> initial;
   // Solver.
-  LinearSolverKind solver = LinearSolverKind::cholmod;
+  std::string solver = "cholmod";            ///< a linear_solvers() name
   bool reuse_factor = true;
   NewtonOptions newton;  ///< tolerance 1e-6 on ‖g‖ unless the file says otherwise
   // Output.

@@ -73,7 +73,7 @@ void write_stats(const StretchConfig& c, const StretchResult& r) {
   j["reparametrize"] = c.reparametrize;
   j["steps_requested"] = c.steps;
   j["stretch"] = c.stretch;
-  j["solver"] = std::string(to_string(c.solver));
+  j["solver"] = c.solver;
   j["reuse_factor"] = c.reuse_factor;
   if (!c.mesh_file.empty()) j["mesh_file"] = c.mesh_file.string();
   j["axis"] = std::string(1, char('x' + c.axis));
@@ -191,7 +191,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   result.vertices = mesh.vertex_count();
   result.cells = mesh.cell_count();
   const ElasticSystem system(mesh, make_material(c.material, c.params, c.reparametrize), std::move(fixed));
-  auto solver = make_linear_solver({.kind = c.solver, .reuse_factor = c.reuse_factor});
+  auto solver = make_linear_solver({.name = c.solver, .reuse_factor = c.reuse_factor});
 
   log << fmt::format("{}: {}, material {}, mu {:g}, lambda {:g}{}\n", c.program,
                      c.mesh_file.empty() ? fmt::format("resolution {}", res) : "mesh " + c.mesh_file.string(), c.material,
@@ -199,7 +199,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   if (reoriented) log << fmt::format("warning: {} inverted cell(s) of the mesh re-oriented\n", reoriented);
   log << fmt::format("{} vertices, {} {}, {} steps to a {:g}x stretch along {}, solver {}, output {}\n",
                      mesh.vertex_count(), mesh.cell_count(), mesh.type == CellType::tet4 ? "tets" : "cubes", c.steps,
-                     c.stretch, char('x' + a), to_string(c.solver), c.out.string());
+                     c.stretch, char('x' + a), c.solver, c.out.string());
   log << "mesh: " << describe(mesh_quality(system.mesh(), system.rest()), mesh.type) << "\n";
 
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());

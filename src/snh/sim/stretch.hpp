@@ -28,7 +28,7 @@ struct StretchConfig {
   int steps = 25;
   double stretch = 3.5;                   ///< final length / rest length along y
   std::filesystem::path out = "output";
-  LinearSolverKind solver = LinearSolverKind::cholmod;
+  std::string solver = "cholmod";            ///< a linear_solvers() name
   bool reuse_factor = true;               ///< direct solvers: precondition with the last factor (linear_solver.hpp)
   NewtonOptions newton;
   std::string program = "snh stretch";    ///< for the header and stats.json

@@ -1,7 +1,12 @@
 #pragma once
-// Sparse symmetric positive (semi-)definite solvers for the Newton step (DESIGN.md solve/):
-// CHOLMOD supernodal Cholesky (default; symbolic analysis reused while the pattern is unchanged),
-// Eigen's simplicial LDLT, and Jacobi-preconditioned conjugate gradients.
+// Sparse symmetric positive (semi-)definite solvers for the Newton step (DESIGN.md solve/), chosen by name
+// from a registry (linear_solvers()):
+//   cholmod  CHOLMOD supernodal Cholesky (default; symbolic analysis reused while the pattern is unchanged)
+//   ldlt     Eigen's simplicial LDLᵀ
+//   pcg      conjugate gradients with a Jacobi preconditioner
+// A new solver (multigrid-preconditioned CG, say) is one more registry entry; the public conjugate
+// gradients (conjugate_gradient.hpp) take any Preconditioner, and SolverGeometry carries what a
+// geometric preconditioner needs to know about the mesh behind the matrix.
 //
 // Factor reuse (direct solvers, on by default): once a factorization exists, a later matrix with the
 // same pattern is first solved by conjugate gradients preconditioned with that factor. Consecutive
@@ -9,25 +14,21 @@
 // each costing one pair of triangular solves (at resolution 20 about 1/40 of a factorization). When it
 // does not converge within LinearSolverOptions::reuse_iterations, or when the last reuse needed more
 // than half of them, the matrix is factorized afresh. The answer is the same to the solve tolerance.
+#include <functional>
 #include <memory>
-#include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <Eigen/SparseCore>
 
+#include "snh/mesh/volume_mesh.hpp"
+#include "snh/solve/conjugate_gradient.hpp"
+
 namespace snh {
 
-using SparseLower = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
-
-enum class LinearSolverKind { cholmod, ldlt, pcg };
-
-[[nodiscard]] std::string_view to_string(LinearSolverKind k);
-/// "cholmod", "ldlt" or "pcg"; nullopt otherwise.
-[[nodiscard]] std::optional<LinearSolverKind> parse_linear_solver(std::string_view s);
-
 struct LinearSolverOptions {
-  LinearSolverKind kind = LinearSolverKind::cholmod;
+  std::string name = "cholmod";  ///< one of linear_solver_names()
   /// Relative residual ‖Ax − b‖ ≤ tolerance ‖b‖ at which conjugate gradients stop (PCG, and direct
   /// solvers reusing a factor).
   double tolerance = 1e-10;
@@ -35,6 +36,13 @@ struct LinearSolverOptions {
   bool reuse_factor = true;
   /// Direct solvers: conjugate-gradient iterations allowed with a reused factor before refactorizing.
   int reuse_iterations = 20;
+};
+
+/// What a preconditioner may need to know about the problem behind the matrix (a geometric multigrid:
+/// the mesh and which DOF each row is). Pointers may be null (a matrix with no mesh behind it).
+struct SolverGeometry {
+  const VolumeMesh* mesh = nullptr;              ///< the simulated mesh at rest
+  const std::vector<int>* free_index = nullptr;  ///< per DOF (3 #V), its row in the matrix; −1 where kinematic
 };
 
 class LinearSolver {
@@ -59,13 +67,27 @@ class LinearSolver {
   [[nodiscard]] virtual int last_iterations() const { return 0; }
   /// Numeric factorizations so far (including shifted retries); 0 for PCG.
   [[nodiscard]] virtual int factorizations() const { return 0; }
-  [[nodiscard]] virtual LinearSolverKind kind() const = 0;
+  /// The registry name it was made under.
+  [[nodiscard]] virtual std::string_view name() const = 0;
 };
 
-/// A solver with the given options. PCG gives up (non-finite result) after max(1000, 2 n) iterations.
-[[nodiscard]] std::unique_ptr<LinearSolver> make_linear_solver(const LinearSolverOptions& options);
-[[nodiscard]] inline std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverKind kind) {
-  return make_linear_solver(LinearSolverOptions{.kind = kind});
-}
+/// One entry of the registry.
+struct LinearSolverInfo {
+  std::string_view name;
+  std::string_view description;  ///< one line, for --help
+  std::function<std::unique_ptr<LinearSolver>(const LinearSolverOptions&, const SolverGeometry&)> make;
+};
+
+/// Every linear solver, in the order --help lists them.
+[[nodiscard]] const std::vector<LinearSolverInfo>& linear_solvers();
+/// Their names.
+[[nodiscard]] std::vector<std::string> linear_solver_names();
+/// True if `name` is a registered solver.
+[[nodiscard]] bool is_linear_solver(std::string_view name);
+
+/// The solver called options.name. Throws std::invalid_argument for an unknown name (the message lists
+/// the known ones) or bad options. PCG gives up (non-finite result) after max(1000, 2 n) iterations.
+[[nodiscard]] std::unique_ptr<LinearSolver> make_linear_solver(const LinearSolverOptions& options,
+                                                               const SolverGeometry& geometry = {});
 
 }  // namespace snh

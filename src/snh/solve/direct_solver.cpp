@@ -1,0 +1,184 @@
+#include "snh/solve/direct_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCholesky>
+#include <fmt/format.h>
+
+namespace snh {
+namespace {
+
+bool same_pattern(const SparseLower& a, const SparseLower& b) {
+  if (a.rows() != b.rows() || a.nonZeros() != b.nonZeros()) return false;
+  return std::equal(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1, b.outerIndexPtr()) &&
+         std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(), b.innerIndexPtr());
+}
+
+/// Adds shift to the diagonal of a lower-triangular CSC matrix whose every column starts at its diagonal.
+void add_to_diagonal(SparseLower& A, double shift) {
+  for (Eigen::Index c = 0; c < A.outerSize(); ++c) {
+    const int first = A.outerIndexPtr()[c];
+    if (A.outerIndexPtr()[c + 1] > first && A.innerIndexPtr()[first] == c) A.valuePtr()[first] += shift;
+    else throw std::logic_error("add_to_diagonal: missing diagonal entry");
+  }
+}
+
+Eigen::VectorXd not_a_solution(Eigen::Index n) { return Eigen::VectorXd::Constant(n, std::nan("")); }
+
+/// CHOLMOD and LDLᵀ share the symbolic-reuse and shift logic.
+template <class Factor>
+class DirectSolver final : public LinearSolver {
+ public:
+  explicit DirectSolver(std::string_view name) : name_(name) {
+    // try_factorize expects indefinite matrices: keep CHOLMOD from printing a warning for each.
+    if constexpr (requires(Factor& f) { f.cholmod(); }) factor_.cholmod().print = 0;
+  }
+  bool try_factorize(const SparseLower& A) override {
+    if (!analysed_ || !same_pattern(A, pattern_)) {
+      pattern_ = A;
+      factor_.analyzePattern(A);
+      analysed_ = true;
+    }
+    return numeric(A);
+  }
+  double factorize(const SparseLower& A) override {
+    if (try_factorize(A)) return 0.0;
+    // Shifts double from 1e-10 of the largest diagonal entry; beyond the Gershgorin bound (largest
+    // absolute row sum) every shifted matrix is positive definite, so only a non-finite A can fail.
+    Eigen::VectorXd row_abs = Eigen::VectorXd::Zero(A.rows());
+    for (Eigen::Index c = 0; c < A.outerSize(); ++c)
+      for (SparseLower::InnerIterator it(A, c); it; ++it) {
+        row_abs[it.row()] += std::abs(it.value());
+        if (it.row() != it.col()) row_abs[it.col()] += std::abs(it.value());
+      }
+    const double bound = 2.0 * std::max(row_abs.maxCoeff(), 1e-300);
+    SparseLower shifted = A;
+    double shift = 1e-10 * std::max(A.diagonal().cwiseAbs().maxCoeff(), 1e-300);
+    double applied = 0.0;
+    while (std::isfinite(bound) && applied <= bound) {
+      add_to_diagonal(shifted, shift - applied);
+      applied = shift;
+      if (numeric(shifted)) return applied;
+      shift *= 2.0;
+    }
+    throw std::runtime_error(fmt::format("{}: the Newton matrix could not be factorized even with a diagonal shift "
+                                         "of {:g} (it has a non-finite entry)",
+                                         name_, applied));
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b, double /*enough*/) override { return factor_.solve(b); }
+  int factorizations() const override { return factorizations_; }
+  std::string_view name() const override { return name_; }
+
+ private:
+  /// Factorizes A (pattern analysed); true if it succeeded and (for LDLᵀ) every pivot is positive.
+  bool numeric(const SparseLower& A) {
+    ++factorizations_;
+    factor_.factorize(A);
+    return factor_.info() == Eigen::Success && positive_pivots();
+  }
+  bool positive_pivots() const {
+    if constexpr (requires(const Factor& f) { f.vectorD(); }) return (factor_.vectorD().array() > 0.0).all();
+    else return true;  // LLᵀ fails by itself when not positive definite
+  }
+  std::string_view name_;
+  Factor factor_;
+  SparseLower pattern_;
+  bool analysed_ = false;
+  int factorizations_ = 0;
+};
+
+/// The last factor of a direct solver as a preconditioner.
+class FactorPreconditioner final : public Preconditioner {
+ public:
+  explicit FactorPreconditioner(LinearSolver& direct) : direct_(direct) {}
+  void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override { z = direct_.solve(r); }
+
+ private:
+  LinearSolver& direct_;
+};
+
+/// A direct solver whose last factor preconditions conjugate gradients on later matrices of the same
+/// pattern, refactorizing only when that stops paying (see linear_solver.hpp).
+class FactorReuse final : public LinearSolver {
+ public:
+  FactorReuse(std::unique_ptr<LinearSolver> direct, double tolerance, int max_iterations)
+      : direct_(std::move(direct)), preconditioner_(*direct_), tolerance_(tolerance), max_iterations_(max_iterations) {}
+  bool try_factorize(const SparseLower& A) override { return prepare(A, Mode::reuse_try) || fresh(Mode::direct_try); }
+  double factorize(const SparseLower& A) override {
+    if (prepare(A, Mode::reuse_must)) return 0.0;
+    fresh(Mode::direct_must);
+    return shift_;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b, double enough) override {
+    iterations_ = 0;
+    if (mode_ == Mode::direct_try || mode_ == Mode::direct_must) return direct_->solve(b);
+    Eigen::VectorXd x;
+    const CgResult r =
+        conjugate_gradients(A_, b, preconditioner_, std::max(tolerance_ * b.norm(), enough), max_iterations_, x);
+    iterations_ = r.iterations;
+    if (r.status == CgStatus::converged) {
+      stale_ = 2 * iterations_ > max_iterations_;  // the factor is drifting away: refresh it next time
+      return x;
+    }
+    // A proven indefinite after try_factorize: report it (the factor stays a good preconditioner).
+    if (r.status == CgStatus::indefinite && mode_ == Mode::reuse_try) return not_a_solution(b.size());
+    // Too slow, or indefinite where a solution is required: factorize this matrix.
+    if (!fresh(mode_ == Mode::reuse_try ? Mode::direct_try : Mode::direct_must)) return not_a_solution(b.size());
+    return direct_->solve(b);
+  }
+  int last_iterations() const override { return iterations_; }
+  int factorizations() const override { return direct_->factorizations(); }
+  std::string_view name() const override { return direct_->name(); }
+
+ private:
+  enum class Mode { direct_try, direct_must, reuse_try, reuse_must };
+  /// Takes A; true if the held factor can precondition it (then mode becomes `reuse`).
+  bool prepare(const SparseLower& A, Mode reuse) {
+    const bool reusable = have_factor_ && !stale_ && same_pattern(A, A_);
+    if (reusable) std::copy(A.valuePtr(), A.valuePtr() + A.nonZeros(), A_.valuePtr());
+    else A_ = A;
+    mode_ = reuse;
+    return reusable;
+  }
+  /// Factorizes A_ (shifted if `direct_must`); false if A_ is not positive definite (`direct_try`).
+  bool fresh(Mode direct) {
+    mode_ = direct;
+    stale_ = false;
+    shift_ = 0.0;
+    if (direct == Mode::direct_must) {
+      shift_ = direct_->factorize(A_);
+      have_factor_ = true;
+    } else {
+      have_factor_ = direct_->try_factorize(A_);
+    }
+    return have_factor_;
+  }
+  std::unique_ptr<LinearSolver> direct_;
+  FactorPreconditioner preconditioner_;
+  double tolerance_;
+  int max_iterations_;
+  SparseLower A_;
+  Mode mode_ = Mode::direct_try;
+  bool have_factor_ = false, stale_ = false;
+  double shift_ = 0.0;
+  int iterations_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<LinearSolver> make_cholmod_solver() {
+  return std::make_unique<DirectSolver<Eigen::CholmodSupernodalLLT<SparseLower, Eigen::Lower>>>("cholmod");
+}
+
+std::unique_ptr<LinearSolver> make_ldlt_solver() {
+  return std::make_unique<DirectSolver<Eigen::SimplicialLDLT<SparseLower, Eigen::Lower>>>("ldlt");
+}
+
+std::unique_ptr<LinearSolver> with_factor_reuse(std::unique_ptr<LinearSolver> direct, double tolerance, int max_iterations) {
+  return std::make_unique<FactorReuse>(std::move(direct), tolerance, max_iterations);
+}
+
+}  // namespace snh
