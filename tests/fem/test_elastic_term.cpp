@@ -1,12 +1,15 @@
-// Assembly: patch test, finite differences of the assembled gradient and Hessian on distorted meshes,
-// the sparse pattern, and bit-identical results for 1 and 2 threads.
+// The elastic term assembled through a Problem: patch test, finite differences of the assembled gradient
+// and Hessian on distorted meshes, PSD projection, bit-identical results for 1 and 2 threads, per-cell
+// materials and weight scales, and bad input.
 #include <gtest/gtest.h>
 
 #include <omp.h>
 
 #include <random>
 
-#include "snh/fem/elastic_system.hpp"
+#include "snh/fem/elastic_term.hpp"
+#include "snh/fem/problem.hpp"
+#include "snh/math/finite_difference.hpp"
 #include "snh/mesh/box.hpp"
 
 namespace snh {
@@ -36,24 +39,42 @@ std::vector<std::uint8_t> boundary_fixed(int res) {
   return fixed;
 }
 
+/// An elastic term alone in a problem with these kinematic DOFs.
+struct Assembled {
+  Assembled(const VolumeMesh& m, AnyMaterial material, const std::vector<std::uint8_t>& fixed)
+      : elastic(m, std::move(material)), problem{DofMap(fixed)} {
+    problem.add(elastic);
+  }
+  /// Energy and free-DOF gradient; the free-DOF Hessian when H is given.
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& g, SparseLower* H = nullptr,
+                  PsdProjection p = PsdProjection::clamp) {
+    HessianMatrix M;
+    const double E = problem.evaluate(x, g, H ? &M : nullptr, p);
+    if (H) *H = M.matrix;
+    return E;
+  }
+  ElasticTerm elastic;
+  Problem problem;
+};
+
 class Assembly : public ::testing::TestWithParam<std::tuple<CellType, std::string>> {};
 
 TEST_P(Assembly, PatchTestAffineDeformationIsAnEquilibrium) {
   const auto [type, name] = GetParam();
   const int res = 3;
   const VolumeMesh m = distorted(type, res, 0.2, 1);
-  const ElasticSystem sys(m, make_material(name, {1.0, 10.0}), boundary_fixed(res));
+  Assembled sys(m, make_material(name, {1.0, 10.0}), boundary_fixed(res));
   Mat3 A;
   A << 1.3, 0.2, -0.1, 0.05, 0.8, 0.3, -0.2, 0.1, 1.1;
   const Eigen::Matrix3Xd X = (A * m.vertices).colwise() + Eigen::Vector3d(0.3, -0.2, 0.5);
   Eigen::VectorXd g;
   const double E = sys.evaluate(flatten(X), g, nullptr);
-  ASSERT_GT(sys.free_count(), 0);
+  ASSERT_GT(sys.problem.dofs().free_count(), 0);
   // Energy = rest volume × ψ(A); interior forces vanish.
-  const double psi = std::visit([&](const auto& mat) { return mat.psi(A); }, sys.material());
-  const double volume = rest_volumes(sys.rest()).sum();
+  const double psi = std::visit([&](const auto& mat) { return mat.psi(A); }, sys.elastic.material(0));
+  const double volume = rest_volumes(sys.elastic.rest()).sum();
   EXPECT_NEAR(E, volume * psi, 1e-12 * std::abs(volume * psi));
-  const double scale = std::visit([&](const auto& mat) { return mat.pk1(A).norm(); }, sys.material());
+  const double scale = std::visit([&](const auto& mat) { return mat.pk1(A).norm(); }, sys.elastic.material(0));
   EXPECT_LE(g.norm(), 1e-12 * scale) << name;
 }
 
@@ -63,7 +84,7 @@ TEST_P(Assembly, GradientAndHessianMatchFiniteDifferences) {
   VolumeMesh m = distorted(type, res, 0.15, 2);
   std::vector<std::uint8_t> fixed(3 * m.vertex_count(), 0);
   for (int d = 0; d < 6; ++d) fixed[d] = 1;  // a few fixed DOFs to exercise the free-DOF map
-  const ElasticSystem sys(m, make_material(name, {1.0, 10.0}), fixed);
+  Assembled sys(m, make_material(name, {1.0, 10.0}), fixed);
   std::mt19937_64 rng(3);
   std::normal_distribution<double> n(0.0, 0.05);
   Eigen::VectorXd x = flatten(m.vertices);
@@ -74,21 +95,25 @@ TEST_P(Assembly, GradientAndHessianMatchFiniteDifferences) {
   sys.evaluate(x, g, &H, PsdProjection::none);
   const Eigen::MatrixXd Hfull = Eigen::MatrixXd(H).selfadjointView<Eigen::Lower>();
 
+  // As functions of the free DOFs.
+  const DofMap& dofs = sys.problem.dofs();
+  auto at = [&](const Eigen::VectorXd& y) {
+    Eigen::VectorXd z = x;
+    for (Eigen::Index d = 0; d < z.size(); ++d)
+      if (dofs.is_free(d)) z[d] = y[dofs.free_index()[d]];
+    return z;
+  };
+  const Eigen::VectorXd y = dofs.gather_free(x);
   double best_g = 1e300, best_H = 1e300;
-  for (double eps : {1e-3, 1e-4, 1e-5, 1e-6}) {
-    Eigen::VectorXd fd_g(sys.free_count());
-    Eigen::MatrixXd fd_H(sys.free_count(), sys.free_count());
-    for (Eigen::Index d = 0, f = 0; d < x.size(); ++d) {
-      if (fixed[d]) continue;
-      Eigen::VectorXd xp = x, xm = x, gp, gm;
-      xp[d] += eps;
-      xm[d] -= eps;
-      fd_g[f] = (sys.energy(xp) - sys.energy(xm)) / (2 * eps);
-      sys.evaluate(xp, gp, nullptr);
-      sys.evaluate(xm, gm, nullptr);
-      fd_H.col(f) = (gp - gm) / (2 * eps);
-      ++f;
-    }
+  for (double eps : {1e-3, 1e-4, 1e-5}) {
+    const Eigen::VectorXd fd_g = fd_gradient([&](const Eigen::VectorXd& z) { return sys.elastic.energy(at(z)); }, y, eps);
+    const Eigen::MatrixXd fd_H = fd_jacobian(
+        [&](const Eigen::VectorXd& z) {
+          Eigen::VectorXd gz;
+          sys.evaluate(at(z), gz);
+          return gz;
+        },
+        y, eps);
     best_g = std::min(best_g, (fd_g - g).norm() / g.norm());
     best_H = std::min(best_H, (fd_H - Hfull).norm() / Hfull.norm());
   }
@@ -99,7 +124,7 @@ TEST_P(Assembly, GradientAndHessianMatchFiniteDifferences) {
 TEST_P(Assembly, ProjectedHessianIsPositiveSemidefinite) {
   const auto [type, name] = GetParam();
   const VolumeMesh m = distorted(type, 2, 0.1, 4);
-  const ElasticSystem sys(m, make_material(name, {1.0, 10.0}), std::vector<std::uint8_t>(3 * m.vertex_count(), 0));
+  Assembled sys(m, make_material(name, {1.0, 10.0}), std::vector<std::uint8_t>(3 * m.vertex_count(), 0));
   std::mt19937_64 rng(5);
   std::normal_distribution<double> n(0.0, 0.3);  // large: some elements invert
   Eigen::VectorXd x = flatten(m.vertices);
@@ -109,7 +134,7 @@ TEST_P(Assembly, ProjectedHessianIsPositiveSemidefinite) {
   const double E = sys.evaluate(x, g, &H, PsdProjection::clamp);
   if (!std::isfinite(E)) {  // some element inverted: only allowed for an energy undefined there, and reported as +inf
     EXPECT_EQ(E, std::numeric_limits<double>::infinity());
-    EXPECT_FALSE(std::visit([](const auto& mat) { return std::decay_t<decltype(mat)>::inversion_safe; }, sys.material()));
+    EXPECT_FALSE(std::visit([](const auto& mat) { return std::decay_t<decltype(mat)>::inversion_safe; }, sys.elastic.material(0)));
     return;
   }
   const Eigen::MatrixXd Hfull = Eigen::MatrixXd(H).selfadjointView<Eigen::Lower>();
@@ -129,9 +154,9 @@ TEST(Assembly, BitIdenticalForOneAndTwoThreads) {
   for (CellType type : {CellType::tet4, CellType::hex8}) {
     const int res = 6;
     const VolumeMesh m = distorted(type, res, 0.2, 6);
-    ElasticSystem sys(m, make_material("stable_neo_hookean", {1.0, 10.0}), boundary_fixed(res));
-    sys.set_parallel_threshold(0);  // every loop in parallel, even on this small mesh
-    EXPECT_GT(sys.colour_count(), 1);
+    Assembled sys(m, make_material("stable_neo_hookean", {1.0, 10.0}), boundary_fixed(res));
+    sys.elastic.set_parallel_threshold(0);  // every loop in parallel, even on this small mesh
+    EXPECT_GT(sys.elastic.colour_count(), 1);
     Eigen::VectorXd x = flatten(m.vertices) * 1.2;
     Eigen::VectorXd g1, g2;
     SparseLower H1, H2;
@@ -147,16 +172,81 @@ TEST(Assembly, BitIdenticalForOneAndTwoThreads) {
 }
 
 TEST(Assembly, RejectsDegenerateAndBadInput) {
+  const AnyMaterial snh = make_material("stable_neo_hookean", {1, 10});
   VolumeMesh m = box_tets(1);
   m.vertices.col(m.cells(1, 0)) = m.vertices.col(m.cells(0, 0));  // collapse tet 0
-  EXPECT_THROW(ElasticSystem(m, make_material("stable_neo_hookean", {1, 10}), std::vector<std::uint8_t>(24, 0)),
-               DegenerateElement);
-  EXPECT_THROW(ElasticSystem(box_tets(1), make_material("stable_neo_hookean", {1, 10}), std::vector<std::uint8_t>(5, 0)),
-               std::invalid_argument);
+  EXPECT_THROW(ElasticTerm(m, snh), DegenerateElement);
   VolumeMesh bad_index = box_tets(1);
   bad_index.cells(2, 3) = 999;  // checked before the rest state reads vertex 999
-  EXPECT_THROW(ElasticSystem(bad_index, make_material("stable_neo_hookean", {1, 10}), std::vector<std::uint8_t>(24, 0)),
-               std::invalid_argument);
+  EXPECT_THROW(ElasticTerm(bad_index, snh), std::invalid_argument);
+  const VolumeMesh ok = box_tets(1);
+  EXPECT_THROW(ElasticTerm(ok, {snh, snh}, {}), std::invalid_argument) << "two materials need an index per cell";
+  EXPECT_THROW(ElasticTerm(ok, {snh, snh}, {0, 1, 2, 0, 0, 0}), std::invalid_argument) << "index out of range";
+  EXPECT_THROW(ElasticTerm(ok, {snh}, {0, 0}), std::invalid_argument) << "one index per cell";
+  EXPECT_THROW(ElasticTerm(ok, {snh}, {}, Eigen::VectorXd::Ones(5)), std::invalid_argument) << "one scale per cell";
+  Eigen::VectorXd zero = Eigen::VectorXd::Ones(6);
+  zero[2] = 0.0;
+  EXPECT_THROW(ElasticTerm(ok, {snh}, {}, zero), std::invalid_argument) << "scales must be > 0";
+}
+
+/// A deformed state of the mesh: an affine map plus a small random perturbation.
+Eigen::VectorXd deformed(const VolumeMesh& m, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0.0, 0.03);
+  Eigen::VectorXd x = flatten(m.vertices);
+  for (Eigen::Index i = 0; i < x.size(); ++i) x[i] = (i % 3 == 1 ? 1.3 : 0.9) * x[i] + n(rng);
+  return x;
+}
+
+TEST(Assembly, PerCellMaterialsAreEachCellsOwn) {
+  // Two materials (every third cell the second): the energy and gradient are the sums of two
+  // one-material terms over the cells of each, on the same vertices.
+  for (CellType type : {CellType::tet4, CellType::hex8}) {
+    const VolumeMesh m = distorted(type, 2, 0.1, 11);
+    const AnyMaterial soft = make_material("stable_neo_hookean", {1.0, 10.0});
+    const AnyMaterial hard = make_material("corotated", {5.0, 20.0});
+    std::vector<int> which(m.cell_count());
+    VolumeMesh a = m, b = m;
+    std::vector<int> in_a, in_b;
+    for (Eigen::Index c = 0; c < m.cell_count(); ++c) (c % 3 == 0 ? in_b : in_a).push_back(static_cast<int>(c));
+    for (int c : in_b) which[c] = 1;
+    a.cells = m.cells(Eigen::all, in_a);
+    b.cells = m.cells(Eigen::all, in_b);
+    ElasticTerm mixed(m, {soft, hard}, which), only_a(a, soft), only_b(b, hard);
+    const Eigen::VectorXd x = deformed(m, 12);
+    EXPECT_NEAR(mixed.energy(x), only_a.energy(x) + only_b.energy(x), 1e-12 * std::abs(mixed.energy(x)));
+    Eigen::VectorXd g_mixed = Eigen::VectorXd::Zero(x.size()), g_sum = g_mixed;
+    mixed.evaluate(x, &g_mixed, nullptr, PsdProjection::clamp);
+    only_a.evaluate(x, &g_sum, nullptr, PsdProjection::clamp);
+    only_b.evaluate(x, &g_sum, nullptr, PsdProjection::clamp);
+    EXPECT_LE((g_mixed - g_sum).norm(), 1e-12 * g_sum.norm());
+    const ElasticTerm::Deformation d = mixed.deformation(x), d_b = only_b.deformation(x);
+    for (std::size_t k = 0; k < in_b.size(); ++k) EXPECT_EQ(d.energy_density[in_b[k]], d_b.energy_density[k]);
+    EXPECT_EQ(name_of(mixed.material(in_b.front())), "corotated");
+    EXPECT_EQ(name_of(mixed.material(in_a.front())), "stable_neo_hookean");
+  }
+}
+
+TEST(Assembly, WeightScalesScaleEachCellsEnergy) {
+  for (CellType type : {CellType::tet4, CellType::hex8}) {
+    const VolumeMesh m = distorted(type, 2, 0.1, 13);
+    const AnyMaterial mat = make_material("stable_neo_hookean", {1.0, 10.0});
+    Eigen::VectorXd scale(m.cell_count());
+    for (Eigen::Index c = 0; c < m.cell_count(); ++c) scale[c] = 0.25 + 0.5 * static_cast<double>(c % 3);
+    ElasticTerm plain(m, mat), scaled(m, {mat}, {}, scale);
+    const Eigen::VectorXd x = deformed(m, 14);
+    // Per cell: a term over that cell alone, times its scale.
+    double expected = 0.0;
+    for (Eigen::Index c = 0; c < m.cell_count(); ++c) {
+      VolumeMesh one = m;
+      one.cells = m.cells.col(c);
+      expected += scale[c] * ElasticTerm(one, mat).energy(x);
+    }
+    EXPECT_NEAR(scaled.energy(x), expected, 1e-12 * std::abs(expected));
+    EXPECT_NEAR(rest_volumes(scaled.rest()).sum(), rest_volumes(plain.rest()).dot(scale), 1e-12);
+    const ElasticTerm::Deformation dp = plain.deformation(x), ds = scaled.deformation(x);
+    EXPECT_LE((dp.energy_density - ds.energy_density).cwiseAbs().maxCoeff(), 1e-12) << "a density is per volume";
+  }
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "snh/fem/elastic_system.hpp"
+#include "snh/fem/elastic_term.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -76,19 +76,59 @@ Eigen::Matrix<double, 3, N> gather_nodes(const VolumeMesh& mesh, Eigen::Index c,
   return X;
 }
 
+
+
+/// The cells of each material (every cell's index is below `materials`).
+std::vector<std::vector<int>> cells_by_material(const std::vector<int>& material_of, std::size_t materials) {
+  std::vector<std::vector<int>> out(materials);
+  for (std::size_t c = 0; c < material_of.size(); ++c) {
+    const int m = material_of[c];
+    if (m < 0 || static_cast<std::size_t>(m) >= materials)
+      throw std::invalid_argument(fmt::format("cell {}: material index {} (there are {} materials)", c, m, materials));
+    out[m].push_back(static_cast<int>(c));
+  }
+  return out;
+}
+
+/// The rest state with each cell's quadrature weights multiplied by its scale.
+RestState scaled(RestState rest, const Eigen::VectorXd& scale) {
+  if (scale.size() == 0) return rest;
+  std::visit(
+      [&](auto& elems) {
+        if (static_cast<Eigen::Index>(elems.size()) != scale.size())
+          throw std::invalid_argument(fmt::format("weight scales: expected {} (one per cell), got {}", elems.size(), scale.size()));
+        for (std::size_t c = 0; c < elems.size(); ++c) {
+          const double s = scale[static_cast<Eigen::Index>(c)];
+          if (!(s > 0.0) || !std::isfinite(s))
+            throw std::invalid_argument(fmt::format("cell {}: weight scale must be a finite number > 0, got {}", c, s));
+          for (double& w : elems[c].weight) w *= s;
+        }
+      },
+      rest);
+  return rest;
+}
+
 }  // namespace
 
-ElasticSystem::ElasticSystem(VolumeMesh mesh, AnyMaterial material, std::vector<std::uint8_t> fixed)
-    : mesh_(checked(std::move(mesh))), material_(std::move(material)), rest_(compute_rest_state(mesh_)) {
+ElasticTerm::ElasticTerm(VolumeMesh mesh, AnyMaterial material)
+    : ElasticTerm(std::move(mesh), std::vector<AnyMaterial>{std::move(material)}, {}) {}
+
+ElasticTerm::ElasticTerm(VolumeMesh mesh, std::vector<AnyMaterial> materials, std::vector<int> material_of_cell,
+                         Eigen::VectorXd weight_scale)
+    : mesh_(checked(std::move(mesh))),
+      materials_(std::move(materials)),
+      material_of_(std::move(material_of_cell)),
+      rest_(scaled(compute_rest_state(mesh_), weight_scale)) {
+  if (materials_.empty()) throw std::invalid_argument("no material given");
+  if (!material_of_.empty()) {
+    if (static_cast<Eigen::Index>(material_of_.size()) != mesh_.cell_count())
+      throw std::invalid_argument(fmt::format("materials per cell: expected {}, got {}", mesh_.cell_count(), material_of_.size()));
+    cells_of_ = cells_by_material(material_of_, materials_.size());
+  } else if (materials_.size() > 1) {
+    throw std::invalid_argument("several materials need a material index per cell");
+  }
   const Eigen::Index n = mesh_.vertex_count();
   const int npc = nodes_per_cell(mesh_.type);
-  if (static_cast<Eigen::Index>(fixed.size()) != 3 * n)
-    throw std::invalid_argument(fmt::format("fixed flags: expected {} (3 per vertex), got {}", 3 * n, fixed.size()));
-
-  // Free DOF numbering, increasing with the DOF index.
-  free_index_.assign(3 * n, -1);
-  for (Eigen::Index d = 0; d < 3 * n; ++d)
-    if (!fixed[d]) free_index_[d] = static_cast<int>(free_count_++);
 
   // Vertex -> cells adjacency.
   const Buckets vertex_cells = bucket(static_cast<int>(n), [&](auto&& emit) {
@@ -97,56 +137,6 @@ ElasticSystem::ElasticSystem(VolumeMesh mesh, AnyMaterial material, std::vector<
   });
   const std::vector<int>& vc_start = vertex_cells.start;
   const std::vector<int>& vc_list = vertex_cells.items;
-
-  // Vertex neighbours (sharing a cell, itself included), sorted.
-  std::vector<std::vector<int>> nbr(n);
-  for (Eigen::Index v = 0; v < n; ++v) {
-    auto& list = nbr[v];
-    for (int i = vc_start[v]; i < vc_start[v + 1]; ++i)
-      for (int a = 0; a < npc; ++a) list.push_back(mesh_.cells(a, vc_list[i]));
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-  }
-
-  // Lower-triangular CSC pattern over free DOFs: column c = free(3v+k) holds rows free(3u+l) >= c.
-  std::vector<int> outer(free_count_ + 1, 0), inner;
-  for (Eigen::Index v = 0; v < n; ++v)
-    for (int k = 0; k < 3; ++k) {
-      const int col = free_index_[3 * v + k];
-      if (col < 0) continue;
-      for (int u : nbr[v])
-        for (int l = 0; l < 3; ++l) {
-          const int row = free_index_[3 * u + l];
-          if (row >= col) inner.push_back(row);
-        }
-      outer[col + 1] = static_cast<int>(inner.size());
-    }
-  nbr.clear();
-  std::vector<double> zeros(inner.size(), 0.0);
-  pattern_ = Eigen::Map<const SparseLower>(free_count_, free_count_, static_cast<Eigen::Index>(inner.size()),
-                                           outer.data(), inner.data(), zeros.data());
-  pattern_.makeCompressed();
-
-  // Scatter map: for each element and local pair (A, B), at B·ld + A (the column-major layout of the
-  // element stiffness), the value index of (free(A), free(B)) when both are free and free(A) >= free(B);
-  // −1 otherwise (the symmetric partner is stored instead).
-  const int ld = 3 * npc;
-  scatter_.assign(static_cast<std::size_t>(mesh_.cell_count()) * ld * ld, -1);
-  const int* out_ptr = pattern_.outerIndexPtr();
-  const int* in_ptr = pattern_.innerIndexPtr();
-  for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
-    for (int A = 0; A < ld; ++A) {
-      const int rA = free_index_[3 * mesh_.cells(A / 3, c) + A % 3];
-      if (rA < 0) continue;
-      for (int B = 0; B < ld; ++B) {
-        const int rB = free_index_[3 * mesh_.cells(B / 3, c) + B % 3];
-        if (rB < 0 || rA < rB) continue;
-        const int* first = in_ptr + out_ptr[rB];
-        const int* last = in_ptr + out_ptr[rB + 1];
-        const int* it = std::lower_bound(first, last, rA);
-        scatter_[(static_cast<std::size_t>(c) * ld + B) * ld + A] = static_cast<int>(it - in_ptr);
-      }
-    }
 
   // Greedy colouring: an element takes the smallest colour unused by elements sharing a vertex.
   std::vector<int> colour(mesh_.cell_count(), -1), stamp;
@@ -174,64 +164,115 @@ ElasticSystem::ElasticSystem(VolumeMesh mesh, AnyMaterial material, std::vector<
   colour_order_ = std::move(by_colour.items);
 }
 
-double ElasticSystem::energy(const Eigen::VectorXd& x) const {
+template <class Body>
+void ElasticTerm::for_each_material(Body&& body) const {
+  for (std::size_t k = 0; k < materials_.size(); ++k) {
+    const int* list = cells_of_.empty() ? nullptr : cells_of_[k].data();
+    const Eigen::Index count = cells_of_.empty() ? mesh_.cell_count() : static_cast<Eigen::Index>(cells_of_[k].size());
+    std::visit([&](const auto& m, const auto& rest) { body(m, rest, list, count); }, materials_[k], rest_);
+  }
+}
+
+void ElasticTerm::stencil(const Eigen::VectorXd&, Stencil& out) const {
+  out.arity = nodes_per_cell(mesh_.type);
+  out.vertices.assign(mesh_.cells.data(), mesh_.cells.data() + mesh_.cells.size());
+}
+
+std::vector<int> ElasticTerm::scatter_map(const HessianLayout& layout) const {
+  // For each element and local pair (A, B), at B·ld + A (the column-major layout of the element
+  // stiffness), the value index of (num(A), num(B)) when both are numbered and num(A) >= num(B);
+  // −1 otherwise (the symmetric partner is stored instead).
+  const int ld = 3 * nodes_per_cell(mesh_.type);
+  const std::vector<int>& num = layout.numbering();
+  std::vector<int> scatter(static_cast<std::size_t>(mesh_.cell_count()) * ld * ld, -1);
+  for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
+    for (int A = 0; A < ld; ++A) {
+      const int rA = num[3 * mesh_.cells(A / 3, c) + A % 3];
+      if (rA < 0) continue;
+      for (int B = 0; B < ld; ++B) {
+        const int rB = num[3 * mesh_.cells(B / 3, c) + B % 3];
+        if (rB < 0 || rA < rB) continue;
+        const int e = layout.entry(rA, rB);
+        if (e < 0) throw std::logic_error("elastic term: the layout does not hold an element's entries");
+        scatter[(static_cast<std::size_t>(c) * ld + B) * ld + A] = e;
+      }
+    }
+  return scatter;
+}
+
+double ElasticTerm::energy(const Eigen::VectorXd& x) const {
   std::vector<double> per(mesh_.cell_count());
-  std::visit(
-      [&](const auto& m, const auto& rest) {
-        using R = typename std::decay_t<decltype(rest)>::value_type;
-        const Eigen::Index count = mesh_.cell_count();
+  for_each_material([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
+    using R = typename std::decay_t<decltype(rest)>::value_type;
 #pragma omp parallel for schedule(static) if (count * R::points >= parallel_threshold_)
-        for (Eigen::Index c = 0; c < count; ++c)
-          per[c] = element_terms<std::decay_t<decltype(m)>, R::nodes, R::points>(
-              m, rest[c], gather_nodes<R::nodes>(mesh_, c, x), nullptr, nullptr, PsdProjection::none);
-      },
-      material_, rest_);
+    for (Eigen::Index i = 0; i < count; ++i) {
+      const Eigen::Index c = list ? list[i] : i;
+      per[c] = element_terms<std::decay_t<decltype(m)>, R::nodes, R::points>(
+          m, rest[c], gather_nodes<R::nodes>(mesh_, c, x), nullptr, nullptr, PsdProjection::none);
+    }
+  });
   double total = 0.0;
   for (double e : per) total += e;  // fixed order: deterministic
   return total;
 }
 
-double ElasticSystem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, SparseLower* hessian,
-                               PsdProjection projection) const {
-  const Eigen::Index count = mesh_.cell_count();
-  std::vector<double> per(count);
-  Eigen::VectorXd full = Eigen::VectorXd::Zero(x.size());
-  if (hessian) {
-    if (hessian->nonZeros() != pattern_.nonZeros() || hessian->rows() != pattern_.rows()) *hessian = pattern_;
-    std::fill(hessian->valuePtr(), hessian->valuePtr() + hessian->nonZeros(), 0.0);
-  }
-  double* values = hessian ? hessian->valuePtr() : nullptr;
+double ElasticTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
+                             PsdProjection projection) const {
+  if (hessian && scatter_.empty() && mesh_.cell_count() > 0)
+    throw std::logic_error("elastic term: evaluate with a Hessian before bind()");
+  return assemble(x, gradient, hessian ? &scatter_ : nullptr, hessian ? hessian->values() : nullptr, projection);
+}
+
+void ElasticTerm::add_hessian(const Eigen::VectorXd& x, const std::vector<int>& scatter, double* values,
+                              PsdProjection projection) const {
+  (void)assemble(x, nullptr, &scatter, values, projection);
+}
+
+double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const std::vector<int>* scatter,
+                             double* values, PsdProjection projection) const {
+  const Eigen::Index cells = mesh_.cell_count();
+  std::vector<double> per(cells);
+  if (!scatter) values = nullptr;
   std::visit(
-      [&](const auto& m, const auto& rest) {
-        using R = typename std::decay_t<decltype(rest)>::value_type;
+      [&](const auto& rest_all) {
+        using R = typename std::decay_t<decltype(rest_all)>::value_type;
         constexpr int N = R::nodes;
         constexpr int ld = 3 * N;
-        // 1. Element terms, in one parallel loop, into per-element buffers (kept between calls: a fresh
-        //    allocation of this size costs page faults every time).
+        // 1. Element terms, in one parallel loop per material, into per-element buffers (kept between
+        //    calls: a fresh allocation of this size costs page faults every time).
         std::vector<double>& grads = grad_buffer_;
         std::vector<double>& stiff = stiffness_buffer_;
-        grads.resize(static_cast<std::size_t>(count) * ld);
-        if (values) stiff.resize(static_cast<std::size_t>(count) * ld * ld);
+        if (gradient) grads.resize(static_cast<std::size_t>(cells) * ld);
+        if (values) stiff.resize(static_cast<std::size_t>(cells) * ld * ld);
+        for_each_material([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
+          if constexpr (std::is_same_v<std::decay_t<decltype(rest)>, std::decay_t<decltype(rest_all)>>) {
 #pragma omp parallel for schedule(static) if (count * R::points >= parallel_threshold_)
-        for (Eigen::Index c = 0; c < count; ++c) {
-          Eigen::Map<Eigen::Matrix<double, 3, N>> g(grads.data() + static_cast<std::size_t>(c) * ld);
-          Eigen::Matrix<double, ld, ld> K;
-          Eigen::Matrix<double, 3, N> gc;
-          per[c] = element_terms(m, rest[c], gather_nodes<N>(mesh_, c, x), &gc, values ? &K : nullptr, projection);
-          g = gc;
-          if (values) Eigen::Map<Eigen::Matrix<double, ld, ld>>(stiff.data() + static_cast<std::size_t>(c) * ld * ld) = K;
-        }
+            for (Eigen::Index i = 0; i < count; ++i) {
+              const Eigen::Index c = list ? list[i] : i;
+              Eigen::Matrix<double, ld, ld> K;
+              Eigen::Matrix<double, 3, N> gc;
+              per[c] = element_terms(m, rest[c], gather_nodes<N>(mesh_, c, x), gradient ? &gc : nullptr,
+                                     values ? &K : nullptr, projection);
+              if (gradient) Eigen::Map<Eigen::Matrix<double, 3, N>>(grads.data() + static_cast<std::size_t>(c) * ld) = gc;
+              if (values) Eigen::Map<Eigen::Matrix<double, ld, ld>>(stiff.data() + static_cast<std::size_t>(c) * ld * ld) = K;
+            }
+          }
+        });
         // 2. Scatter, colour by colour: elements of one colour share no vertex, so no two threads touch
         //    the same entry, and each entry receives its terms in colour order for any thread count.
+        if (!gradient && !values) return;
         for (int k = 0; k + 1 < static_cast<int>(colour_start_.size()); ++k) {
           const int begin = colour_start_[k], end = colour_start_[k + 1];
 #pragma omp parallel for schedule(static) if ((end - begin) * N >= parallel_threshold_)
           for (int i = begin; i < end; ++i) {
             const int c = colour_order_[i];
-            const double* g = grads.data() + static_cast<std::size_t>(c) * ld;
-            for (int a = 0; a < N; ++a) full.segment<3>(3 * mesh_.cells(a, c)) += Eigen::Map<const Eigen::Vector3d>(g + 3 * a);
+            if (gradient) {
+              const double* g = grads.data() + static_cast<std::size_t>(c) * ld;
+              for (int a = 0; a < N; ++a)
+                gradient->segment<3>(3 * mesh_.cells(a, c)) += Eigen::Map<const Eigen::Vector3d>(g + 3 * a);
+            }
             if (values) {
-              const int* map = scatter_.data() + static_cast<std::size_t>(c) * ld * ld;
+              const int* map = scatter->data() + static_cast<std::size_t>(c) * ld * ld;
               const double* K = stiff.data() + static_cast<std::size_t>(c) * ld * ld;  // same layout as map
               for (int e = 0; e < ld * ld; ++e)
                 if (map[e] >= 0) values[map[e]] += K[e];
@@ -239,48 +280,34 @@ double ElasticSystem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradie
           }
         }
       },
-      material_, rest_);
-  gradient = gather_free(full);
+      rest_);
   double total = 0.0;
   for (double e : per) total += e;
   return total;
 }
 
-Eigen::VectorXd ElasticSystem::gather_free(const Eigen::VectorXd& full) const {
-  Eigen::VectorXd out(free_count_);
-  for (std::size_t d = 0; d < free_index_.size(); ++d)
-    if (free_index_[d] >= 0) out[free_index_[d]] = full[static_cast<Eigen::Index>(d)];
-  return out;
-}
-
-void ElasticSystem::scatter_add_free(const Eigen::VectorXd& free, double scale, Eigen::VectorXd& full) const {
-  for (std::size_t d = 0; d < free_index_.size(); ++d)
-    if (free_index_[d] >= 0) full[static_cast<Eigen::Index>(d)] += scale * free[free_index_[d]];
-}
-
-ElasticSystem::Deformation ElasticSystem::deformation(const Eigen::VectorXd& x) const {
+ElasticTerm::Deformation ElasticTerm::deformation(const Eigen::VectorXd& x) const {
   Deformation out;
   out.min_J.resize(mesh_.cell_count());
   out.energy_density.resize(mesh_.cell_count());
-  std::visit(
-      [&](const auto& m, const auto& rest) {
-        using R = typename std::decay_t<decltype(rest)>::value_type;
-        for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c) {
-          const auto X = gather_nodes<R::nodes>(mesh_, c, x);
-          double lo = std::numeric_limits<double>::infinity(), psi = 0.0, weight = 0.0;
-          for (int q = 0; q < R::points; ++q) {
-            const Mat3 F = X * rest[c].G[q];
-            const double J = F.determinant();
-            lo = std::min(lo, J);
-            out.volume += rest[c].weight[q] * J;
-            psi += rest[c].weight[q] * m.psi(F);
-            weight += rest[c].weight[q];
-          }
-          out.min_J[c] = lo;
-          out.energy_density[c] = psi / weight;
-        }
-      },
-      material_, rest_);
+  for_each_material([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
+    using R = typename std::decay_t<decltype(rest)>::value_type;
+    for (Eigen::Index i = 0; i < count; ++i) {
+      const Eigen::Index c = list ? list[i] : i;
+      const auto X = gather_nodes<R::nodes>(mesh_, c, x);
+      double lo = std::numeric_limits<double>::infinity(), psi = 0.0, weight = 0.0;
+      for (int q = 0; q < R::points; ++q) {
+        const Mat3 F = X * rest[c].G[q];
+        const double J = F.determinant();
+        lo = std::min(lo, J);
+        out.volume += rest[c].weight[q] * J;
+        psi += rest[c].weight[q] * m.psi(F);
+        weight += rest[c].weight[q];
+      }
+      out.min_J[c] = lo;
+      out.energy_density[c] = psi / weight;
+    }
+  });
   return out;
 }
 

@@ -1,56 +1,58 @@
 #pragma once
-// Total elastic energy of a mesh, its gradient, and the PSD-projected Hessian restricted to the free
-// degrees of freedom, assembled in parallel into a fixed sparse pattern through a precomputed scatter
-// map (DESIGN.md fem/). Elements are coloured so that no two elements of a colour share a vertex: the
-// colours run in sequence and each colour in parallel, so every sum is taken in the same order for any
-// thread count (bit-identical results).
-#include <cstdint>
+// The elastic energy of a mesh as a Term (DESIGN.md fem/): Σ_e Σ_q w_q ψ(F_q), its gradient, and its
+// (per-element PSD-projected) Hessian, assembled in parallel through a scatter map precomputed for each
+// Hessian layout. Elements are coloured so that no two elements of a colour share a vertex: the colours
+// run in sequence and each colour in parallel, so every sum is taken in the same order for any thread
+// count (bit-identical results). Each cell may have its own material (the runtime choice is one std::visit
+// per material, outside the element loop) and its own weight scale (the fraction of an embedding lattice's
+// cell that the solid fills).
 #include <vector>
 
 #include <Eigen/Dense>
-#include <Eigen/SparseCore>
 
-#include "snh/fem/objective.hpp"
 #include "snh/fem/rest_state.hpp"
+#include "snh/fem/term.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 
 namespace snh {
 
-class ElasticSystem final : public Objective {
+class ElasticTerm final : public Term {
  public:
   /// mesh      the rest mesh (copied)
-  /// material  the energy density (copied)
-  /// fixed     one flag per DOF (3 #V, x y z per vertex): true where the DOF is kinematic
-  ElasticSystem(VolumeMesh mesh, AnyMaterial material, std::vector<std::uint8_t> fixed);
+  /// material  the energy density of every cell
+  ElasticTerm(VolumeMesh mesh, AnyMaterial material);
+  /// materials         the energies used
+  /// material_of_cell  #C indices into materials (empty: every cell uses materials[0])
+  /// weight_scale      #C factors > 0 on each cell's quadrature weights (empty: all 1)
+  ElasticTerm(VolumeMesh mesh, std::vector<AnyMaterial> materials, std::vector<int> material_of_cell,
+              Eigen::VectorXd weight_scale = {});
 
-  /// Total energy Σ_e Σ_q w_q ψ(F_q); +∞ if any element is outside its energy's domain.
-  ///   x  deformed positions, 3 #V (x y z per vertex)
+  [[nodiscard]] std::string_view name() const override { return "elastic"; }
+  /// Σ_e Σ_q w_q ψ(F_q); +∞ if any element is outside its energy's domain.
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
+  /// Uses internal buffers: do not evaluate the same term concurrently.
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
+                  PsdProjection projection) const override;
+  /// The cells.
+  void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
+  void bind(const HessianLayout& layout) override { scatter_ = scatter_map(layout); }
 
-  /// Energy, gradient on the free DOFs and (optionally) the projected Hessian on the free DOFs.
-  /// Uses internal buffers: do not call evaluate() concurrently on the same system.
-  ///   gradient  resized to free_count(); entries of fixed DOFs are left out
-  ///   hessian   nullptr to skip; otherwise overwritten in the fixed pattern (pattern() layout)
-  /// Returns the energy (+∞ if undefined anywhere; gradient and Hessian are then not meaningful).
-  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, SparseLower* hessian,
-                  PsdProjection projection = PsdProjection::clamp) const override;
+  /// Per element, (3N)² value indices into `layout`'s values (column-major element matrix order), −1 to
+  /// skip (a DOF the layout leaves out, or the upper triangle).
+  [[nodiscard]] std::vector<int> scatter_map(const HessianLayout& layout) const;
+  /// Adds the Hessian at x to `values` through a scatter map of scatter_map() (another layout than the
+  /// bound one: a damping matrix over every DOF).
+  void add_hessian(const Eigen::VectorXd& x, const std::vector<int>& scatter, double* values, PsdProjection projection) const;
 
-  /// An empty matrix with the fixed sparsity pattern of the free-DOF Hessian.
-  [[nodiscard]] const SparseLower& pattern() const override { return pattern_; }
-
-  [[nodiscard]] Eigen::Index free_count() const { return free_count_; }
-  /// Free index of each DOF, −1 where fixed.
-  [[nodiscard]] const std::vector<int>& free_index() const { return free_index_; }
   [[nodiscard]] const VolumeMesh& mesh() const { return mesh_; }
-  [[nodiscard]] const AnyMaterial& material() const { return material_; }
   [[nodiscard]] const RestState& rest() const { return rest_; }
+  [[nodiscard]] const std::vector<AnyMaterial>& materials() const { return materials_; }
+  /// The material of cell c.
+  [[nodiscard]] const AnyMaterial& material(Eigen::Index c) const {
+    return materials_[material_of_.empty() ? 0 : material_of_[static_cast<std::size_t>(c)]];
+  }
   [[nodiscard]] int colour_count() const { return static_cast<int>(colour_start_.size()) - 1; }
-
-  /// Gathers the free entries of a full DOF vector.
-  [[nodiscard]] Eigen::VectorXd gather_free(const Eigen::VectorXd& full) const;
-  /// Adds a free-DOF vector into a full DOF vector: full[d] += scale · free[free_index[d]].
-  void scatter_add_free(const Eigen::VectorXd& free, double scale, Eigen::VectorXd& full) const override;
 
   /// Loops with less work than this many quadrature points (element loops; scatters count one per
   /// node) run on one thread: for small meshes waking threads (and, when other processes compete for
@@ -67,13 +69,19 @@ class ElasticSystem final : public Objective {
   [[nodiscard]] Deformation deformation(const Eigen::VectorXd& x) const;
 
  private:
+  /// Energy, and when asked the gradient (added to *gradient) and the Hessian (added through scatter).
+  double assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const std::vector<int>* scatter, double* values,
+                  PsdProjection projection) const;
+  /// Calls body(material, rest, cells) once per material, with the cells that use it.
+  template <class Body>
+  void for_each_material(Body&& body) const;
+
   VolumeMesh mesh_;
-  AnyMaterial material_;
+  std::vector<AnyMaterial> materials_;
+  std::vector<int> material_of_;                  ///< per cell (empty: all materials_[0])
+  std::vector<std::vector<int>> cells_of_;        ///< per material, its cells (only with several materials)
   RestState rest_;
-  std::vector<int> free_index_;
-  Eigen::Index free_count_ = 0;
-  SparseLower pattern_;
-  std::vector<int> scatter_;        ///< per element, (3N)² value indices into pattern_ (column-major), −1 to skip
+  std::vector<int> scatter_;        ///< for the bound layout
   std::vector<int> colour_order_;   ///< element ids grouped by colour
   std::vector<int> colour_start_;   ///< colour c owns colour_order_[colour_start_[c] .. colour_start_[c+1])
   Eigen::Index parallel_threshold_ = 2048;

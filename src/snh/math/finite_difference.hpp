@@ -47,6 +47,39 @@ template <class Fn>
   return H;
 }
 
+/// Fourth-order central difference of a scalar f(x) of a vector: entry i is ∂f/∂x_i.
+template <class Fn>
+[[nodiscard]] Eigen::VectorXd fd_gradient(Fn&& f, const Eigen::VectorXd& x, double eps) {
+  Eigen::VectorXd G(x.size());
+  for (Eigen::Index i = 0; i < x.size(); ++i)
+    G[i] = fourth_order_difference(
+        [&](double h) {
+          Eigen::VectorXd xh = x;
+          xh[i] += h;
+          return static_cast<double>(f(xh));
+        },
+        eps);
+  return G;
+}
+
+/// Fourth-order central difference of a vector-valued g(x) (m entries): column i (m by 1) is ∂g/∂x_i.
+template <class Fn>
+[[nodiscard]] Eigen::MatrixXd fd_jacobian(Fn&& g, const Eigen::VectorXd& x, double eps) {
+  Eigen::MatrixXd H;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const Eigen::VectorXd column = fourth_order_difference(
+        [&](double h) -> Eigen::VectorXd {
+          Eigen::VectorXd xh = x;
+          xh[i] += h;
+          return g(xh);
+        },
+        eps);
+    if (i == 0) H.resize(column.size(), x.size());
+    H.col(i) = column;
+  }
+  return H;
+}
+
 /// min over ε of ‖fd(ε) − analytic‖ / max(‖analytic‖, floor): the best relative error of a
 /// finite-difference check. fd is called with each ε of kFiniteDifferenceSteps.
 template <class Analytic, class Fd>

@@ -5,20 +5,24 @@
 // Backward Euler with step h, lumped masses m, gravity g and Rayleigh-style damping D = αM + βK:
 //   x_{n+1} = argmin  Ψ(x) + Σ m/(2h²) |x − x̃|² + α/(2h) Σ m |x − x_n|² + β/(2h) Δᵀ K_n Δ − Σ m g·x,
 //   x̃ = x_n + h v_n,  Δ = x − x_n,  v_{n+1} = (x_{n+1} − x_n)/h,
-// where K_n is the PSD-projected elastic Hessian at x_n on the free DOFs (so β damps the free DOFs'
-// velocities relative to each other and to the pins). Its stationarity condition is exactly backward
-// Euler: M(x − x̃)/h² = f_elastic + f_gravity − D v_{n+1}. Quasi-static steps (h = 0) minimise Ψ − Σ m g·x.
-// Sums run over the free DOFs; pinned DOFs are set before each step.
+// where K_n is the PSD-projected elastic Hessian at x_n over every DOF, free and kinematic: its force on
+// the free DOFs is −β/h (K_n Δ)_f, which vanishes for a rigid translation, so a body carried by moving
+// pins or bones is not damped towards standing still in the world. Its stationarity condition is exactly
+// backward Euler: M(x − x̃)/h² = f_elastic + f_gravity − D v_{n+1}. Quasi-static steps (h = 0) minimise
+// Ψ − Σ m g·x. The inertia, mass-damping and gravity sums run over the free DOFs (on kinematic DOFs they
+// are constants of the step); kinematic DOFs are set before each step.
 #include <Eigen/Core>
 
-#include "snh/fem/elastic_system.hpp"
-#include "snh/fem/objective.hpp"
+#include "snh/fem/dof_map.hpp"
+#include "snh/fem/elastic_term.hpp"
+#include "snh/fem/term.hpp"
 
 namespace snh {
 
-/// Lumped mass per DOF (3 #V, the same for x, y and z of a vertex): density × each cell's rest volume,
-/// shared equally among the cell's nodes. Σ over a vertex's x entries = density × total rest volume.
-[[nodiscard]] Eigen::VectorXd lumped_mass(const ElasticSystem& system, double density);
+/// Lumped mass per DOF (3 #V, the same for x, y and z of a vertex): density × each cell's rest volume
+/// (its quadrature weights, scaled where the elastic term scales them), shared equally among the cell's
+/// nodes. Σ over a vertex's x entries = density × total rest volume.
+[[nodiscard]] Eigen::VectorXd lumped_mass(const ElasticTerm& elastic, double density);
 
 struct StepTerms {
   double dt = 0.0;                ///< time step h; 0 for a quasi-static step (no inertia or damping)
@@ -27,22 +31,24 @@ struct StepTerms {
   double stiffness_damping = 0.0; ///< β (time)
 };
 
-/// The incremental potential of one step. Call begin_step() before minimising each step.
-class TimeStepPotential final : public Objective {
+/// The non-elastic part of a step's incremental potential: inertia, mass damping and gravity, and
+/// stiffness damping. Call begin_step() before minimising each step.
+class TimeStepTerm final : public Term {
  public:
-  /// mass: lumped_mass(elastic, density). The elastic system must outlive this object.
-  TimeStepPotential(const ElasticSystem& elastic, Eigen::VectorXd mass, StepTerms terms);
+  /// elastic  the elastic term (must outlive this one; K_n is its Hessian)
+  /// dofs     the problem's free and kinematic DOFs
+  /// mass     lumped_mass(elastic, density)
+  TimeStepTerm(const ElasticTerm& elastic, const DofMap& dofs, Eigen::VectorXd mass, StepTerms terms);
 
-  /// The state at the start of the step (full DOF vectors); assembles K_n when β > 0.
+  /// The state at the start of the step (full DOF vectors); assembles K_n when β > 0 and h > 0.
   void begin_step(const Eigen::VectorXd& x_n, const Eigen::VectorXd& v_n);
 
+  [[nodiscard]] std::string_view name() const override { return "inertia"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
-  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, SparseLower* hessian,
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                   PsdProjection projection) const override;
-  [[nodiscard]] const SparseLower& pattern() const override { return elastic_.pattern(); }
-  void scatter_add_free(const Eigen::VectorXd& free, double scale, Eigen::VectorXd& full) const override {
-    elastic_.scatter_add_free(free, scale, full);
-  }
+  /// Stiffness damping couples what elasticity couples: the elastic term's stencil covers it.
+  void bind(const HessianLayout& layout) override;
 
   [[nodiscard]] const StepTerms& terms() const { return terms_; }
   [[nodiscard]] const Eigen::VectorXd& mass() const { return mass_; }
@@ -52,15 +58,20 @@ class TimeStepPotential final : public Objective {
   [[nodiscard]] double gravity_energy(const Eigen::VectorXd& x) const;
 
  private:
-  /// The non-elastic terms: value, and their gradient added to `gradient` (free DOFs).
-  double extra_terms(const Eigen::VectorXd& x, Eigen::VectorXd* gradient) const;
-  const ElasticSystem& elastic_;
+  [[nodiscard]] bool damps_stiffness() const { return terms_.dt > 0.0 && terms_.stiffness_damping > 0.0; }
+  const ElasticTerm& elastic_;
+  const DofMap& dofs_;
   Eigen::VectorXd mass_;        ///< per DOF
   Eigen::VectorXd gravity_;     ///< per DOF: g component of each DOF's axis
   StepTerms terms_;
   Eigen::VectorXd x_n_, predicted_;
-  SparseLower K_n_;             ///< β > 0: projected elastic Hessian at x_n
-  std::vector<int> diagonal_;   ///< value index of each free DOF's diagonal entry in pattern()
+  // Stiffness damping (β > 0): K_n over every DOF, numbered free DOFs first (as the problem numbers them)
+  // and kinematic DOFs after, with the elastic term's scatter map into it.
+  HessianLayout damping_layout_;
+  std::vector<int> damping_scatter_;
+  SparseLower K_n_;
+  std::vector<int> diagonal_;   ///< value index of each free DOF's diagonal entry in the bound layout
+  std::vector<int> damping_map_;  ///< per value of the bound layout, the K_n value at the same (row, col); −1 if none
 };
 
 }  // namespace snh

@@ -41,7 +41,7 @@ void FrameWriter::adopt_written(int last, const std::function<double(int)>& time
   for (int i = 0; i <= last; ++i) series_.emplace_back(time(i), fmt::format("{:03d}.vtu", i));
 }
 
-void FrameWriter::write(int index, double time, const Eigen::VectorXd& x, const ElasticSystem::Deformation& d) {
+void FrameWriter::write(int index, double time, const Eigen::VectorXd& x, const ElasticTerm::Deformation& d) {
   const Eigen::Matrix3Xd X = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3);
   write_obj(out_ / fmt::format("{:03d}.obj", index), X, surface_);
   if (!write_vtu_) return;

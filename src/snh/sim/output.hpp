@@ -10,7 +10,7 @@
 
 #include <Eigen/Core>
 
-#include "snh/fem/elastic_system.hpp"
+#include "snh/fem/elastic_term.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 
 namespace snh {
@@ -30,8 +30,8 @@ class FrameWriter {
   /// Writes frame `index` at `time`: NNN.obj, and NNN.vtu (point fields displacement and pinned; cell
   /// fields J, the min det F, and psi, the mean energy density) with the .pvd series rewritten to include it.
   ///   x  deformed positions, 3 #V
-  ///   d  the deformation at x (ElasticSystem::deformation)
-  void write(int index, double time, const Eigen::VectorXd& x, const ElasticSystem::Deformation& d);
+  ///   d  the deformation at x (ElasticTerm::deformation)
+  void write(int index, double time, const Eigen::VectorXd& x, const ElasticTerm::Deformation& d);
   /// Continues a series whose frames 0 … last are already on disk (a resumed run): lists them in the
   /// .pvd at time(i) without writing anything.
   void adopt_written(int last, const std::function<double(int)>& time);

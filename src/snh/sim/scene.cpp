@@ -11,7 +11,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "snh/fem/elastic_system.hpp"
+#include "snh/fem/elastic_term.hpp"
+#include "snh/fem/problem.hpp"
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/mesh_read.hpp"
 #include "snh/material/registry.hpp"
@@ -561,7 +562,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
     }
   };
 
-  const ElasticSystem elastic(mesh, make_material(s.material, s.params, s.reparametrize), std::move(fixed));
+  ElasticTerm elastic(mesh, make_material(s.material, s.params, s.reparametrize));
+  const DofMap dofs(fixed);
   const double rest_volume = rest_volumes(elastic.rest()).sum();
   const bool dynamic = s.integrator == Integrator::backward_euler;
   const double frame_dt = s.end_time / s.frames;
@@ -569,7 +571,10 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
   const double h = frame_dt / substeps;
   StepTerms terms{.dt = dynamic ? h : 0.0, .gravity = s.gravity, .mass_damping = s.mass_damping,
                   .stiffness_damping = s.stiffness_damping};
-  TimeStepPotential potential(elastic, lumped_mass(elastic, s.density), terms);
+  TimeStepTerm potential(elastic, dofs, lumped_mass(elastic, s.density), terms);
+  Problem problem(dofs);
+  problem.add(elastic);
+  problem.add(potential);
   auto solver = make_linear_solver({.name = s.solver, .reuse_factor = s.reuse_factor});
 
   SceneResult result;
@@ -591,7 +596,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
   FrameWriter frames(s.out, mesh, s.write_vtu, pinned);
   Eigen::VectorXd v = Eigen::VectorXd::Zero(x.size());
   auto record = [&](FrameStats& f) {
-    const ElasticSystem::Deformation d = elastic.deformation(x);
+    const ElasticTerm::Deformation d = elastic.deformation(x);
     f.min_J = d.min_J.minCoeff();
     f.inverted = static_cast<int>((d.min_J.array() <= 0.0).count());
     f.volume_ratio = d.volume / rest_volume;
@@ -663,7 +668,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
       Eigen::VectorXd guess = dynamic ? Eigen::VectorXd(x + h * v) : (frame > 1 ? Eigen::VectorXd(2.0 * x - previous) : x);
       place_pins(guess, t);
       potential.begin_step(x_n, v);
-      if (!std::isfinite(potential.energy(guess))) {  // the prediction leaves the domain: start from x_n
+      if (!std::isfinite(problem.energy(guess))) {  // the prediction leaves the domain: start from x_n
         guess = x_n;
         place_pins(guess, t);
       }
@@ -677,7 +682,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log, bool live_progress) {
         };
       previous = x_n;
       x = guess;
-      const NewtonReport rep = newton_solve(potential, x, *solver, newton);
+      const NewtonReport rep = newton_solve(problem, x, *solver, newton);
       if (live_progress) log << "\r\x1b[2K";
       if (rep.interrupted) {  // abandon the frame: back to the last completed substep's state
         x = x_n;

@@ -8,7 +8,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "snh/fem/elastic_system.hpp"
+#include "snh/fem/elastic_term.hpp"
+#include "snh/fem/problem.hpp"
 #include "snh/fem/quality.hpp"
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/mesh_read.hpp"
@@ -27,7 +28,7 @@ using Clock = std::chrono::steady_clock;
 double half_length(const StretchConfig& c, int s) { return 1.0 + (c.stretch - 1.0) * s / c.steps; }
 
 /// Min det F, inverted-element count and volume ratio of a deformation.
-void record_deformation(const ElasticSystem::Deformation& d, double rest_volume, StepStats& st) {
+void record_deformation(const ElasticTerm::Deformation& d, double rest_volume, StepStats& st) {
   st.min_J = d.min_J.minCoeff();
   st.inverted = static_cast<int>((d.min_J.array() <= 0.0).count());
   st.volume_ratio = d.volume / rest_volume;
@@ -190,7 +191,9 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   result.element = mesh.type;
   result.vertices = mesh.vertex_count();
   result.cells = mesh.cell_count();
-  const ElasticSystem system(mesh, make_material(c.material, c.params, c.reparametrize), std::move(fixed));
+  ElasticTerm elastic(mesh, make_material(c.material, c.params, c.reparametrize));
+  Problem problem{DofMap(fixed)};
+  problem.add(elastic);
   auto solver = make_linear_solver({.name = c.solver, .reuse_factor = c.reuse_factor});
 
   log << fmt::format("{}: {}, material {}, mu {:g}, lambda {:g}{}\n", c.program,
@@ -200,14 +203,14 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   log << fmt::format("{} vertices, {} {}, {} steps to a {:g}x stretch along {}, solver {}, output {}\n",
                      mesh.vertex_count(), mesh.cell_count(), mesh.type == CellType::tet4 ? "tets" : "cubes", c.steps,
                      c.stretch, char('x' + a), c.solver, c.out.string());
-  log << "mesh: " << describe(mesh_quality(system.mesh(), system.rest()), mesh.type) << "\n";
+  log << "mesh: " << describe(mesh_quality(elastic.mesh(), elastic.rest()), mesh.type) << "\n";
 
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
   std::vector<bool> pinned(mesh.vertex_count(), false);
   for (const auto* layer : {&bottom, &top})
     for (int v : *layer) pinned[v] = true;
   FrameWriter frames(c.out, mesh, c.write_vtu, pinned);
-  const double rest_volume = rest_volumes(system.rest()).sum();
+  const double rest_volume = rest_volumes(elastic.rest()).sum();
   Eigen::VectorXd previous = x;  // the solution one step back, for extrapolation
   int first = 1;
   if (resume_from) {
@@ -219,7 +222,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     first = ck.step + 1;
     log << fmt::format("resuming after step {} (checkpoint in {})\n", ck.step, c.out.string());
   } else {
-    frames.write(0, 0.0, x, system.deformation(x));
+    frames.write(0, 0.0, x, elastic.deformation(x));
   }
 
   for (int s = first; s <= c.steps; ++s) {
@@ -244,7 +247,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
       }
     // An extrapolated guess outside the energy's domain falls back to the last solution scaled along y
     // to the new boundary (a positive scaling keeps every det F > 0 that was).
-    if (!std::isfinite(system.energy(guess))) {
+    if (!std::isfinite(problem.energy(guess))) {
       guess = x;
       const double ratio = half_length(c, s) / half_length(c, s - 1);
       for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) guess[3 * v + a] = centre + (guess[3 * v + a] - centre) * ratio;
@@ -258,7 +261,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
         log << fmt::format("\r\x1b[2Kstep {:>3}/{}: Newton iteration {}, |f| = {:.2e} ...", s, c.steps, it, r);
         log.flush();
       };
-    const NewtonReport rep = newton_solve(system, x, *solver, newton);
+    const NewtonReport rep = newton_solve(problem, x, *solver, newton);
     if (c.live_progress) log << "\r\x1b[2K";
     if (rep.interrupted) {  // abandon this step: the state stays at the last completed one
       x = previous;
@@ -279,7 +282,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     st.assembly_seconds = rep.assembly_seconds;
     st.solve_seconds = rep.solve_seconds;
     st.residuals = rep.residuals;
-    const ElasticSystem::Deformation deformed = system.deformation(x);
+    const ElasticTerm::Deformation deformed = elastic.deformation(x);
     if (!rep.converged) st.failure = rep.failure + worst_element(deformed.min_J);
     record_deformation(deformed, rest_volume, st);
     try {

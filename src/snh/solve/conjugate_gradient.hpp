@@ -4,13 +4,10 @@
 // matrix is not positive definite: Newton then falls back to the projected Hessian. The preconditioner is
 // an interface so that a direct factor (factor reuse), Jacobi, and later multigrid plug in the same way.
 #include <Eigen/Core>
-#include <Eigen/SparseCore>
+
+#include "snh/math/sparse.hpp"
 
 namespace snh {
-
-/// The lower triangle of a symmetric matrix, column-major (the form CHOLMOD takes); every column starts
-/// with its diagonal entry.
-using SparseLower = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
 /// z = M⁻¹ r for a symmetric positive definite M that approximates A.
 class Preconditioner {

@@ -1,6 +1,7 @@
 #include "snh/solve/newton.hpp"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -11,16 +12,16 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-NewtonReport newton_iterations(const Objective& system, Eigen::VectorXd& x, LinearSolver& solver,
+NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolver& solver,
                                const NewtonOptions& options) {
   NewtonReport report;
   Eigen::VectorXd g;
-  SparseLower H = system.pattern();
+  HessianMatrix H;
   const bool try_true = options.try_true_hessian;
   // An iterative linear solve may stop at a residual that cannot decide convergence: a tenth of the tolerance.
   const double linear_enough = 0.1 * options.tolerance;
   auto t = Clock::now();
-  double E = system.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
+  double E = problem.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
   report.assembly_seconds += seconds_since(t);
   if (!std::isfinite(E)) {
     report.energy = E;
@@ -54,7 +55,7 @@ NewtonReport newton_iterations(const Objective& system, Eigen::VectorXd& x, Line
     // no non-positive curvature) and gives a descent direction; otherwise the projected Hessian.
     Eigen::VectorXd d;
     bool have_step = false;
-    if (try_true && solver.try_factorize(H)) {
+    if (try_true && solver.try_factorize(H.matrix)) {
       d = solver.solve(-g, linear_enough);
       report.linear_iterations += solver.last_iterations();
       have_step = d.allFinite() && g.dot(d) < 0.0;
@@ -65,11 +66,11 @@ NewtonReport newton_iterations(const Objective& system, Eigen::VectorXd& x, Line
         report.solve_seconds += seconds_since(t);
         t = Clock::now();
         Eigen::VectorXd unused;
-        system.evaluate(x, unused, &H, options.projection);
+        problem.evaluate(x, unused, &H, options.projection);
         report.assembly_seconds += seconds_since(t);
         t = Clock::now();
       }
-      solver.factorize(H);
+      solver.factorize(H.matrix);
       d = solver.solve(-g, linear_enough);
       report.linear_iterations += solver.last_iterations();
     }
@@ -79,15 +80,25 @@ NewtonReport newton_iterations(const Objective& system, Eigen::VectorXd& x, Line
       d = -g;
       slope = -g.squaredNorm();
     }
+    if (options.step_tolerance > 0.0 && d.lpNorm<Eigen::Infinity>() < options.step_tolerance) {
+      report.converged = report.converged_by_step = true;
+      return report;
+    }
 
     t = Clock::now();
     Eigen::VectorXd trial = x;
-    double alpha = 1.0, E_trial = 0.0;
+    // The line search starts at the largest step every term allows.
+    double alpha = std::min(1.0, problem.max_step(x, d)), E_trial = 0.0;
+    if (!(alpha > 0.0)) {
+      report.failure = fmt::format("no step is allowed at Newton iteration {} (the step bound is {:g})", report.iterations, alpha);
+      report.assembly_seconds += seconds_since(t);
+      return report;
+    }
     bool accepted = false;
     for (int h = 0; h <= options.max_halvings; ++h) {
       trial = x;
-      system.scatter_add_free(d, alpha, trial);
-      E_trial = system.energy(trial);
+      problem.dofs().scatter_add_free(d, alpha, trial);
+      E_trial = problem.energy(trial);
       if (std::isfinite(E_trial) && E_trial <= E + 1e-4 * alpha * slope) {
         accepted = true;
         break;
@@ -95,7 +106,7 @@ NewtonReport newton_iterations(const Objective& system, Eigen::VectorXd& x, Line
       // Within rounding of E: accept the full step if it reduces the residual.
       if (h == 0 && std::isfinite(E_trial) && std::abs(E_trial - E) <= 1e-12 * std::max(1.0, std::abs(E))) {
         Eigen::VectorXd g_trial;
-        system.evaluate(trial, g_trial, nullptr, options.projection);
+        problem.evaluate(trial, g_trial, nullptr, options.projection);
         if (g_trial.norm() < r) {
           accepted = true;
           break;
@@ -112,18 +123,18 @@ NewtonReport newton_iterations(const Objective& system, Eigen::VectorXd& x, Line
       return report;
     }
     x = trial;
+    problem.on_accepted(x);
     t = Clock::now();
-    E = system.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
+    E = problem.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
     report.assembly_seconds += seconds_since(t);
   }
 }
 
 }  // namespace
 
-NewtonReport newton_solve(const Objective& system, Eigen::VectorXd& x, LinearSolver& solver,
-                          const NewtonOptions& options) {
+NewtonReport newton_solve(Problem& problem, Eigen::VectorXd& x, LinearSolver& solver, const NewtonOptions& options) {
   const int factorizations = solver.factorizations();
-  NewtonReport report = newton_iterations(system, x, solver, options);
+  NewtonReport report = newton_iterations(problem, x, solver, options);
   report.factorizations = solver.factorizations() - factorizations;
   return report;
 }

@@ -8,16 +8,20 @@
 // linear), and otherwise the Hessian assembled from PSD-projected element Hessians, which always
 // gives a descent direction. It steps along d = −H⁻¹g and halves the step
 // until E(x + αd) ≤ E(x) + 1e-4 α gᵀd. A state where the energy is undefined (+∞) counts as a failed
-// trial, so the step gets shorter; no NaN enters x. Near convergence, where the energy decrease is
-// below its rounding error, a full step that reduces ‖g‖ is accepted. Iterative linear solves may stop
-// once ‖Hd + g‖ is below a tenth of the tolerance, which cannot decide convergence.
+// trial, so the step gets shorter; no NaN enters x. The line search starts at α₀ = min(1, the problem's
+// step bound) (a term's max_step: continuous collision detection for contact), and every accepted
+// iterate is passed to the problem's on_accepted. Near convergence, where the energy decrease is below
+// its rounding error, a full step that reduces ‖g‖ is accepted. Iterative linear solves may stop once
+// ‖Hd + g‖ is below a tenth of the tolerance, which cannot decide convergence. Optionally (step_tolerance
+// > 0) Newton also stops when the Newton step's largest entry is below step_tolerance (the criterion of
+// IPC and PolyFEM: scale-aware where an absolute ‖g‖ is not).
 #include <functional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
-#include "snh/fem/objective.hpp"
+#include "snh/fem/problem.hpp"
 #include "snh/solve/linear_solver.hpp"
 
 namespace snh {
@@ -25,6 +29,7 @@ namespace snh {
 struct NewtonOptions {
   int max_iterations = 50;        ///< the paper programs' limit
   double tolerance = 1e-3;        ///< on ‖g‖ (free DOFs)
+  double step_tolerance = 0.0;    ///< > 0: also converged when ‖d‖∞ of the Newton step d is below this
   PsdProjection projection = PsdProjection::clamp;
   bool try_true_hessian = true;   ///< first try the unprojected Hessian
   int max_halvings = 60;
@@ -36,6 +41,7 @@ struct NewtonOptions {
 
 struct NewtonReport {
   bool converged = false;
+  bool converged_by_step = false; ///< converged by step_tolerance (before taking that last step)
   int iterations = 0;             ///< Newton steps taken
   int line_search_steps = 0;      ///< step halvings, in total
   int linear_iterations = 0;      ///< conjugate-gradient iterations, in total (0 for plain direct solves)
@@ -50,10 +56,10 @@ struct NewtonReport {
   bool interrupted = false;       ///< stopped because should_stop() said so
 };
 
-/// Minimises the objective (the elastic energy, or a time step's incremental potential) over the free
-/// DOFs of x (fixed DOFs keep their values).
+/// Minimises the problem (the elastic energy, or a time step's incremental potential, plus any other
+/// terms) over its free DOFs (kinematic DOFs keep their values in x).
 ///   x  full DOF vector (3 #V); on return, the last accepted iterate
-[[nodiscard]] NewtonReport newton_solve(const Objective& system, Eigen::VectorXd& x, LinearSolver& solver,
+[[nodiscard]] NewtonReport newton_solve(Problem& problem, Eigen::VectorXd& x, LinearSolver& solver,
                                         const NewtonOptions& options = {});
 
 }  // namespace snh

@@ -1,0 +1,95 @@
+#include "snh/fem/problem.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+namespace snh {
+
+void Problem::add(Term& term) {
+  terms_.push_back(&term);
+  have_layout_ = false;
+}
+
+double Problem::energy(const Eigen::VectorXd& x) const {
+  double total = 0.0;
+  for (const Term* t : terms_) {
+    const double e = t->energy(x);
+    if (!std::isfinite(e)) return e;
+    total += e;
+  }
+  return total;
+}
+
+void Problem::update_layout(const Eigen::VectorXd& x) {
+  bool rebuild = !have_layout_;
+  if (rebuild) {
+    fixed_.assign(terms_.size(), Stencil{});
+    varying_.assign(terms_.size(), Stencil{});
+    for (std::size_t i = 0; i < terms_.size(); ++i)
+      if (!terms_[i]->stencil_varies()) terms_[i]->stencil(x, fixed_[i]);
+  }
+  for (std::size_t i = 0; i < terms_.size(); ++i)
+    if (terms_[i]->stencil_varies()) {
+      Stencil s;
+      terms_[i]->stencil(x, s);
+      if (!rebuild && !layout_.covers(s)) rebuild = true;
+      varying_[i] = std::move(s);
+    }
+  if (!rebuild) return;
+  std::vector<const Stencil*> all;
+  for (const auto* list : {&fixed_, &varying_})
+    for (const Stencil& s : *list)
+      if (s.groups() > 0) all.push_back(&s);
+  layout_ = HessianLayout(dofs_.free_index(), static_cast<int>(dofs_.free_count()), all);
+  have_layout_ = true;
+  ++layouts_built_;
+  for (Term* t : terms_) t->bind(layout_);
+}
+
+const HessianLayout& Problem::layout() {
+  if (!have_layout_) update_layout(Eigen::VectorXd::Zero(dofs_.dofs()));
+  return layout_;
+}
+
+double Problem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, HessianMatrix* hessian,
+                         PsdProjection projection) {
+  update_layout(x);
+  Eigen::VectorXd full = Eigen::VectorXd::Zero(x.size());
+  std::optional<HessianValues> values;
+  if (hessian) {
+    if (hessian->layout != layout_.id()) {
+      hessian->matrix = layout_.pattern();
+      hessian->layout = layout_.id();
+    }
+    std::fill(hessian->matrix.valuePtr(), hessian->matrix.valuePtr() + hessian->matrix.nonZeros(), 0.0);
+    values.emplace(layout_, hessian->matrix.valuePtr());
+  }
+  double total = 0.0;
+  for (const Term* t : terms_) {
+    const double e = t->evaluate(x, &full, values ? &*values : nullptr, projection);
+    if (!std::isfinite(e)) {
+      gradient = dofs_.gather_free(full);
+      return e;
+    }
+    total += e;
+  }
+  gradient = dofs_.gather_free(full);
+  return total;
+}
+
+double Problem::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx_free) const {
+  double alpha = 1.0;
+  Eigen::VectorXd dx;
+  for (const Term* t : terms_) {
+    if (dx.size() == 0) dx = dofs_.expand(dx_free);
+    alpha = std::min(alpha, t->max_step(x, dx));
+  }
+  return alpha;
+}
+
+void Problem::on_accepted(const Eigen::VectorXd& x) {
+  for (Term* t : terms_) t->on_accepted(x);
+}
+
+}  // namespace snh

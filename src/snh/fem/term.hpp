@@ -1,0 +1,46 @@
+#pragma once
+// An energy term of the problem Newton minimises (DESIGN.md fem/): elasticity, inertia and damping,
+// attachment springs, contact barriers. Terms see every DOF (x is 3 #V: free and kinematic), add their
+// gradient to a full DOF vector and their Hessian entries to a shared layout (HessianValues), declare which
+// vertices their Hessian couples (stencil), may bound a Newton step (max_step: the largest safe fraction,
+// as continuous collision detection does for contact) and may update lagged state when an iterate is
+// accepted. A Problem (problem.hpp) sums them. PolyFEM's summed forms are the model.
+#include <string_view>
+
+#include <Eigen/Core>
+
+#include "snh/fem/hessian_layout.hpp"
+#include "snh/material/psd_projection.hpp"
+
+namespace snh {
+
+class Term {
+ public:
+  virtual ~Term() = default;
+  /// A short name for messages ("elastic", "inertia", "contact").
+  [[nodiscard]] virtual std::string_view name() const = 0;
+  /// The energy at x (3 #V, every DOF); +∞ where x is outside the term's domain.
+  [[nodiscard]] virtual double energy(const Eigen::VectorXd& x) const = 0;
+  /// The energy; adds ∂E/∂x (every DOF, 3 #V) to *gradient and the Hessian's entries to *hessian (each
+  /// skipped when null; only DOFs the layout numbers). `projection` asks for per-element (per-pair) PSD
+  /// projection where the term has one. Returns +∞ outside the domain (gradient and Hessian then not
+  /// meaningful).
+  virtual double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
+                          PsdProjection projection) const = 0;
+  /// The vertices its Hessian couples at x, beyond each DOF with itself (left empty by terms with a
+  /// diagonal Hessian).
+  virtual void stencil(const Eigen::VectorXd& /*x*/, Stencil& /*out*/) const {}
+  /// True if the stencil depends on x (contact pairs): it is then asked at every evaluation, and the
+  /// layout grows when it is not covered. A fixed stencil is asked once.
+  [[nodiscard]] virtual bool stencil_varies() const { return false; }
+  /// Called when the problem's layout is (re)built, before any evaluation with it: a term that scatters
+  /// through precomputed value indices computes them here.
+  virtual void bind(const HessianLayout& /*layout*/) {}
+  /// The largest α in (0, 1] such that x + α dx is safe for this term (dx: a step on every DOF, 0 on the
+  /// kinematic ones); 1 by default. Newton starts its line search at the smallest over all terms.
+  [[nodiscard]] virtual double max_step(const Eigen::VectorXd& /*x*/, const Eigen::VectorXd& /*dx*/) const { return 1.0; }
+  /// Called with every iterate Newton accepts.
+  virtual void on_accepted(const Eigen::VectorXd& /*x*/) {}
+};
+
+}  // namespace snh

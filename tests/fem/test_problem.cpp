@@ -1,0 +1,208 @@
+// The problem layer: the DOF map, Hessian layouts (any numbering, covers, add_block), a sum of terms
+// checked against finite differences, and a layout that grows when a term's stencil moves.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "snh/fem/elastic_term.hpp"
+#include "snh/fem/problem.hpp"
+#include "snh/math/finite_difference.hpp"
+#include "snh/mesh/box.hpp"
+
+namespace snh {
+namespace {
+
+Eigen::VectorXd flatten(const Eigen::Matrix3Xd& X) { return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()); }
+
+/// Springs k/2 (|x_a − x_b| − L)² between vertex pairs; the pairs may be chosen by x (varying stencil):
+/// when `follow` is set, vertex 0 is also tied to whichever vertex is farthest from it.
+class Springs final : public Term {
+ public:
+  Springs(std::vector<std::array<int, 2>> pairs, double k, double rest, bool follow = false)
+      : pairs_(std::move(pairs)), k_(k), rest_(rest), follow_(follow) {}
+  std::string_view name() const override { return "springs"; }
+  double energy(const Eigen::VectorXd& x) const override { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, const HessianValues* H, PsdProjection) const override {
+    double E = 0.0;
+    for (const auto& [a, b] : current(x)) {
+      const Eigen::Vector3d d = x.segment<3>(3 * a) - x.segment<3>(3 * b);
+      const double l = d.norm(), s = l - rest_;
+      E += 0.5 * k_ * s * s;
+      const Eigen::Vector3d n = d / l;
+      if (g) {
+        g->segment<3>(3 * a) += k_ * s * n;
+        g->segment<3>(3 * b) -= k_ * s * n;
+      }
+      if (H) {
+        const Mat3 K = k_ * (n * n.transpose() + (s / l) * (Mat3::Identity() - n * n.transpose()));
+        H->add_block(a, a, K);
+        H->add_block(b, b, K);
+        H->add_block(a, b, -K);
+      }
+    }
+    return E;
+  }
+  void stencil(const Eigen::VectorXd& x, Stencil& out) const override {
+    out.arity = 2;
+    out.vertices.clear();
+    for (const auto& [a, b] : current(x)) out.vertices.insert(out.vertices.end(), {a, b});
+  }
+  bool stencil_varies() const override { return follow_; }
+
+ private:
+  std::vector<std::array<int, 2>> current(const Eigen::VectorXd& x) const {
+    std::vector<std::array<int, 2>> p = pairs_;
+    if (follow_ && x.size() > 0) {
+      int far = 1;
+      for (int v = 1; v < x.size() / 3; ++v)
+        if ((x.segment<3>(3 * v) - x.segment<3>(0)).norm() > (x.segment<3>(3 * far) - x.segment<3>(0)).norm()) far = v;
+      p.push_back({0, far});
+    }
+    return p;
+  }
+  std::vector<std::array<int, 2>> pairs_;
+  double k_, rest_;
+  bool follow_;
+};
+
+TEST(DofMap, NumbersFreeDofsInOrder) {
+  const DofMap m({0, 1, 0, 0, 1, 1});
+  EXPECT_EQ(m.dofs(), 6);
+  EXPECT_EQ(m.free_count(), 3);
+  EXPECT_EQ(m.free_index(), (std::vector<int>{0, -1, 1, 2, -1, -1}));
+  const Eigen::VectorXd full = Eigen::VectorXd::LinSpaced(6, 1, 6);
+  EXPECT_EQ(m.gather_free(full), Eigen::Vector3d(1, 3, 4));
+  Eigen::VectorXd y = full;
+  m.scatter_add_free(Eigen::Vector3d(1, 1, 1), 2.0, y);
+  EXPECT_EQ(y, (Eigen::VectorXd(6) << 3, 2, 5, 6, 5, 6).finished());
+  EXPECT_EQ(m.expand(Eigen::Vector3d(7, 8, 9)), (Eigen::VectorXd(6) << 7, 0, 8, 9, 0, 0).finished());
+}
+
+TEST(HessianLayout, AnyNumberingGivesSortedLowerColumnsStartingAtTheDiagonal) {
+  // Two vertices coupled, a third alone; DOFs numbered in a scrambled order, one DOF left out.
+  const Stencil pair{.arity = 2, .vertices = {0, 2}};
+  std::vector<int> numbering = {4, 0, 6, -1, 7, 1, 2, 5, 3};
+  const HessianLayout L(numbering, 8, {&pair});
+  const SparseLower& P = L.pattern();
+  ASSERT_EQ(P.rows(), 8);
+  for (Eigen::Index c = 0; c < P.outerSize(); ++c) {
+    const int first = P.outerIndexPtr()[c], last = P.outerIndexPtr()[c + 1];
+    ASSERT_LT(first, last);
+    EXPECT_EQ(P.innerIndexPtr()[first], c) << "column " << c << " starts at its diagonal";
+    for (int k = first + 1; k < last; ++k) EXPECT_LT(P.innerIndexPtr()[k - 1], P.innerIndexPtr()[k]);
+  }
+  // Vertex 1's DOFs (numbers 7, 1) couple only with themselves; vertices 0 and 2 with each other.
+  EXPECT_GE(L.entry(7, 1), 0);
+  EXPECT_EQ(L.entry(7, 0), -1);
+  EXPECT_GE(L.entry(5, 4), 0);  // vertex 2 (its y: 5) with vertex 0 (its x: 4)
+  EXPECT_TRUE(L.covers(pair));
+  EXPECT_FALSE(L.covers(Stencil{.arity = 2, .vertices = {0, 1}}));
+  EXPECT_NE(L.id(), HessianLayout(numbering, 8, {&pair}).id()) << "every layout has its own id";
+  EXPECT_THROW(HessianLayout(numbering, 9, {&pair}), std::invalid_argument) << "number 8 unused";
+  numbering[1] = 4;
+  EXPECT_THROW(HessianLayout(numbering, 8, {&pair}), std::invalid_argument) << "number 4 twice";
+}
+
+TEST(HessianLayout, AddBlockFillsTheLowerTriangleAndSkipsKinematicDofs) {
+  const Stencil pair{.arity = 2, .vertices = {0, 1}};
+  const DofMap dofs({0, 0, 1, 0, 0, 0});  // vertex 0's z is kinematic
+  const HessianLayout L(dofs.free_index(), 5, {&pair});
+  std::vector<double> values(L.pattern().nonZeros(), 0.0);
+  const HessianValues H(L, values.data());
+  Mat3 A, B;
+  A << 4, 1, 2, 1, 5, 3, 2, 3, 6;
+  B << 1, 2, 3, 4, 5, 6, 7, 8, 9;
+  H.add_block(0, 0, A);
+  H.add_block(1, 1, A);
+  H.add_block(0, 1, B);
+  SparseLower M = L.pattern();
+  std::copy(values.begin(), values.end(), M.valuePtr());
+  const Eigen::MatrixXd dense = Eigen::MatrixXd(M).selfadjointView<Eigen::Lower>();
+  Eigen::MatrixXd full = Eigen::MatrixXd::Zero(6, 6);
+  full.block<3, 3>(0, 0) = A;
+  full.block<3, 3>(3, 3) = A;
+  full.block<3, 3>(0, 3) = B;
+  full.block<3, 3>(3, 0) = B.transpose();
+  const std::vector<int> keep = {0, 1, 3, 4, 5};
+  EXPECT_EQ(dense, full(keep, keep));
+  EXPECT_THROW(HessianValues(HessianLayout(dofs.free_index(), 5, {}), values.data()).add_block(0, 1, B), std::logic_error);
+}
+
+TEST(Problem, SumsItsTermsAndMatchesFiniteDifferences) {
+  const VolumeMesh m = box_tets(2);
+  std::vector<std::uint8_t> fixed(3 * m.vertex_count(), 0);
+  for (int d : {0, 1, 2, 7}) fixed[d] = 1;
+  ElasticTerm elastic(m, make_material("stable_neo_hookean", {1.0, 10.0}));
+  Springs springs({{0, 26}, {5, 20}, {3, 3 + 9}}, 2.0, 0.5);  // far apart in the mesh: the layout must couple them
+  Problem p{DofMap(fixed)};
+  p.add(elastic);
+  p.add(springs);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> n(0.0, 0.05);
+  Eigen::VectorXd x = flatten(m.vertices);
+  for (Eigen::Index i = 0; i < x.size(); ++i) x[i] = 1.1 * x[i] + n(rng);
+  Eigen::VectorXd g;
+  HessianMatrix H;
+  const double E = p.evaluate(x, g, &H, PsdProjection::none);
+  EXPECT_DOUBLE_EQ(E, elastic.energy(x) + springs.energy(x));
+  EXPECT_DOUBLE_EQ(E, p.energy(x));
+  const Eigen::MatrixXd Hd = Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>();
+  auto at = [&](const Eigen::VectorXd& y) {
+    Eigen::VectorXd z = x;
+    for (Eigen::Index d = 0; d < z.size(); ++d)
+      if (!fixed[d]) z[d] = y[p.dofs().free_index()[d]];
+    return z;
+  };
+  const Eigen::VectorXd y = p.dofs().gather_free(x);
+  const Eigen::VectorXd fd_g = fd_gradient([&](const Eigen::VectorXd& z) { return p.energy(at(z)); }, y, 1e-4);
+  const Eigen::MatrixXd fd_H = fd_jacobian(
+      [&](const Eigen::VectorXd& z) {
+        Eigen::VectorXd gz;
+        p.evaluate(at(z), gz, nullptr, PsdProjection::none);
+        return gz;
+      },
+      y, 1e-4);
+  EXPECT_LE((fd_g - g).norm(), 1e-8 * g.norm());
+  EXPECT_LE((fd_H - Hd).norm(), 1e-8 * Hd.norm());
+  EXPECT_EQ(p.layouts_built(), 1);
+}
+
+TEST(Problem, TheLayoutGrowsWhenAVaryingStencilLeavesIt) {
+  const VolumeMesh m = box_hexes(2);
+  ElasticTerm elastic(m, make_material("stable_neo_hookean", {1.0, 10.0}));
+  Springs follow({}, 1.0, 0.1, true);  // vertex 0 tied to the vertex farthest from it
+  Problem p{DofMap(std::vector<std::uint8_t>(3 * m.vertex_count(), 0))};
+  p.add(elastic);
+  p.add(follow);
+  // box_hexes(2): vertex i + 3j + 9k at (i−1, j−1, k−1); vertex 0 shares a cell only with i, j, k ≤ 1.
+  Eigen::VectorXd x = flatten(m.vertices), g;
+  HessianMatrix H;
+  p.evaluate(x, g, &H, PsdProjection::clamp);  // the farthest from vertex 0 is vertex 26: (0, 26) in the layout
+  EXPECT_EQ(p.layouts_built(), 1);
+  const std::uint64_t first = H.layout;
+  p.evaluate(x * 1.01, g, &H, PsdProjection::clamp);  // the same pair: no rebuild
+  EXPECT_EQ(p.layouts_built(), 1);
+  EXPECT_EQ(H.layout, first);
+  x.segment<3>(3 * 1) = Eigen::Vector3d(9, -1, -1);  // vertex 1 far away: (0, 1) share a cell, covered
+  p.evaluate(x, g, &H, PsdProjection::clamp);
+  EXPECT_EQ(p.layouts_built(), 1);
+  EXPECT_EQ(H.layout, first);
+  x = flatten(m.vertices);
+  x.segment<3>(3 * 8) = Eigen::Vector3d(9, 9, -1);  // vertex 8 = (1, 1, −1) far away: (0, 8) share no cell
+  p.evaluate(x, g, &H, PsdProjection::clamp);
+  EXPECT_EQ(p.layouts_built(), 2) << "the layout grew";
+  EXPECT_NE(H.layout, first);
+  // The grown matrix equals a fresh problem's over the same pairs.
+  Springs fixed_pair({{0, 8}}, 1.0, 0.1);
+  Problem q{DofMap(std::vector<std::uint8_t>(3 * m.vertex_count(), 0))};
+  q.add(elastic);
+  q.add(fixed_pair);
+  Eigen::VectorXd gq;
+  HessianMatrix Hq;
+  q.evaluate(x, gq, &Hq, PsdProjection::clamp);
+  EXPECT_EQ(g, gq);
+  EXPECT_EQ(Eigen::MatrixXd(H.matrix), Eigen::MatrixXd(Hq.matrix));
+}
+
+}  // namespace
+}  // namespace snh

@@ -1,0 +1,144 @@
+// Projected Newton on toy problems: trials outside an energy's domain (+∞) shorten the step and never
+// enter the state, a term's step bound starts the line search, accepted iterates reach the terms, and the
+// step-size stopping rule.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "snh/fem/problem.hpp"
+#include "snh/solve/newton.hpp"
+
+namespace snh {
+namespace {
+
+/// E(x) = Σ_i a (x_i − b) − μ log(x_i − b): defined for x_i > b (+∞ elsewhere), minimised at b + μ/a. A full
+/// Newton step from x_i − b = s lands at 2s − a s²/μ, outside the domain for s > 2μ/a. With `bounded`,
+/// max_step keeps every x_i above b (a tenth of the way left), as a contact term's CCD would.
+class Barrier final : public Term {
+ public:
+  Barrier(double b, double a, double mu, bool bounded) : b_(b), a_(a), mu_(mu), bounded_(bounded) {}
+  std::string_view name() const override { return "barrier"; }
+  double energy(const Eigen::VectorXd& x) const override { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, const HessianValues* H, PsdProjection) const override {
+    ++evaluations;
+    double E = 0.0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      const double s = x[i] - b_;
+      if (!(s > 0.0)) {
+        ++outside;
+        return std::numeric_limits<double>::infinity();
+      }
+      E += a_ * s - mu_ * std::log(s);
+      if (g) (*g)[i] += a_ - mu_ / s;
+      if (H) {
+        Mat3 block = Mat3::Zero();
+        block(i % 3, i % 3) = mu_ / (s * s);
+        H->add_block(static_cast<int>(i / 3), static_cast<int>(i / 3), block);
+      }
+    }
+    return E;
+  }
+  double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override {
+    if (!bounded_) return 1.0;
+    double alpha = 1.0;
+    for (Eigen::Index i = 0; i < x.size(); ++i)
+      if (dx[i] < 0.0) alpha = std::min(alpha, 0.9 * (x[i] - b_) / -dx[i]);
+    ++bounds;
+    return alpha;
+  }
+  void on_accepted(const Eigen::VectorXd& x) override {
+    ++accepted;
+    last_accepted = x;
+  }
+  mutable int evaluations = 0, outside = 0, bounds = 0;
+  int accepted = 0;
+  Eigen::VectorXd last_accepted;
+
+ private:
+  double b_, a_, mu_;
+  bool bounded_;
+};
+
+/// Two vertices, every DOF free, b = 0, a = μ = 1 (minimum at 1); starting values above 2 overshoot.
+struct Toy {
+  explicit Toy(bool bounded) : term(0.0, 1.0, 1.0, bounded), problem(DofMap(std::vector<std::uint8_t>(6, 0))) {
+    problem.add(term);
+  }
+  Barrier term;
+  Problem problem;
+};
+
+const Eigen::VectorXd kStart = (Eigen::VectorXd(6) << 40.0, 0.5, 3.0, 7.0, 0.02, 1.5).finished();
+
+TEST(Newton, TrialsOutsideTheDomainShortenTheStepAndNeverEnterTheState) {
+  Toy toy(false);
+  Eigen::VectorXd x = kStart;
+  auto solver = make_linear_solver({.name = "ldlt"});
+  const NewtonReport r = newton_solve(toy.problem, x, *solver, {.max_iterations = 200, .tolerance = 1e-10});
+  ASSERT_TRUE(r.converged) << r.failure;
+  EXPECT_GT(toy.term.outside, 0) << "some full steps left the domain";
+  EXPECT_GT(r.line_search_steps, 0);
+  EXPECT_TRUE(x.allFinite());
+  EXPECT_TRUE((x.array() > 0.0).all());
+  EXPECT_EQ(toy.term.accepted, r.iterations) << "every accepted iterate reaches the terms";
+  EXPECT_EQ(toy.term.last_accepted, x);
+  EXPECT_LE((x.array() - 1.0).abs().maxCoeff(), 1e-9);
+}
+
+TEST(Newton, TheLineSearchStartsAtTheTermsStepBound) {
+  Toy free(false), bounded(true);
+  Eigen::VectorXd a = kStart, b = kStart;
+  auto s1 = make_linear_solver({.name = "ldlt"}), s2 = make_linear_solver({.name = "ldlt"});
+  const NewtonReport ra = newton_solve(free.problem, a, *s1, {.max_iterations = 200, .tolerance = 1e-10});
+  const NewtonReport rb = newton_solve(bounded.problem, b, *s2, {.max_iterations = 200, .tolerance = 1e-10});
+  ASSERT_TRUE(ra.converged && rb.converged);
+  EXPECT_EQ(bounded.term.outside, 0) << "the bound keeps every trial inside the domain";
+  EXPECT_EQ(bounded.term.bounds, rb.iterations) << "asked once per Newton step";
+  EXPECT_GT(free.term.outside, 0);
+  EXPECT_LE((a - b).cwiseAbs().maxCoeff(), 1e-8) << "the same minimum";
+}
+
+TEST(Newton, AZeroStepBoundIsAFailureNotAHang) {
+  class Stuck final : public Term {
+   public:
+    std::string_view name() const override { return "stuck"; }
+    double energy(const Eigen::VectorXd& x) const override { return 0.5 * x.squaredNorm(); }
+    double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, const HessianValues* H, PsdProjection) const override {
+      if (g) *g += x;
+      if (H)
+        for (int v = 0; v < x.size() / 3; ++v) H->add_block(v, v, Mat3::Identity());
+      return energy(x);
+    }
+    double max_step(const Eigen::VectorXd&, const Eigen::VectorXd&) const override { return 0.0; }
+  } stuck;
+  Problem p{DofMap(std::vector<std::uint8_t>(3, 0))};
+  p.add(stuck);
+  Eigen::VectorXd x = Eigen::Vector3d(1, 2, 3);
+  auto solver = make_linear_solver({.name = "ldlt"});
+  const NewtonReport r = newton_solve(p, x, *solver, {});
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.failure, "no step is allowed at Newton iteration 1 (the step bound is 0)");
+  EXPECT_EQ(x, Eigen::Vector3d(1, 2, 3));
+}
+
+TEST(Newton, StopsOnTheStepSizeWhenAsked) {
+  Toy toy(true);
+  Eigen::VectorXd x = kStart;
+  auto solver = make_linear_solver({.name = "ldlt"});
+  // An unreachable residual tolerance: only the step-size rule can stop it.
+  const NewtonReport r =
+      newton_solve(toy.problem, x, *solver, {.max_iterations = 200, .tolerance = 1e-300, .step_tolerance = 1e-9});
+  ASSERT_TRUE(r.converged) << r.failure;
+  EXPECT_TRUE(r.converged_by_step);
+  EXPECT_LE((x.array() - 1.0).abs().maxCoeff(), 1e-8);
+  // Without it, the same solve runs out of iterations.
+  Toy again(true);
+  Eigen::VectorXd y = kStart;
+  const NewtonReport q = newton_solve(again.problem, y, *solver, {.max_iterations = 60, .tolerance = 1e-300});
+  EXPECT_FALSE(q.converged);
+  EXPECT_FALSE(q.converged_by_step);
+}
+
+}  // namespace
+}  // namespace snh
