@@ -1,5 +1,6 @@
 #include "snh/io/mesh_read.hpp"
 
+#include "snh/io/base64.hpp"
 #include "snh/io/lexer.hpp"
 #include "snh/io/surface_read.hpp"
 
@@ -377,39 +378,6 @@ MeshFile read_gmsh(const fs::path& path) {
 
 // ---- VTK .vtu (ASCII data arrays) -----------------------------------------------------------------
 
-/// Decodes base64, allowing several padded streams one after another (VTK encodes the length header
-/// and the data separately). Returns false on a character outside the alphabet.
-bool decode_base64(std::string_view in, std::string& out) {
-  auto value = [](char c) -> int {
-    if (c >= 'A' && c <= 'Z') return c - 'A';
-    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
-    if (c >= '0' && c <= '9') return c - '0' + 52;
-    if (c == '+') return 62;
-    if (c == '/') return 63;
-    return -1;
-  };
-  out.clear();
-  unsigned buffer = 0;
-  int bits = 0;
-  for (char c : in) {
-    if (std::isspace(static_cast<unsigned char>(c))) continue;
-    if (c == '=') {  // padding: the current stream ends; drop its partial bits
-      buffer = 0;
-      bits = 0;
-      continue;
-    }
-    const int v = value(c);
-    if (v < 0) return false;
-    buffer = (buffer << 6) | static_cast<unsigned>(v);
-    bits += 6;
-    if (bits >= 8) {
-      bits -= 8;
-      out.push_back(static_cast<char>((buffer >> bits) & 0xFF));
-    }
-  }
-  return true;
-}
-
 /// Reads `count` little-endian values of VTK type `type` from bytes, as doubles; nullopt for an unknown type.
 std::optional<std::vector<double>> decode_values(std::string_view type, const char* bytes, std::size_t count) {
   std::vector<double> out(count);
@@ -516,7 +484,7 @@ MeshFile read_vtu(const fs::path& path, VtuData* data = nullptr) {
       if (format == "binary") {
         const std::size_t start = text.find('>', at) + 1, end = text.find("</DataArray>", start);
         if (end == std::string::npos) fail(at, "unterminated DataArray");
-        if (!decode_base64(std::string_view(text).substr(start, end - start), bytes)) fail(at, fmt::format("DataArray {}: invalid base64", label));
+        if (!base64_decode(std::string_view(text).substr(start, end - start), bytes)) fail(at, fmt::format("DataArray {}: invalid base64", label));
       } else if (format == "appended") {
         if (appended.empty()) fail(at, fmt::format("DataArray {} is appended, but the file has no <AppendedData>", label));
         std::size_t offset = 0;
@@ -529,7 +497,7 @@ MeshFile read_vtu(const fs::path& path, VtuData* data = nullptr) {
         if (appended_base64) {
           // Base64: the header, then the data, each its own stream; decode enough characters for both.
           const std::size_t chars = 4 * ((header_size + 2) / 3) + 4 * ((static_cast<std::size_t>(expected) * size + 2) / 3);
-          if (!decode_base64(appended.substr(offset, chars), bytes)) fail(at, fmt::format("DataArray {}: invalid base64", label));
+          if (!base64_decode(appended.substr(offset, chars), bytes)) fail(at, fmt::format("DataArray {}: invalid base64", label));
         } else {
           bytes = std::string(appended.substr(offset, header_size + static_cast<std::size_t>(expected) * size));
         }

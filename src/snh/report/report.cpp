@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "snh/io/atomic_file.hpp"
+#include "snh/io/base64.hpp"
 #include "snh/io/mesh_read.hpp"
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/surface.hpp"
@@ -491,21 +492,6 @@ json read_report_data(const fs::path& dir) {
     throw ReportError(fmt::format("{}: not a report's data ({}): run snh report {} again", path.string(), e.what(),
                                   dir.string()));
   }
-}
-
-std::string base64_encode(const void* data, std::size_t size) {
-  static constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  const auto* b = static_cast<const unsigned char*>(data);
-  std::string out;
-  out.reserve(4 * ((size + 2) / 3));
-  for (std::size_t i = 0; i < size; i += 3) {
-    const unsigned v = (b[i] << 16) | (i + 1 < size ? b[i + 1] << 8 : 0) | (i + 2 < size ? b[i + 2] : 0);
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += i + 1 < size ? kAlphabet[(v >> 6) & 63] : '=';
-    out += i + 2 < size ? kAlphabet[v & 63] : '=';
-  }
-  return out;
 }
 
 ReportSummary write_report(const fs::path& dir, const ReportOptions& options) {

@@ -17,6 +17,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "snh/io/base64.hpp"  // base64_encode, declared here before it moved to io/
+
 namespace snh {
 
 /// A directory the report cannot be made for; the message is one line naming the file at fault.
@@ -47,8 +49,5 @@ ReportSummary write_report(const std::filesystem::path& dir, const ReportOptions
 
 /// The viewer script embedded at build time (viewer/ bundled by esbuild).
 [[nodiscard]] std::string_view report_bundle();
-
-/// Base64 (RFC 4648, padded) of `size` bytes.
-[[nodiscard]] std::string base64_encode(const void* data, std::size_t size);
 
 }  // namespace snh
