@@ -14,7 +14,7 @@
 
 #include <fmt/format.h>
 
-#include "snh/io/mesh_read.hpp"
+#include "snh/io/mesh_file.hpp"
 
 namespace snh::detail {
 

@@ -1,11 +1,20 @@
 #include "snh/io/vtu.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <iterator>
+#include <optional>
+#include <string_view>
 
 #include <fmt/format.h>
 
 #include "snh/io/atomic_file.hpp"
+#include "snh/io/base64.hpp"
+#include "snh/io/hex_order.hpp"
 #include "snh/io/lexer.hpp"
+#include "snh/io/mesh_builder.hpp"
 
 namespace snh {
 
@@ -13,8 +22,6 @@ void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const 
                const std::vector<std::pair<std::string, Eigen::Matrix3Xd>>& point_data,
                const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data,
                const std::vector<std::pair<std::string, Eigen::VectorXd>>& point_scalars) {
-  // VTK_HEXAHEDRON walks the bottom face around; VolumeMesh has c2 = c0 + ŷ, c3 = c0 + x̂ + ŷ.
-  static constexpr int kHexToVtk[8] = {0, 1, 3, 2, 4, 5, 7, 6};
   const int npc = nodes_per_cell(mesh.type);
   const int vtk_type = mesh.type == CellType::tet4 ? 10 : 12;
   write_atomically(path, [&](std::ostream& out) {
@@ -29,7 +36,7 @@ void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const 
     fmt::format_to(o, "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
     for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
       for (int a = 0; a < npc; ++a)
-        fmt::format_to(o, "{}{}", a ? " " : "", mesh.cells(mesh.type == CellType::hex8 ? kHexToVtk[a] : a, c));
+        fmt::format_to(o, "{}{}", a ? " " : "", mesh.cells(mesh.type == CellType::hex8 ? detail::kHexCornerSwap[a] : a, c));
       fmt::format_to(o, "\n");
     }
     fmt::format_to(o, "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
@@ -86,6 +93,229 @@ std::vector<std::pair<double, std::string>> read_pvd(const std::filesystem::path
     out.emplace_back(t, file);
   }
   if (out.empty()) throw MeshError(fmt::format("{}: lists no frames", path.string()));
+  return out;
+}
+
+namespace {
+
+using detail::Lexer;
+using detail::xml_attribute;
+
+/// Reads `count` little-endian values of VTK type `type` from bytes, as doubles; nullopt for an unknown type.
+std::optional<std::vector<double>> decode_values(std::string_view type, const char* bytes, std::size_t count) {
+  std::vector<double> out(count);
+  auto take = [&](auto tag) {
+    using T = decltype(tag);
+    for (std::size_t i = 0; i < count; ++i) {
+      T v;
+      std::memcpy(&v, bytes + i * sizeof(T), sizeof(T));
+      out[i] = static_cast<double>(v);
+    }
+  };
+  if (type == "Float64") take(double{});
+  else if (type == "Float32") take(float{});
+  else if (type == "Int64") take(std::int64_t{});
+  else if (type == "UInt64") take(std::uint64_t{});
+  else if (type == "Int32") take(std::int32_t{});
+  else if (type == "UInt32") take(std::uint32_t{});
+  else if (type == "Int16") take(std::int16_t{});
+  else if (type == "UInt16") take(std::uint16_t{});
+  else if (type == "Int8") take(std::int8_t{});
+  else if (type == "UInt8") take(std::uint8_t{});
+  else return std::nullopt;
+  return out;
+}
+
+/// The bytes of one value of VTK type `type`; 0 for an unknown type.
+std::size_t vtk_type_size(std::string_view type) {
+  if (type == "Float64" || type == "Int64" || type == "UInt64") return 8;
+  if (type == "Float32" || type == "Int32" || type == "UInt32") return 4;
+  if (type == "Int16" || type == "UInt16") return 2;
+  if (type == "Int8" || type == "UInt8") return 1;
+  return 0;
+}
+
+/// Reads a .vtu file's mesh; when `data` is given, also every named array of <PointData> and <CellData>.
+MeshFile read_vtu_file(const std::filesystem::path& path, VtuData* data) {
+  const std::string text = detail::read_all(path);
+  const std::string file = path.string();
+  auto line_of = [&](std::size_t pos) {
+    return 1 + static_cast<int>(std::count(text.begin(), text.begin() + std::min(pos, text.size()), '\n'));
+  };
+  auto fail = [&](std::size_t pos, const std::string& what) -> void {
+    throw MeshError(fmt::format("{}:{}: {}", file, line_of(pos), what));
+  };
+  const std::size_t root = text.find("<VTKFile");
+  if (root == std::string::npos || text.find("UnstructuredGrid") == std::string::npos)
+    fail(0, "not a VTK UnstructuredGrid (.vtu) file");
+  const std::string_view root_tag = std::string_view(text).substr(root, text.find('>', root) - root);
+  if (const std::string c = xml_attribute(root_tag, "compressor"); !c.empty())
+    fail(root, fmt::format("compressed data ({}) is not supported: write the file uncompressed", c));
+  if (xml_attribute(root_tag, "byte_order") == "BigEndian") fail(root, "big-endian data is not supported");
+  const std::string header_type = xml_attribute(root_tag, "header_type");
+  const std::size_t header_size = header_type == "UInt64" ? 8 : 4;
+  if (!header_type.empty() && header_type != "UInt32" && header_type != "UInt64")
+    fail(root, fmt::format("unknown header_type \"{}\"", header_type));
+  // The appended data: what follows the underscore, raw or base64.
+  std::string_view appended;
+  bool appended_base64 = false;
+  if (const std::size_t ad = text.find("<AppendedData"); ad != std::string::npos) {
+    const std::string_view tag = std::string_view(text).substr(ad, text.find('>', ad) - ad);
+    appended_base64 = xml_attribute(tag, "encoding") == "base64";
+    const std::size_t underscore = text.find('_', text.find('>', ad));
+    if (underscore == std::string::npos) fail(ad, "<AppendedData> without the '_' that starts the data");
+    appended = std::string_view(text).substr(underscore + 1);
+  }
+  const std::size_t piece = text.find("<Piece");
+  if (piece == std::string::npos) fail(0, "no <Piece>");
+  const std::string_view piece_tag = std::string_view(text).substr(piece, text.find('>', piece) - piece);
+  long long n_points = -1, n_cells = -1;
+  try {
+    n_points = std::stoll(xml_attribute(piece_tag, "NumberOfPoints"));
+    n_cells = std::stoll(xml_attribute(piece_tag, "NumberOfCells"));
+  } catch (const std::exception&) {
+    fail(piece, "<Piece> needs NumberOfPoints and NumberOfCells");
+  }
+  if (n_points < 0 || n_cells < 0 || n_points > (1LL << 31) || n_cells > (1LL << 31)) fail(piece, "implausible point or cell count");
+  // The values of the DataArray named `name` inside `section` (or its first one), `expected` of them.
+  auto array = [&](const char* section, const char* name, long long expected, std::size_t& where) {
+    const std::size_t sec = text.find(fmt::format("<{}", section), piece);
+    if (sec == std::string::npos) fail(piece, fmt::format("no <{}> section", section));
+    const std::size_t sec_end = text.find(fmt::format("</{}", section), sec);
+    std::size_t at = sec;
+    for (;;) {
+      at = text.find("<DataArray", at + 1);
+      if (at == std::string::npos || at > sec_end) fail(sec, fmt::format("no DataArray {} in <{}>", name ? name : "", section));
+      const std::string_view tag = std::string_view(text).substr(at, text.find('>', at) - at);
+      if (name && xml_attribute(tag, "Name") != name) continue;
+      where = at;
+      const std::string label = name ? name : section;
+      const std::string format = xml_attribute(tag, "format"), type = xml_attribute(tag, "type");
+      if (format == "ascii") {
+        const std::size_t start = text.find('>', at) + 1, end = text.find("</DataArray>", start);
+        if (end == std::string::npos) fail(at, "unterminated DataArray");
+        std::vector<double> out;
+        Lexer lx(path, text.substr(start, end - start));
+        const bool data_array = std::strcmp(section, "PointData") == 0 || std::strcmp(section, "CellData") == 0;
+        while (!lx.at_end()) out.push_back(lx.number(label.c_str(), !data_array));
+        if (static_cast<long long>(out.size()) != expected)
+          fail(at, fmt::format("{} has {} values, expected {}", label, out.size(), expected));
+        return out;
+      }
+      const std::size_t size = vtk_type_size(type);
+      if (size == 0) fail(at, fmt::format("DataArray {} has unknown type \"{}\"", label, type));
+      std::string bytes;
+      if (format == "binary") {
+        const std::size_t start = text.find('>', at) + 1, end = text.find("</DataArray>", start);
+        if (end == std::string::npos) fail(at, "unterminated DataArray");
+        if (!base64_decode(std::string_view(text).substr(start, end - start), bytes)) fail(at, fmt::format("DataArray {}: invalid base64", label));
+      } else if (format == "appended") {
+        if (appended.empty()) fail(at, fmt::format("DataArray {} is appended, but the file has no <AppendedData>", label));
+        std::size_t offset = 0;
+        try {
+          offset = std::stoull(xml_attribute(tag, "offset"));
+        } catch (const std::exception&) {
+          fail(at, fmt::format("DataArray {} is appended but has no offset", label));
+        }
+        if (offset >= appended.size()) fail(at, fmt::format("DataArray {}: offset {} is past the end of the appended data", label, offset));
+        if (appended_base64) {
+          // Base64: the header, then the data, each its own stream; decode enough characters for both.
+          const std::size_t chars = 4 * ((header_size + 2) / 3) + 4 * ((static_cast<std::size_t>(expected) * size + 2) / 3);
+          if (!base64_decode(appended.substr(offset, chars), bytes)) fail(at, fmt::format("DataArray {}: invalid base64", label));
+        } else {
+          bytes = std::string(appended.substr(offset, header_size + static_cast<std::size_t>(expected) * size));
+        }
+      } else {
+        fail(at, fmt::format("DataArray {} has unknown format \"{}\"", label, format));
+      }
+      if (bytes.size() < header_size) fail(at, fmt::format("DataArray {}: the data ends before its length header", label));
+      std::uint64_t length = 0;
+      std::memcpy(&length, bytes.data(), header_size);  // little-endian: the low bytes come first
+      if (length != static_cast<std::uint64_t>(expected) * size || bytes.size() < header_size + length)
+        fail(at, fmt::format("DataArray {}: {} bytes of data, expected {} ({} values of {})", label,
+                             std::min<std::uint64_t>(length, bytes.size() - header_size), expected * size, expected, type));
+      std::vector<double> out = *decode_values(type, bytes.data() + header_size, static_cast<std::size_t>(expected));
+      if (std::strcmp(section, "Points") == 0)
+        for (double v : out)
+          if (!std::isfinite(v)) fail(at, "a point coordinate is not finite");
+      return out;
+    }
+  };
+  std::size_t where = 0;
+  const std::vector<double> points = array("Points", nullptr, 3 * n_points, where);
+  detail::MeshBuilder b;
+  Lexer dummy(path, "");  // the builder reports through a lexer; .vtu cells have no line of their own
+  for (long long i = 0; i < n_points; ++i) b.vertex(dummy, i, points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+  std::size_t w_off = 0, w_types = 0, w_conn = 0;
+  const std::vector<double> offsets = array("Cells", "offsets", n_cells, w_off);
+  const std::vector<double> types = array("Cells", "types", n_cells, w_types);
+  long long total = n_cells ? static_cast<long long>(offsets.back()) : 0;
+  if (total < 0 || total > (1LL << 33)) fail(w_off, "implausible offsets");
+  const std::vector<double> conn = array("Cells", "connectivity", total, w_conn);
+  long long previous = 0;
+  std::vector<long long> kept;  // the tet and hex cells, by index in the file
+  for (long long c = 0; c < n_cells; ++c) {
+    const long long type = static_cast<long long>(types[c]), end = static_cast<long long>(offsets[c]);
+    if (end < previous || end > total) fail(w_off, fmt::format("cell {}: offsets are not increasing", c));
+    if (type == 5 || type == 9 || type == 3 || type == 1) {  // surface / line / vertex cells: skipped
+      previous = end;
+      continue;
+    }
+    kept.push_back(c);
+    const int nodes = type == 10 ? 4 : type == 12 ? 8 : -1;
+    if (nodes < 0) fail(w_types, fmt::format("cell {} has unsupported VTK type {} (tets 10 and hexes 12 only)", c, type));
+    if (end - previous != nodes) fail(w_off, fmt::format("cell {}: offsets give {} nodes for a {}-node cell", c, end - previous, nodes));
+    std::vector<long long> ids(nodes);
+    for (int a = 0; a < nodes; ++a) ids[a] = static_cast<long long>(conn[previous + a]);
+    for (long long id : ids)
+      if (id < 0 || id >= n_points) fail(w_conn, fmt::format("cell {} refers to point {}, which does not exist", c, id));
+    b.cell(dummy, nodes == 4 ? CellType::tet4 : CellType::hex8, nodes == 4 ? ids : detail::hex_to_lattice(ids), 0);
+    previous = end;
+  }
+  if (data) {
+    // Every named array of the two data sections, by its NumberOfComponents (1 if not given).
+    for (const char* section : {"PointData", "CellData"}) {
+      const std::size_t sec = text.find(fmt::format("<{}", section), piece);
+      if (sec == std::string::npos) continue;
+      const std::size_t sec_end = text.find(fmt::format("</{}", section), sec);
+      const bool cells = std::strcmp(section, "CellData") == 0;
+      for (std::size_t at = text.find("<DataArray", sec); at != std::string::npos && at < sec_end;
+           at = text.find("<DataArray", at + 1)) {
+        const std::string_view tag = std::string_view(text).substr(at, text.find('>', at) - at);
+        const std::string name = xml_attribute(tag, "Name");
+        if (name.empty()) continue;
+        const std::string nc = xml_attribute(tag, "NumberOfComponents");
+        long long components = 1;
+        if (!nc.empty()) {
+          try {
+            components = std::stoll(nc);
+          } catch (const std::exception&) {
+            components = 0;
+          }
+          if (components < 1 || components > 9) fail(at, fmt::format("DataArray {}: bad NumberOfComponents \"{}\"", name, nc));
+        }
+        std::size_t w = 0;
+        std::vector<double> values = array(section, name.c_str(), (cells ? n_cells : n_points) * components, w);
+        if (cells && static_cast<long long>(kept.size()) != n_cells) {  // only the tet and hex cells' values
+          std::vector<double> selected;
+          for (long long c : kept)
+            selected.insert(selected.end(), values.begin() + c * components, values.begin() + (c + 1) * components);
+          values = std::move(selected);
+        }
+        (cells ? data->cell_data : data->point_data)[name] = std::move(values);
+      }
+    }
+  }
+  return b.finish(dummy);
+}
+
+}  // namespace
+
+MeshFile read_vtu(const std::filesystem::path& path) { return read_vtu_file(path, nullptr); }
+
+VtuData read_vtu_data(const std::filesystem::path& path) {
+  VtuData out;
+  out.mesh = read_vtu_file(path, &out);
   return out;
 }
 

@@ -1,12 +1,16 @@
 #pragma once
-// VTK XML unstructured grids (.vtu, ASCII) and ParaView series (.pvd) for frames of a volume mesh.
+// VTK XML unstructured grids (.vtu) and ParaView series (.pvd) (DESIGN.md io/): frames of a volume mesh
+// written (ASCII data), and .vtu meshes read back with their data arrays (ASCII, inline base64, or
+// appended raw or base64 data; uncompressed, little-endian).
 #include <filesystem>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "snh/io/mesh_file.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 
 namespace snh {
@@ -30,5 +34,22 @@ void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<do
 /// DataSet's index). Throws MeshError ("FILE: what is wrong") for an unreadable file, a DataSet without
 /// a file or with a timestep that is not a number, or no DataSet at all.
 [[nodiscard]] std::vector<std::pair<double, std::string>> read_pvd(const std::filesystem::path& path);
+
+/// Reads a .vtu file's mesh, without the geometric checks (check_mesh).
+///   path  the .vtu file: one <Piece>; tet (VTK type 10) and hex (12) cells are kept, surface, line and
+///         vertex cells (5, 9, 3, 1) skipped
+/// Returns the mesh (cell lines unknown: 0). Throws MeshError ("FILE:LINE: ...").
+[[nodiscard]] MeshFile read_vtu(const std::filesystem::path& path);
+
+/// A .vtu file's mesh (unchecked, as read_mesh_file) and its named data arrays, e.g. a frame written by
+/// write_vtu read back. Values are interleaved by component (x0 y0 z0 x1 ...); cell arrays hold the
+/// values of the tet and hex cells only (surface, line and vertex cells are skipped, as in the mesh).
+struct VtuData {
+  MeshFile mesh;
+  std::map<std::string, std::vector<double>> point_data, cell_data;
+};
+
+/// Reads a .vtu file with its <PointData> and <CellData> arrays. Throws MeshError.
+[[nodiscard]] VtuData read_vtu_data(const std::filesystem::path& path);
 
 }  // namespace snh
