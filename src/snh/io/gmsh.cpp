@@ -7,7 +7,9 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ostream.h>
 
+#include "snh/io/atomic_file.hpp"
 #include "snh/io/hex_order.hpp"
 #include "snh/io/lexer.hpp"
 #include "snh/io/mesh_builder.hpp"
@@ -251,6 +253,23 @@ MeshFile read_gmsh(const std::filesystem::path& path) {
   }
   if (!nodes_seen || !elements_seen) lx.fail("the file has no $Nodes or no $Elements section");
   return b.finish(lx);
+}
+
+void write_msh(const std::filesystem::path& path, const VolumeMesh& m) {
+  write_atomically(path, [&](std::ostream& o) {
+    const Eigen::Index nv = m.vertex_count(), nc = m.cell_count();
+    const int n = nodes_per_cell(m.type);
+    fmt::print(o, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 {} 1 {}\n3 1 0 {}\n", nv, nv, nv);
+    for (Eigen::Index v = 0; v < nv; ++v) fmt::print(o, "{}\n", v + 1);
+    for (Eigen::Index v = 0; v < nv; ++v) fmt::print(o, "{:.17g} {:.17g} {:.17g}\n", m.vertices(0, v), m.vertices(1, v), m.vertices(2, v));
+    fmt::print(o, "$EndNodes\n$Elements\n1 {} 1 {}\n3 1 {} {}\n", nc, nc, m.type == CellType::tet4 ? 4 : 5, nc);
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      fmt::print(o, "{}", c + 1);
+      for (int a = 0; a < n; ++a) fmt::print(o, " {}", m.cells(detail::file_corner(m.type, a), c) + 1);
+      o << '\n';
+    }
+    o << "$EndElements\n";
+  });
 }
 
 }  // namespace snh

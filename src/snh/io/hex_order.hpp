@@ -3,6 +3,8 @@
 // and in VolumeMesh (lattice order: c2 = c0 + ŷ, c3 = c0 + x̂ + ŷ).
 #include <vector>
 
+#include "snh/mesh/volume_mesh.hpp"
+
 namespace snh::detail {
 
 /// Swapping corners 2 ↔ 3 and 6 ↔ 7 maps either order to the other (the permutation is its own inverse).
@@ -14,5 +16,8 @@ inline std::vector<long long> hex_to_lattice(const std::vector<long long>& ids) 
   for (int a = 0; a < 8; ++a) out[a] = ids[kHexCornerSwap[a]];
   return out;
 }
+
+/// The VolumeMesh corner written as file corner `a` of a cell of type `t` (tets keep their order).
+inline int file_corner(CellType t, int a) { return t == CellType::tet4 ? a : kHexCornerSwap[a]; }
 
 }  // namespace snh::detail

@@ -7,7 +7,9 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ostream.h>
 
+#include "snh/io/atomic_file.hpp"
 #include "snh/io/hex_order.hpp"
 #include "snh/io/lexer.hpp"
 #include "snh/io/mesh_builder.hpp"
@@ -59,6 +61,21 @@ MeshFile read_medit(const std::filesystem::path& path) {
   }
   if (!dimension_seen) lx.fail("no 'Dimension 3' line");
   return b.finish(lx);
+}
+
+void write_medit(const std::filesystem::path& path, const VolumeMesh& m) {
+  write_atomically(path, [&](std::ostream& o) {
+    const int n = nodes_per_cell(m.type);
+    fmt::print(o, "MeshVersionFormatted 2\nDimension 3\nVertices\n{}\n", m.vertex_count());
+    for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
+      fmt::print(o, "{:.17g} {:.17g} {:.17g} 0\n", m.vertices(0, v), m.vertices(1, v), m.vertices(2, v));
+    fmt::print(o, "{}\n{}\n", m.type == CellType::tet4 ? "Tetrahedra" : "Hexahedra", m.cell_count());
+    for (Eigen::Index c = 0; c < m.cell_count(); ++c) {
+      for (int a = 0; a < n; ++a) fmt::print(o, "{} ", m.cells(detail::file_corner(m.type, a), c) + 1);
+      o << "0\n";
+    }
+    o << "End\n";
+  });
 }
 
 }  // namespace snh

@@ -36,7 +36,7 @@ void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const 
     fmt::format_to(o, "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
     for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
       for (int a = 0; a < npc; ++a)
-        fmt::format_to(o, "{}{}", a ? " " : "", mesh.cells(mesh.type == CellType::hex8 ? detail::kHexCornerSwap[a] : a, c));
+        fmt::format_to(o, "{}{}", a ? " " : "", mesh.cells(detail::file_corner(mesh.type, a), c));
       fmt::format_to(o, "\n");
     }
     fmt::format_to(o, "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
