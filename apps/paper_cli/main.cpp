@@ -14,6 +14,7 @@
 #include "../common/omp_env.hpp"
 #include "../common/run_report.hpp"
 #include "snh/sim/interrupt.hpp"
+#include "snh/sim/run_directory.hpp"
 #include "snh/sim/stretch.hpp"
 
 namespace {
@@ -77,6 +78,8 @@ int main(int argc, char** argv) {
     config.live_progress = ::isatty(STDOUT_FILENO) != 0;
     snh::validate(config);
     snh::install_stop_handlers();
+    // The directory stays locked until the report is written: no other run can start there meanwhile.
+    config.lock = std::make_shared<snh::RunDirectoryLock>(config.out);
     const snh::StretchResult result = snh::run_stretch(config, std::cout);
     (void)snh::cli::write_run_report(config.out, program);  // the browser report; a failure keeps the results
     if (result.interrupted_by) return 128 + result.interrupted_by;

@@ -114,6 +114,8 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     c.live_progress = ::isatty(STDOUT_FILENO) != 0;
     validate(c);
     install_stop_handlers();
+    // The directory stays locked until the report is written: no other run can start there meanwhile.
+    c.lock = std::make_shared<RunDirectoryLock>(c.out);
     const StretchResult r = run_stretch(c, std::cout);
     if (!o->no_report) (void)write_run_report(c.out, "snh");
     exit_code = r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;

@@ -273,23 +273,23 @@ TEST(RunReport, RewritingForFewerFramesRemovesStaleFrameFiles) {
 
 TEST(RunReport, SceneReportUsesTimeAndItsPins) {
   Scene s;
-  s.element = CellType::hex8;
-  s.resolution = 2;
-  s.end_time = 0.2;
-  s.frames = 4;
-  s.gravity = Eigen::Vector3d(0, -9.8, 0);
-  PinSet pin;
+  s.mesh.element = CellType::hex8;
+  s.mesh.resolution = 2;
+  s.time.end_time = 0.2;
+  s.time.frames = 4;
+  s.forces.gravity = Eigen::Vector3d(0, -9.8, 0);
+  PinSpec pin;
   pin.select.region = Eigen::AlignedBox3d(Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d(1, 1, 1));  // the top face
   s.pins.push_back(pin);
-  s.out = fresh_dir("scene");
-  s.command_line = "snh run hanging.json";
+  s.output.dir = fresh_dir("scene");
+  s.run.command_line = "snh run hanging.json";
   std::ostringstream log;
   const SceneResult r = run_scene(s, log);
   ASSERT_TRUE(r.all_converged);
-  const ReportSummary sum = write_report(s.out);
+  const ReportSummary sum = write_report(s.output.dir);
   EXPECT_EQ(sum.kind, "scene");
   EXPECT_EQ(sum.frames, 5);
-  const json d = js_payload(s.out / "report" / "data.js", "window.SNH_REPORT = ", ";");
+  const json d = js_payload(s.output.dir / "report" / "data.js", "window.SNH_REPORT = ", ";");
   EXPECT_EQ(d["title"], "snh run hanging.json");
   EXPECT_EQ(d["mesh"]["pinned_count"], 9);
   EXPECT_EQ(d["mesh"]["frames"][4]["label"], "frame 4");
@@ -298,7 +298,7 @@ TEST(RunReport, SceneReportUsesTimeAndItsPins) {
     EXPECT_EQ(p["x"].size(), 5u);  // frame 0 included
     EXPECT_EQ(p["x_label"], "time");
   }
-  fs::remove_all(s.out);
+  fs::remove_all(s.output.dir);
 }
 
 TEST(RunReport, RunWithoutVtuFramesHasPlotsButNo3DView) {

@@ -129,26 +129,26 @@ TEST(Dynamics, StiffnessDampingLeavesARigidlyCarriedBodyAlone) {
 
 /// A scene in memory, run quietly into a temporary directory.
 SceneResult run_quietly(Scene s, const std::string& name) {
-  s.out = std::filesystem::temp_directory_path() / ("snh_test_dyn_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(s.out);
+  s.output.dir = std::filesystem::temp_directory_path() / ("snh_test_dyn_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(s.output.dir);
   std::ostringstream log;
   SceneResult r = run_scene(s, log);
-  std::filesystem::remove_all(s.out);
+  std::filesystem::remove_all(s.output.dir);
   return r;
 }
 
 Scene free_cube(const std::string& material) {
   Scene s;
   s.source = "free_cube";
-  s.element = CellType::hex8;
-  s.resolution = 3;
-  s.material = material;
-  s.params = {1.0, 10.0};
-  s.dt = 0.02;
-  s.end_time = 2.0;
-  s.frames = 40;
-  s.initial.push_back({.kind = InitialOp::Kind::scale, .vector = Eigen::Vector3d(1.3, 0.9, 1.1)});
-  s.write_vtu = false;
+  s.mesh.element = CellType::hex8;
+  s.mesh.resolution = 3;
+  s.material.name = material;
+  s.material.params = {1.0, 10.0};
+  s.time.dt = 0.02;
+  s.time.end_time = 2.0;
+  s.time.frames = 40;
+  s.initial.push_back(ScaleOp{.factors = Eigen::Vector3d(1.3, 0.9, 1.1)});
+  s.output.vtu = false;
   return s;
 }
 
@@ -169,8 +169,8 @@ TEST(Dynamics, BackwardEulerNeverGainsEnergyWithoutForcing) {
 
 TEST(Dynamics, DampingDissipatesFaster) {
   Scene plain = free_cube("stable_neo_hookean"), damped = plain;
-  damped.mass_damping = 2.0;
-  damped.stiffness_damping = 0.05;
+  damped.forces.mass_damping = 2.0;
+  damped.forces.stiffness_damping = 0.05;
   const SceneResult a = run_quietly(plain, "plain"), b = run_quietly(damped, "damped");
   ASSERT_TRUE(a.all_converged && b.all_converged);
   EXPECT_LT(b.frames.back().total_energy, 0.5 * a.frames.back().total_energy);
@@ -181,28 +181,30 @@ TEST(Dynamics, DampingDissipatesFaster) {
 TEST(Dynamics, PinnedBarUnderGravitySettlesAtTheQuasiStaticSolution) {
   Scene s;
   s.source = "bar";
-  s.element = CellType::hex8;
-  s.resolution = 3;
-  s.box_min = Eigen::Vector3d(0, -0.25, -0.25);
-  s.box_max = Eigen::Vector3d(2, 0.25, 0.25);
-  s.params = {300.0, 1200.0};
-  s.density = 1.0;
-  s.gravity = Eigen::Vector3d(0, -9.81, 0);
-  s.pins.push_back({.select = {.region = Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, -1), Eigen::Vector3d(0, 1, 1))}});
-  s.write_vtu = false;
-  s.newton.tolerance = 1e-8;
+  s.mesh.element = CellType::hex8;
+  s.mesh.resolution = 3;
+  s.mesh.min = Eigen::Vector3d(0, -0.25, -0.25);
+  s.mesh.max = Eigen::Vector3d(2, 0.25, 0.25);
+  s.material.params = {300.0, 1200.0};
+  s.material.density = 1.0;
+  s.forces.gravity = Eigen::Vector3d(0, -9.81, 0);
+  PinSpec end;
+  end.select.region = Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, -1), Eigen::Vector3d(0, 1, 1));
+  s.pins.push_back(end);
+  s.output.vtu = false;
+  s.solver.newton.tolerance = 1e-8;
   Scene statics = s;
-  statics.integrator = Integrator::quasi_static;
-  statics.frames = 1;
+  statics.time.integrator = Integrator::quasi_static;
+  statics.time.frames = 1;
   Scene dynamics = s;
-  dynamics.dt = 0.02;
-  dynamics.end_time = 8.0;
-  dynamics.frames = 40;
-  dynamics.mass_damping = 4.0;
+  dynamics.time.dt = 0.02;
+  dynamics.time.end_time = 8.0;
+  dynamics.time.frames = 40;
+  dynamics.forces.mass_damping = 4.0;
   const SceneResult a = run_quietly(statics, "static"), b = run_quietly(dynamics, "dynamic");
   ASSERT_TRUE(a.all_converged) << a.failure;
   ASSERT_TRUE(b.all_converged) << b.failure;
-  const double sag = (a.final_positions - flatten(scene_mesh(s).vertices)).cwiseAbs().maxCoeff();
+  const double sag = (a.final_positions - flatten(scene_mesh(s)->mesh.vertices)).cwiseAbs().maxCoeff();
   EXPECT_GT(sag, 0.05) << "the bar bends under gravity";
   std::cout << "bar: sag " << sag << ", dynamic vs static " << (b.final_positions - a.final_positions).cwiseAbs().maxCoeff() << ", kinetic " << b.frames.back().kinetic_energy << "\n";
   EXPECT_LT((b.final_positions - a.final_positions).cwiseAbs().maxCoeff(), 1e-5 * sag)

@@ -33,9 +33,18 @@ std::string error_of(const json& j) {
 
 TEST(SceneFile, DefaultsAndAFullScene) {
   const Scene d = parse_scene(json::object(), "dir/empty.json");
-  EXPECT_EQ(d.element, CellType::hex8);
-  EXPECT_EQ(d.integrator, Integrator::backward_euler);
-  EXPECT_EQ(d.out, std::filesystem::path("output") / "empty");
+  EXPECT_EQ(d.mesh.element, CellType::hex8);
+  EXPECT_EQ(d.time.integrator, Integrator::backward_euler);
+  EXPECT_EQ(d.output.dir, std::filesystem::path("output") / "empty");
+  // The defaults live in the sections' structs: a scene built in code means what an empty file means.
+  const Scene code;
+  EXPECT_EQ(code.solver.newton.tolerance, d.solver.newton.tolerance);
+  EXPECT_EQ(code.solver.newton.tolerance, 1e-6);
+  EXPECT_EQ(code.time.dt, d.time.dt);
+  EXPECT_EQ(code.time.frames, d.time.frames);
+  EXPECT_EQ(code.material.name, d.material.name);
+  EXPECT_EQ(code.material.params.lambda, d.material.params.lambda);
+  EXPECT_EQ(code.mesh.resolution, d.mesh.resolution);
   const Scene s = parse_scene(json::parse(R"({
     "mesh": {"box": {"element": "tet", "res": 3, "tet_split": "mirrored", "min": [0, 0, 0], "max": [2, 1, 1]}},
     "material": {"name": "neo_hookean", "youngs": 1000, "poisson": 0.3, "reparametrize": true},
@@ -46,21 +55,29 @@ TEST(SceneFile, DefaultsAndAFullScene) {
     "solver": {"linear": "pcg", "tolerance": 1e-6, "max_iterations": 20},
     "output": {"dir": "here", "vtu": false}})"),
                                   "full.json");
-  EXPECT_EQ(s.element, CellType::tet4);
-  EXPECT_EQ(s.tet_split, TetSplit::mirrored);
-  EXPECT_EQ(s.material, "neo_hookean");
-  EXPECT_TRUE(s.reparametrize);
-  EXPECT_NEAR(s.params.mu, 1000 / 2.6, 1e-9);
-  EXPECT_EQ(s.integrator, Integrator::quasi_static);
+  EXPECT_EQ(s.mesh.element, CellType::tet4);
+  EXPECT_EQ(s.mesh.tet_split, TetSplit::mirrored);
+  EXPECT_EQ(s.material.name, "neo_hookean");
+  EXPECT_TRUE(s.material.reparametrize);
+  EXPECT_NEAR(s.material.params.mu, 1000 / 2.6, 1e-9);
+  EXPECT_EQ(s.material.density, 2);
+  EXPECT_EQ(s.time.integrator, Integrator::quasi_static);
+  EXPECT_EQ(s.forces.stiffness_damping, 0.01);
   ASSERT_EQ(s.pins.size(), 1u);
   ASSERT_EQ(s.pins[0].motions.size(), 1u);
-  EXPECT_NEAR(s.pins[0].motions[0].angle, M_PI / 2, 1e-15);
-  EXPECT_TRUE(s.pins[0].motions[0].vector.isApprox(Eigen::Vector3d(0, 0, 1)));
-  EXPECT_EQ(s.initial.size(), 2u);
-  EXPECT_EQ(s.solver, "pcg");
-  EXPECT_EQ(s.newton.max_iterations, 20);
-  EXPECT_EQ(s.out, "here");
-  EXPECT_FALSE(s.write_vtu);
+  const Rotate& rotate = std::get<Rotate>(s.pins[0].motions[0]);
+  EXPECT_NEAR(rotate.radians, M_PI / 2, 1e-15);
+  EXPECT_TRUE(rotate.axis.isApprox(Eigen::Vector3d(0, 0, 1)));
+  EXPECT_EQ(rotate.start, 1);
+  ASSERT_EQ(s.initial.size(), 2u);
+  EXPECT_EQ(std::get<CollapseOp>(s.initial[0]).to, CollapseOp::To::line);
+  EXPECT_EQ(std::get<PerturbOp>(s.initial[1]).seed, 3u);
+  EXPECT_EQ(s.solver.linear, "pcg");
+  EXPECT_EQ(s.solver.newton.max_iterations, 20);
+  EXPECT_EQ(s.output.dir, "here");
+  EXPECT_FALSE(s.output.vtu);
+  ASSERT_TRUE(s.loaded);
+  EXPECT_EQ(s.loaded->mesh.cell_count(), 6 * 27) << "the mesh is read once, by the parser";
 }
 
 TEST(SceneFile, ErrorsNameTheKey) {
@@ -107,7 +124,7 @@ TEST(SceneFile, UnreadableAndMalformedFiles) {
 
 TEST(SceneFile, InitialDeformations) {
   Scene s = parse_scene(json::parse(R"({"mesh": {"box": {"res": 2}}})"), "s.json");
-  const VolumeMesh mesh = scene_mesh(s);
+  const VolumeMesh mesh = scene_mesh(s)->mesh;
   auto positions = [&](const char* ops) {
     s.initial = parse_scene(json::parse(std::string(R"({"mesh": {"box": {"res": 2}}, "initial": )") + ops + "}"), "s.json").initial;
     const Eigen::VectorXd x = initial_positions(s, mesh);
@@ -142,13 +159,13 @@ TEST(SceneFile, InitialDeformations) {
 /// Runs a scene quietly in a temporary directory.
 SceneResult run_json(const std::string& text, const std::string& name) {
   Scene s = parse_scene(json::parse(text), name + ".json");
-  s.out = std::filesystem::temp_directory_path() / ("snh_test_scene_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(s.out);
+  s.output.dir = std::filesystem::temp_directory_path() / ("snh_test_scene_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(s.output.dir);
   std::ostringstream log;
   SceneResult r = run_scene(s, log);
-  EXPECT_TRUE(std::filesystem::exists(s.out / "stats.json"));
-  EXPECT_TRUE(std::filesystem::exists(s.out / "000.obj"));
-  std::filesystem::remove_all(s.out);
+  EXPECT_TRUE(std::filesystem::exists(s.output.dir / "stats.json"));
+  EXPECT_TRUE(std::filesystem::exists(s.output.dir / "000.obj"));
+  std::filesystem::remove_all(s.output.dir);
   return r;
 }
 
@@ -193,11 +210,11 @@ TEST(SceneRun, AStopKeepsTheCompletedFrames) {
                                         "pins": [{"region": {"min": [-1, 1, -1], "max": [1, 1, 1]}}]})"),
                         "stop.json");
   int calls = 0;
-  s.newton.on_iteration = [&](int, double) {
+  s.solver.newton.on_iteration = [&](int, double) {
     if (++calls == 40) request_stop(SIGINT);
   };
-  s.out = std::filesystem::temp_directory_path() / ("snh_test_scene_stop_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(s.out);
+  s.output.dir = std::filesystem::temp_directory_path() / ("snh_test_scene_stop_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(s.output.dir);
   std::ostringstream log;
   const SceneResult r = run_scene(s, log);
   request_stop(0);
@@ -206,11 +223,11 @@ TEST(SceneRun, AStopKeepsTheCompletedFrames) {
   const std::size_t frames = r.frames.size();  // frame 0 and the completed ones
   ASSERT_GT(frames, 1u);
   ASSERT_LT(frames, 11u);
-  EXPECT_TRUE(std::filesystem::exists(s.out / fmt::format("{:03d}.obj", frames - 1)));
-  EXPECT_FALSE(std::filesystem::exists(s.out / fmt::format("{:03d}.obj", frames)));
+  EXPECT_TRUE(std::filesystem::exists(s.output.dir / fmt::format("{:03d}.obj", frames - 1)));
+  EXPECT_FALSE(std::filesystem::exists(s.output.dir / fmt::format("{:03d}.obj", frames)));
   EXPECT_TRUE(r.final_positions.allFinite());
   EXPECT_NE(r.failure.find("interrupted by signal 2"), std::string::npos) << r.failure;
-  std::filesystem::remove_all(s.out);
+  std::filesystem::remove_all(s.output.dir);
 }
 
 TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
@@ -218,13 +235,13 @@ TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
                                  "damping": {"mass": 0.5}, "pins": [{"region": {"min": [-1, 1, -1], "max": [1, 1, 1]}}]})");
   const auto base = std::filesystem::temp_directory_path() / ("snh_test_scene_resume_" + std::to_string(::getpid()));
   Scene full = parse_scene(j, "resume.json"), cut = full;
-  full.out = base / "full";
-  cut.out = base / "cut";
+  full.output.dir = base / "full";
+  cut.output.dir = base / "cut";
   std::ostringstream log;
   const SceneResult a = run_scene(full, log);
   ASSERT_TRUE(a.all_converged);
   int calls = 0;
-  cut.newton.on_iteration = [&](int, double) {
+  cut.solver.newton.on_iteration = [&](int, double) {
     if (++calls == 50) request_stop(SIGINT);
   };
   const SceneResult b = run_scene(cut, log);
@@ -232,8 +249,8 @@ TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
   ASSERT_EQ(b.interrupted_by, SIGINT);
   ASSERT_LT(b.frames.size(), 13u);
   Scene again = parse_scene(j, "resume.json");
-  again.out = cut.out;
-  again.resume = true;
+  again.output.dir = cut.output.dir;
+  again.run.resume = true;
   const SceneResult c = run_scene(again, log);
   ASSERT_TRUE(c.all_converged) << c.failure;
   ASSERT_EQ(c.frames.size(), 13u);
@@ -242,8 +259,8 @@ TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
   EXPECT_NEAR(c.frames.back().kinetic_energy, a.frames.back().kinetic_energy, 1e-6);
   // Another scene in the same directory cannot resume there.
   Scene other = parse_scene(json::parse(R"({"mesh": {"box": {"res": 2}}, "frames": 12})"), "resume.json");
-  other.out = cut.out;
-  other.resume = true;
+  other.output.dir = cut.output.dir;
+  other.run.resume = true;
   EXPECT_THROW((void)run_scene(other, log), std::invalid_argument);
   std::filesystem::remove_all(base);
 }
@@ -256,13 +273,12 @@ TEST(SceneRun, AMeshFileRelativeToTheScene) {
   const Scene s = parse_scene(json::parse(R"({"mesh": {"file": "meshes/two.ele"}, "pins": [{"indices": [0, 1, 2]}],
                                              "gravity": [0, 0, -1], "frames": 2, "end_time": 0.1})"),
                               dir / "s.json");
-  EXPECT_EQ(s.mesh_file, dir / "meshes" / "two.ele");
-  int reoriented = -1;
-  const VolumeMesh m = scene_mesh(s, &reoriented);
-  EXPECT_EQ(m.cell_count(), 2);
-  EXPECT_EQ(reoriented, 1);
+  EXPECT_EQ(s.mesh.file, dir / "meshes" / "two.ele");
+  const std::shared_ptr<const SceneMesh> m = scene_mesh(s);
+  EXPECT_EQ(m->mesh.cell_count(), 2);
+  EXPECT_EQ(m->reoriented, 1);
   Scene run = s;
-  run.out = dir / "out";
+  run.output.dir = dir / "out";
   std::ostringstream log;
   const SceneResult r = run_scene(run, log);
   EXPECT_TRUE(r.all_converged) << r.failure;

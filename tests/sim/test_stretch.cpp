@@ -279,7 +279,7 @@ TEST(StretchFailure, ANonConvergedStepIsReportedWithItsWorstElement) {
   EXPECT_FALSE(last.converged);
   EXPECT_NE(last.failure.find("no convergence in 50 Newton iterations"), std::string::npos) << last.failure;
   EXPECT_NE(last.failure.find("; worst element "), std::string::npos) << last.failure;
-  EXPECT_TRUE(fs::exists(dir / fmt::format("{:03d}.obj", last.step))) << "the failed step's frame is kept";
+  EXPECT_TRUE(fs::exists(dir / fmt::format("{:03d}.obj", last.index))) << "the failed step's frame is kept";
   EXPECT_TRUE(fs::exists(dir / "stats.json"));
   fs::remove_all(dir);
 }

@@ -9,11 +9,14 @@
 #include <fmt/format.h>
 
 #include "snh/io/atomic_file.hpp"
+#include "snh/io/checksum.hpp"
 
 namespace snh {
 namespace {
 
-constexpr char kMagic[8] = {'S', 'N', 'H', 'C', 'K', 'P', 'T', '1'};
+// Version 2 ends with an FNV-1a digest of everything before it; version 1 (no digest) is refused.
+constexpr char kMagic[8] = {'S', 'N', 'H', 'C', 'K', 'P', 'T', '2'};
+constexpr char kMagicV1[8] = {'S', 'N', 'H', 'C', 'K', 'P', 'T', '1'};
 
 template <class T>
 void put(std::ostream& o, const T& v) {
@@ -28,14 +31,18 @@ void put_vector(std::ostream& o, const Eigen::VectorXd& v) {
 }  // namespace
 
 void write_checkpoint(const std::filesystem::path& dir, const Checkpoint& c) {
+  std::ostringstream body;
+  body.write(kMagic, sizeof(kMagic));
+  put<std::uint64_t>(body, c.fingerprint.size());
+  body.write(c.fingerprint.data(), static_cast<std::streamsize>(c.fingerprint.size()));
+  put<std::int64_t>(body, c.step);
+  put<double>(body, c.time);
+  put_vector(body, c.x);
+  put_vector(body, c.aux);
+  const std::string bytes = body.str();
   write_atomically(dir / "checkpoint.bin", [&](std::ostream& o) {
-    o.write(kMagic, sizeof(kMagic));
-    put<std::uint64_t>(o, c.fingerprint.size());
-    o.write(c.fingerprint.data(), static_cast<std::streamsize>(c.fingerprint.size()));
-    put<std::int64_t>(o, c.step);
-    put<double>(o, c.time);
-    put_vector(o, c.x);
-    put_vector(o, c.aux);
+    o.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    put<std::uint64_t>(o, fnv1a64(bytes));
   });
 }
 
@@ -50,14 +57,22 @@ std::optional<Checkpoint> read_checkpoint(const std::filesystem::path& dir) {
   auto fail = [&](const char* what) -> void {
     throw std::runtime_error(fmt::format("{}: damaged checkpoint ({})", path.string(), what));
   };
+  std::size_t limit = bytes.size();
   auto take = [&](void* out, std::size_t n) {
-    if (bytes.size() - pos < n) fail("it ends early");
+    if (limit - pos < n) fail("it ends early");
     std::memcpy(out, bytes.data() + pos, n);
     pos += n;
   };
   char magic[8];
   take(magic, sizeof(magic));
+  if (std::memcmp(magic, kMagicV1, sizeof(magic)) == 0) fail("written by an older snh without a checksum: start the run again");
   if (std::memcmp(magic, kMagic, sizeof(magic)) != 0) fail("not an snh checkpoint");
+  if (bytes.size() < sizeof(kMagic) + sizeof(std::uint64_t)) fail("it ends early");
+  std::uint64_t digest = 0;
+  std::memcpy(&digest, bytes.data() + bytes.size() - sizeof(digest), sizeof(digest));
+  if (digest != fnv1a64(bytes.data(), bytes.size() - sizeof(digest)))
+    fail("its checksum does not match: the file was changed or damaged");
+  limit = bytes.size() - sizeof(digest);
   Checkpoint c;
   std::uint64_t n = 0;
   take(&n, sizeof(n));
@@ -66,6 +81,7 @@ std::optional<Checkpoint> read_checkpoint(const std::filesystem::path& dir) {
   take(c.fingerprint.data(), n);
   std::int64_t step = 0;
   take(&step, sizeof(step));
+  if (step < 0 || step > 100000000) fail("bad step");
   c.step = static_cast<int>(step);
   take(&c.time, sizeof(c.time));
   for (Eigen::VectorXd* v : {&c.x, &c.aux}) {
@@ -74,7 +90,8 @@ std::optional<Checkpoint> read_checkpoint(const std::filesystem::path& dir) {
     v->resize(static_cast<Eigen::Index>(n));
     take(v->data(), n * sizeof(double));
   }
-  if (pos != bytes.size()) fail("trailing bytes");
+  if (pos != limit) fail("trailing bytes");
+  if (!c.x.allFinite() || !c.aux.allFinite()) fail("its state is not finite");
   return c;
 }
 

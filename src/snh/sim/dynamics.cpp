@@ -64,6 +64,7 @@ double TimeStepTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradien
                               PsdProjection) const {
   const std::vector<int>& free = dofs_.free_index();
   const double h = terms_.dt;
+  if (x_n_.size() != x.size()) throw std::logic_error("time-step term: evaluated before begin_step()");
   double value = 0.0;
   for (std::size_t d = 0; d < free.size(); ++d) {
     if (free[d] < 0) continue;

@@ -1,14 +1,19 @@
 #pragma once
-// Scenes (DESIGN.md sim/): a JSON file describing a mesh, a material, an integrator, pins with scripted
-// motion and an initial deformation, run by `snh run SCENE.json`. The format is in the README
+// Scenes (DESIGN.md sim/): a JSON file describing a mesh, a material, time stepping, forces, pins with
+// scripted motion and an initial deformation, run by `snh run SCENE.json`. The format is in the README
 // ("Scene files"); every key is checked, and an unknown key or a bad value is an error that names it.
+// A Scene is made of sections, each with its own parser (sim/scene/*.cpp) and its defaults in its struct,
+// so a Scene built in code and one read from JSON mean the same; a section for contact (issue 16) and one
+// for a rig (issue 12) go beside them.
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -17,7 +22,10 @@
 #include "snh/material/lame.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/volume_mesh.hpp"
-#include "snh/solve/linear_solver.hpp"
+#include "snh/sim/kinematics.hpp"
+#include "snh/sim/run_directory.hpp"
+#include "snh/sim/simulation.hpp"
+#include "snh/sim/stats.hpp"
 #include "snh/solve/newton.hpp"
 
 namespace snh {
@@ -28,101 +36,144 @@ class SceneError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// "mesh": a mesh file, or else a box of tets or hexes spanning [min, max].
+struct MeshSpec {
+  std::filesystem::path file;  ///< relative paths resolved against the scene file's directory
+  CellType element = CellType::hex8;
+  int resolution = 4;
+  TetSplit tet_split = TetSplit::paper;
+  Eigen::Vector3d min = Eigen::Vector3d::Constant(-1.0), max = Eigen::Vector3d::Constant(1.0);
+};
+
+/// "material" and "density".
+struct MaterialSpec {
+  std::string name = "stable_neo_hookean";
+  Lame params{1.0, 10.0};
+  bool reparametrize = false;
+  double density = 1.0;
+};
+
+/// "integrator", "dt", "end_time", "frames".
+struct TimeSpec {
+  Integrator integrator = Integrator::backward_euler;
+  double dt = 0.01;        ///< backward Euler: the largest substep (each frame is split into equal substeps)
+  double end_time = 1.0;
+  int frames = 25;
+};
+
+/// "gravity" and "damping".
+struct ForceSpec {
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
+  double mass_damping = 0.0, stiffness_damping = 0.0;
+};
+
 /// Vertices chosen by an axis-aligned box (inclusive, to a 1e-9 relative tolerance) or by index.
 struct Selection {
   std::optional<Eigen::AlignedBox3d> region;
   std::vector<int> indices;
 };
 
-/// A scripted motion of a pin set, applied with progress p = clamp((t − start)/(end − start), 0, 1).
-struct Motion {
-  enum class Kind { translate, rotate, scale } kind = Kind::translate;
-  Eigen::Vector3d vector = Eigen::Vector3d::Zero();  ///< translate: offset; rotate: axis; scale: factors
-  double angle = 0.0;                                ///< rotate: radians
-  std::optional<Eigen::Vector3d> center;             ///< rotate / scale (default: the set's centroid)
-  double start = 0.0, end = 0.0;
-};
-
-struct PinSet {
+/// One entry of "pins": vertices held on some axes, moved by scripted motions (kinematics.hpp).
+struct PinSpec {
   Selection select;
   std::array<bool, 3> axes{true, true, true};  ///< the coordinates held (x, y, z); the others slide freely
-  std::vector<Motion> motions;  ///< composed in order
+  std::vector<Motion> motions;                 ///< composed in order, from the set's positions at t = 0
 };
 
-/// One operation of the initial deformation, applied to the rest positions in order.
-struct InitialOp {
-  enum class Kind { scale, reflect, collapse, perturb, move } kind = Kind::scale;
-  Eigen::Vector3d vector = Eigen::Vector3d::Ones();  ///< scale: factors; move: offset
-  int axis = 0;                                      ///< reflect: mirror axis; collapse: see below
-  enum class To { plane, line, point } to = To::point;  ///< collapse: plane ⟂ axis, line along axis, or point
-  double amplitude = 0.0;                            ///< perturb: uniform in [−a, a] per coordinate
-  std::uint64_t seed = 1;                            ///< perturb
-  std::optional<Eigen::Vector3d> center;             ///< scale / reflect / collapse (default: bounding-box centre)
-  Selection select;                                  ///< move
+/// One operation of "initial", applied to the rest positions in order. `center` defaults to the
+/// bounding-box centre of the positions at that point.
+struct ScaleOp {
+  Eigen::Vector3d factors = Eigen::Vector3d::Ones();
+  std::optional<Eigen::Vector3d> center;
+};
+struct ReflectOp {
+  int axis = 0;
+  std::optional<Eigen::Vector3d> center;
+};
+struct CollapseOp {
+  enum class To { plane, line, point } to = To::point;  ///< plane ⟂ axis, line along axis, or point
+  int axis = 1;
+  std::optional<Eigen::Vector3d> center;
+};
+struct PerturbOp {
+  double amplitude = 0.0;  ///< uniform in [−a, a] per coordinate
+  std::uint64_t seed = 1;
+};
+struct MoveOp {
+  Selection select;
+  Eigen::Vector3d by = Eigen::Vector3d::Zero();
+};
+using InitialOp = std::variant<ScaleOp, ReflectOp, CollapseOp, PerturbOp, MoveOp>;
+
+/// "solver".
+struct SolverSpec {
+  std::string linear = "cholmod";  ///< a linear_solvers() name
+  bool refactorize = false;
+  /// Dynamics resolves small forces (a perturbed, crushed mesh starts with forces near 1e-6): a stricter
+  /// tolerance than the stretch test's 1e-3.
+  NewtonOptions newton = [] {
+    NewtonOptions o;
+    o.tolerance = 1e-6;
+    return o;
+  }();
 };
 
-enum class Integrator { backward_euler, quasi_static };
+/// "output".
+struct OutputSpec {
+  std::filesystem::path dir;  ///< a scene file's default: output/<file stem>
+  bool vtu = true;
+};
+
+/// How this run is driven (not part of the scene's physics or its fingerprint).
+struct RunControl {
+  bool resume = false;         ///< continue the run in output.dir from its checkpoint (the last completed frame)
+  std::string command_line;    ///< as the user typed it, for stats.json and the report
+  bool live_progress = false;  ///< the log is a terminal: update a line per Newton iteration
+  /// The lock on the output directory if the caller holds it (run_directory.hpp); null: the run takes it.
+  std::shared_ptr<RunDirectoryLock> lock;
+};
+
+/// A mesh read from a file (and checked), or built from a box.
+struct SceneMesh {
+  VolumeMesh mesh;
+  int reoriented = 0;      ///< inverted cells of the file turned round
+  std::string digest;      ///< the file's contents (checksum.hpp); empty for a box
+};
 
 struct Scene {
   std::filesystem::path source;  ///< the file, for messages and stats
   std::string settings;          ///< the parsed file, canonical (checkpoint fingerprint); empty if built in code
-  bool resume = false;           ///< continue the run in `out` from its checkpoint (the last completed frame)
-  std::string command_line;      ///< as the user typed it, for stats.json and the report
-  // Mesh: a file (mesh_file, relative paths resolved against the scene file's directory), or else a box
-  // of tets or hexes spanning [box_min, box_max].
-  std::filesystem::path mesh_file;
-  CellType element = CellType::hex8;
-  int resolution = 4;
-  TetSplit tet_split = TetSplit::paper;
-  Eigen::Vector3d box_min = Eigen::Vector3d::Constant(-1.0), box_max = Eigen::Vector3d::Constant(1.0);
-  // Material.
-  std::string material = "stable_neo_hookean";
-  Lame params{1.0, 10.0};
-  bool reparametrize = false;
-  double density = 1.0;
-  // Time.
-  Integrator integrator = Integrator::backward_euler;
-  double dt = 0.01;        ///< backward Euler: the largest substep (each frame is split into equal substeps)
-  double end_time = 1.0;
-  int frames = 25;
-  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
-  double mass_damping = 0.0, stiffness_damping = 0.0;
-  std::vector<PinSet> pins;
+  MeshSpec mesh;
+  MaterialSpec material;
+  TimeSpec time;
+  ForceSpec forces;
+  std::vector<PinSpec> pins;
   std::vector<InitialOp> initial;
-  // Solver.
-  std::string solver = "cholmod";            ///< a linear_solvers() name
-  bool reuse_factor = true;
-  NewtonOptions newton;  ///< tolerance 1e-6 on ‖g‖ unless the file says otherwise
-  // Output.
-  std::filesystem::path out;  ///< default output/<file stem>
-  bool write_vtu = true;
+  SolverSpec solver;
+  OutputSpec output;
+  RunControl run;
+  /// The mesh, read once by parse_scene (which needs it to check the selections); built on demand for a
+  /// Scene made in code.
+  std::shared_ptr<const SceneMesh> loaded;
 };
 
 /// Reads and checks a scene file. Throws SceneError.
 [[nodiscard]] Scene load_scene(const std::filesystem::path& file);
-/// Checks a parsed scene; `source` names it in messages. Throws SceneError.
+/// Checks a parsed scene; `source` names it in messages. Throws SceneError (MeshError for a bad mesh file).
 [[nodiscard]] Scene parse_scene(const nlohmann::json& j, const std::filesystem::path& source);
 
-/// The mesh of a scene: its mesh file (read and checked; `reoriented` gets the count of inverted cells
-/// turned round), or a box of its element type scaled to its bounds. Throws MeshError for a bad file.
-[[nodiscard]] VolumeMesh scene_mesh(const Scene& scene, int* reoriented = nullptr);
+/// The scene's mesh: the one parse_scene read, or its file read now, or its box scaled to its bounds.
+/// Throws MeshError for a bad file.
+[[nodiscard]] std::shared_ptr<const SceneMesh> scene_mesh(const Scene& scene);
+/// The vertices of a selection. Throws SceneError naming `where` when it selects nothing or an index is
+/// out of range.
+[[nodiscard]] std::vector<int> select_vertices(const Selection& s, const Eigen::Matrix3Xd& X, const std::string& where);
 /// The initial positions: the rest positions with scene.initial applied (3 #V).
 [[nodiscard]] Eigen::VectorXd initial_positions(const Scene& scene, const VolumeMesh& mesh);
+/// The pins as kinematic sets on this mesh, their motions starting from `x0` (3 #V).
+[[nodiscard]] std::vector<KinematicSet> scene_kinematics(const Scene& scene, const VolumeMesh& mesh, const Eigen::VectorXd& x0);
 
-struct FrameStats {
-  int frame = 0;
-  double time = 0.0;
-  int substeps = 0;
-  bool converged = true;
-  int newton_iterations = 0, line_search_steps = 0, linear_iterations = 0, factorizations = 0;
-  double residual = 0.0;  ///< the largest final ‖g‖ of the frame's substeps
-  double elastic_energy = 0.0, kinetic_energy = 0.0, gravity_energy = 0.0;
-  double total_energy = 0.0;  ///< elastic + kinetic + gravity
-  double volume_ratio = 1.0, min_J = 1.0;
-  int inverted = 0;
-  double wall_seconds = 0.0;
-  std::string failure;
-};
+using FrameStats = StepRecord;
 
 struct SceneResult {
   std::vector<FrameStats> frames;  ///< frame 0 is the initial state
@@ -135,10 +186,10 @@ struct SceneResult {
   Eigen::VectorXd final_positions;
 };
 
-/// Runs the scene: writes NNN.obj / NNN.vtu frames, frames.pvd, stats.json and stats.csv into scene.out,
-/// printing a header and one line per frame to log (live_progress: update a line per Newton iteration).
-/// Stops at the first substep that fails (its frame and the stats are still written). A starting state
-/// outside the energy's domain stops the run at frame 0 with that reason.
-[[nodiscard]] SceneResult run_scene(const Scene& scene, std::ostream& log, bool live_progress = false);
+/// Runs the scene into scene.output.dir: NNN.obj / NNN.vtu frames, frames.pvd, stats.json, stats.csv and
+/// checkpoint.bin, printing a header and one line per frame to log. Stops at the first substep that fails
+/// (its frame and the stats are still written). A starting state outside the energy's domain stops the
+/// run at frame 0 with that reason.
+[[nodiscard]] SceneResult run_scene(const Scene& scene, std::ostream& log);
 
 }  // namespace snh

@@ -3,6 +3,7 @@
 // pulled apart in equal quasi-static steps (y → ∓(1 + (stretch − 1) s/steps), x and z held), one
 // Newton solve per step, an OBJ frame per step, and per-step statistics.
 #include <filesystem>
+#include <memory>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -11,6 +12,9 @@
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 #include "snh/solve/linear_solver.hpp"
+#include "snh/sim/kinematics.hpp"
+#include "snh/sim/run_directory.hpp"
+#include "snh/sim/stats.hpp"
 #include "snh/solve/newton.hpp"
 
 namespace snh {
@@ -37,26 +41,28 @@ struct StretchConfig {
   bool live_progress = false;             ///< log is a terminal: update the step's line at every Newton iteration
   /// Continue the run in `out` from its checkpoint (the last completed step); the settings must match.
   bool resume = false;
+  /// The lock on `out` if the caller holds it (run_directory.hpp); null: the run takes it for itself.
+  std::shared_ptr<RunDirectoryLock> lock;
 };
 
-struct StepStats {
-  int step = 0;
-  bool converged = false;
-  int newton_iterations = 0;
-  int line_search_steps = 0;
-  int linear_iterations = 0;  ///< conjugate-gradient iterations
-  int factorizations = 0;     ///< numeric factorizations (direct solvers)
-  int true_hessian_steps = 0;  ///< Newton iterations that used the unprojected Hessian
-  double residual = 0.0;
-  double energy = 0.0;
-  double wall_seconds = 0.0;
-  double assembly_seconds = 0.0;
-  double solve_seconds = 0.0;
-  double min_J = 0.0;         ///< smallest det F over all quadrature points
-  int inverted = 0;           ///< elements with det F ≤ 0 somewhere
-  double volume_ratio = 1.0;  ///< deformed / rest volume
-  std::vector<double> residuals;
-  std::string failure;
+using StepStats = StepRecord;
+
+/// The stretch test's kinematic layers: the vertices' rest positions with their coordinate along the axis
+/// scaled about the centre by 1 + (stretch − 1) t / steps at time t (the step number).
+class AxisStretch final : public KinematicProvider {
+ public:
+  ///   rest     3 by n, the layers' rest positions
+  AxisStretch(Eigen::Matrix3Xd rest, int axis, double centre, double stretch, int steps)
+      : rest_(std::move(rest)), axis_(axis), centre_(centre), stretch_(stretch), steps_(steps) {}
+  void targets(double t, Eigen::Matrix3Xd& out) const override;
+  /// Length at time t relative to the rest length.
+  [[nodiscard]] double length(double t) const { return 1.0 + (stretch_ - 1.0) * t / steps_; }
+
+ private:
+  Eigen::Matrix3Xd rest_;
+  int axis_;
+  double centre_, stretch_;
+  int steps_;
 };
 
 struct StretchResult {
@@ -71,18 +77,20 @@ struct StretchResult {
   double middle_rest_width = 0.0;  ///< the same extent at rest
   CellType element = CellType::tet4;
   Eigen::Index vertices = 0, cells = 0;
+  std::string failure;           ///< why the run stopped early (empty when it ran to the end)
 };
 
 /// Checks the configuration (material, parameters, numbers, output directory) without running anything.
 /// Throws std::invalid_argument, ParameterError, UnknownMaterial or WriteError with a one-line message.
 void validate(const StretchConfig& config);
 
-/// The settings that determine a run's result, as one line (for checkpoints).
+/// The settings that determine a run's result, as one line (for checkpoints); a mesh file by its contents.
 [[nodiscard]] std::string fingerprint(const StretchConfig& config);
 
-/// Runs the test, printing a header and one line per step to log, writing 000.obj … NNN.obj (and
-/// NNN.vtu with frames.pvd), stats.json and stats.csv into config.out. Stops at the first step that fails to converge (its
-/// frame and stats are still written).
+/// Runs the test (a Simulation of the layers' AxisStretch, run by the driver), printing a header and one
+/// line per step to log, writing 000.obj … NNN.obj (and NNN.vtu with frames.pvd), stats.json, stats.csv
+/// and checkpoint.bin into config.out. Stops at the first step that fails to converge (its frame and
+/// stats are still written).
 [[nodiscard]] StretchResult run_stretch(const StretchConfig& config, std::ostream& log);
 
 }  // namespace snh

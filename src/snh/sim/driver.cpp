@@ -1,0 +1,205 @@
+#include "snh/sim/driver.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "snh/io/atomic_file.hpp"
+#include "snh/sim/checkpoint.hpp"
+#include "snh/sim/interrupt.hpp"
+#include "snh/sim/output.hpp"
+
+namespace snh {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using json = nlohmann::json;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+/// stats.json and stats.csv of the run so far.
+void write_stats(const RunPlan& plan, const RunResult& r, const std::string& status, const json* extra = nullptr) {
+  const RecordTable& table = *plan.table;
+  json j = plan.settings;
+  j["snh_version"] = SNH_VERSION;
+  j["status"] = status;
+  j["all_converged"] = status == "finished" ? r.all_converged : false;
+  j["failure"] = r.failure;
+  j["interrupted_by_signal"] = r.interrupted_by;
+  j["total_seconds"] = r.total_seconds;
+  j["peak_memory_mib"] = r.peak_memory_mib;
+  add_totals(table, r.records, j);
+  if (extra)
+    for (auto it = extra->begin(); it != extra->end(); ++it) j[it.key()] = it.value();
+  json records = json::array();
+  for (const StepRecord& s : r.records) records.push_back(to_json(table, s));
+  j[table.records] = records;
+  j["schema"] = schema_json(table);
+  write_atomically(plan.out / "stats.json", [&](std::ostream& o) { o << j.dump(2) << "\n"; });
+  write_atomically(plan.out / "stats.csv", [&](std::ostream& o) {
+    o << csv_header(table) << "\n";
+    for (const StepRecord& s : r.records) o << csv_row(table, s) << "\n";
+  });
+}
+
+/// Min det F, inverted-element count and volume ratio of the current state.
+void record_deformation(const ElasticTerm::Deformation& d, double rest_volume, StepRecord& r) {
+  r.min_J = d.min_J.minCoeff();
+  r.inverted = static_cast<int>((d.min_J.array() <= 0.0).count());
+  r.volume_ratio = d.volume / rest_volume;
+}
+
+}  // namespace
+
+RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log) {
+  const auto t_start = Clock::now();
+  const RecordTable& table = *plan.table;
+  const std::string word = table.index;  // "step" or "frame"
+  RunResult result;
+  const std::shared_ptr<RunDirectoryLock> lock = plan.lock ? plan.lock : std::make_shared<RunDirectoryLock>(plan.out);
+
+  // A resume is checked before any work: the checkpoint (intact, these settings, this mesh), the frames it
+  // keeps and their history. A fresh run starts from an empty directory of ours.
+  std::optional<Checkpoint> resume_from;
+  if (plan.resume) {
+    resume_from = checkpoint_for_resume(plan.out, plan.fingerprint, sim.x().size());
+    if (resume_from->step > plan.frames)
+      throw std::invalid_argument(fmt::format("cannot resume: the checkpoint in {} is after {} {}, beyond the {} of this run",
+                                              plan.out.string(), word, resume_from->step, plan.frames));
+    check_kept_frames(plan.out, resume_from->step, plan.write_vtu);
+    for (const json& j : history_for_resume(plan.out, table.records, resume_from->step + (table.has_initial ? 1 : 0)))
+      result.records.push_back(from_json(table, j));
+  } else {
+    (void)clear_previous_run(plan.out);
+  }
+  write_stats(plan, result, "running");
+
+  if (plan.header) plan.header(log);
+  log.flush();
+  FrameWriter frames(plan.out, sim.mesh(), plan.write_vtu, sim.kinematic_vertices());
+  int first = 1;
+  if (resume_from) {
+    sim.restore({.x = resume_from->x, .aux = resume_from->aux, .time = resume_from->time,
+                 .steps = resume_from->step * plan.substeps});
+    frames.adopt_written(resume_from->step, [&](int i) { return i * plan.frame_duration; });
+    first = resume_from->step + 1;
+    log << fmt::format("resuming after {} {} (checkpoint in {})\n", word, resume_from->step, plan.out.string());
+    log.flush();
+  }
+
+  auto write_frame = [&](int index, const ElasticTerm::Deformation& d) {
+    try {
+      frames.write(index, index * plan.frame_duration, sim.x(), d);
+    } catch (const WriteError& e) {
+      throw WriteError(fmt::format("{} {}: {} ({}stats.json and checkpoint.bin are kept: --resume continues once the "
+                                   "output can be written)",
+                                   word, index, e.what(), index > 0 ? fmt::format("frames 000 to {:03d}, ", index - 1) : ""));
+    }
+  };
+  auto finish = [&](const std::string& status) {
+    result.total_seconds = since(t_start);
+    result.peak_memory_mib = peak_memory_mib();
+    json extra = json::object();
+    if (plan.finish) plan.finish(extra);
+    write_stats(plan, result, status, &extra);
+    if (plan.summary) log << plan.summary(result) << "\n";
+    log.flush();
+    return result;
+  };
+
+  if (!resume_from) {
+    const auto t0 = Clock::now();
+    const ElasticTerm::Deformation d = sim.elastic().deformation(sim.x());
+    write_frame(0, d);
+    if (table.has_initial) {
+      StepRecord r0;
+      record_deformation(d, sim.rest_volume(), r0);
+      if (plan.fill) plan.fill(r0, nullptr);
+      if (!std::isfinite(sim.elastic().energy(sim.x()))) {
+        Eigen::Index worst = 0;
+        d.min_J.minCoeff(&worst);
+        r0.converged = false;
+        r0.failure = fmt::format("the initial state is outside the domain of {} ({} element(s) with J <= 0; min J = {:.4g})",
+                                 name_of(sim.elastic().material(worst)), r0.inverted, r0.min_J);
+        result.all_converged = false;
+        result.failure = r0.failure;
+      }
+      r0.wall_seconds = since(t0);
+      result.records.push_back(r0);
+      if (plan.line) log << plan.line(r0) << "\n";
+      log.flush();
+      if (!result.all_converged) return finish("stopped");
+    }
+  }
+
+  const NewtonOptions& base = sim.setup().newton;
+  bool stopped = false;
+  for (int frame = first; frame <= plan.frames; ++frame) {
+    if (stop_requested()) {
+      stopped = true;
+      break;
+    }
+    const auto t_frame = Clock::now();
+    int substep = 1;
+    NewtonOptions newton = base;
+    newton.should_stop = [] { return stop_requested(); };
+    if (plan.live_progress && plan.live)
+      newton.on_iteration = [&](int it, double r) {
+        if (base.on_iteration) base.on_iteration(it, r);
+        log << "\r\x1b[2K" << plan.live(frame, substep, it, r);
+        log.flush();
+      };
+    const StepReport rep = sim.advance((frame - 1) * plan.frame_duration, plan.substep, plan.substeps, &newton,
+                                       [&](int k) { substep = k; });
+    if (plan.live_progress && plan.live) log << "\r\x1b[2K";
+    if (rep.interrupted) {  // the frame is abandoned: the state is the last completed frame's
+      stopped = true;
+      break;
+    }
+    StepRecord r;
+    r.index = frame;
+    r.time = frame * plan.frame_duration;
+    r.substeps = plan.substeps;
+    r.converged = rep.converged;
+    r.newton_iterations = rep.newton_iterations;
+    r.line_search_steps = rep.line_search_steps;
+    r.linear_iterations = rep.linear_iterations;
+    r.factorizations = rep.factorizations;
+    r.true_hessian_steps = rep.true_hessian_steps;
+    r.residual = rep.residual;
+    r.energy = rep.energy;
+    r.assembly_seconds = rep.assembly_seconds;
+    r.solve_seconds = rep.solve_seconds;
+    r.residuals = rep.residuals;
+    if (!rep.converged) r.failure = plan.failure ? plan.failure(rep) : rep.failure;
+    const ElasticTerm::Deformation d = sim.elastic().deformation(sim.x());
+    record_deformation(d, sim.rest_volume(), r);
+    if (plan.fill) plan.fill(r, &rep);
+    write_frame(frame, d);
+    r.wall_seconds = since(t_frame);
+    result.records.push_back(r);
+    if (plan.line) log << plan.line(r) << "\n";
+    log.flush();
+    if (!r.converged) {
+      result.all_converged = false;
+      result.failure = fmt::format("{} {}, {}", word, frame, r.failure);
+      return finish("stopped");
+    }
+    // Everything needed to resume after this frame: the stats so far and the exact state.
+    result.total_seconds = since(t_start);
+    write_stats(plan, result, "running");
+    const SimulationState s = sim.state();
+    write_checkpoint(plan.out, {.fingerprint = plan.fingerprint, .step = frame, .time = r.time, .x = s.x, .aux = s.aux});
+  }
+  if (stopped) {
+    result.interrupted_by = stop_signal();
+    result.all_converged = false;
+    result.failure = fmt::format("interrupted by signal {} after {} {}", result.interrupted_by, word,
+                                 result.records.empty() ? 0 : result.records.back().index);
+    return finish("interrupted");
+  }
+  return finish("finished");
+}
+
+}  // namespace snh

@@ -1,0 +1,79 @@
+#include "snh/sim/run_directory.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <regex>
+#include <stdexcept>
+#include <system_error>
+#include <vector>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include "snh/io/atomic_file.hpp"
+
+namespace snh {
+namespace fs = std::filesystem;
+
+RunDirectoryLock::RunDirectoryLock(const fs::path& dir) {
+  ensure_writable_directory(dir);
+  const fs::path path = dir / ".snh-lock";
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw WriteError(fmt::format("cannot create {}: {}", path.string(), std::strerror(errno)));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    char pid[32] = {};
+    const ssize_t n = ::pread(fd_, pid, sizeof(pid) - 1, 0);
+    ::close(fd_);
+    fd_ = -1;
+    if (err == EWOULDBLOCK)
+      throw WriteError(fmt::format("another snh run is writing to {}{}: wait for it to finish or choose another output "
+                                   "directory",
+                                   dir.string(), n > 0 ? fmt::format(" (process {})", std::string(pid, std::strcspn(pid, "\n"))) : ""));
+    throw WriteError(fmt::format("cannot lock {}: {}", path.string(), std::strerror(err)));
+  }
+  const std::string me = fmt::format("{}\n", ::getpid());
+  if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, me.data(), me.size(), 0) != static_cast<ssize_t>(me.size())) {
+    // The pid is only for the message of a second run; the lock itself holds.
+  }
+}
+
+RunDirectoryLock::~RunDirectoryLock() {
+  if (fd_ >= 0) ::close(fd_);  // releases the lock; the file stays (removing it would race a waiting run)
+}
+
+int clear_previous_run(const fs::path& dir) {
+  static const std::regex ours(R"(\d{3,}\.(obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html)"
+                               R"((\.tmp\.\d+)?|\.snh-write-test\.\d+)");
+  std::vector<fs::path> doomed;
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name == "report" && e.is_directory(ec)) doomed.push_back(e.path());
+    else if (std::regex_match(name, ours) && !e.is_directory(ec)) doomed.push_back(e.path());
+  }
+  if (ec) throw WriteError(fmt::format("cannot list {}: {}", dir.string(), ec.message()));
+  for (const fs::path& p : doomed) {
+    fs::remove_all(p, ec);
+    if (ec) throw WriteError(fmt::format("cannot remove {} (left by an earlier run): {}", p.string(), ec.message()));
+  }
+  return static_cast<int>(doomed.size());
+}
+
+void check_kept_frames(const fs::path& dir, int last, bool vtu) {
+  for (int i = 0; i <= last; ++i)
+    for (const char* ext : {"obj", "vtu"}) {
+      if (std::string(ext) == "vtu" && !vtu) continue;
+      const fs::path f = dir / fmt::format("{:03d}.{}", i, ext);
+      std::error_code ec;
+      if (!fs::is_regular_file(f, ec))
+        throw std::invalid_argument(fmt::format("cannot resume: {} is missing (the run being resumed wrote frames 000 to "
+                                                "{:03d}); start the run again without --resume",
+                                                f.string(), last));
+    }
+}
+
+}  // namespace snh

@@ -1,0 +1,35 @@
+#pragma once
+// The output directory of a run holds one run (DESIGN.md sim/): while a run writes there it holds an
+// exclusive lock (a second run into the same directory is refused at once); a new run first removes the
+// files a previous run of ours left (frames, stats, checkpoint, report), and nothing else; a resume checks
+// that the frames it keeps are still there.
+#include <filesystem>
+#include <string>
+
+namespace snh {
+
+/// The lock on an output directory, held while this object lives (flock on DIR/.snh-lock: released by the
+/// kernel when the process ends, however it ends).
+class RunDirectoryLock {
+ public:
+  /// Creates the directory if needed and takes the lock. Throws WriteError (one line) if the directory
+  /// cannot be used, or if another process holds the lock (naming its pid).
+  explicit RunDirectoryLock(const std::filesystem::path& dir);
+  ~RunDirectoryLock();
+  RunDirectoryLock(const RunDirectoryLock&) = delete;
+  RunDirectoryLock& operator=(const RunDirectoryLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+/// Removes what a previous run of ours left in dir: NNN.obj and NNN.vtu frames, frames.pvd, stats.json,
+/// stats.csv, checkpoint.bin, index.html, the report/ directory and temporaries of interrupted writes.
+/// Other files stay. Returns the number of entries removed. Throws WriteError if one cannot be removed.
+int clear_previous_run(const std::filesystem::path& dir);
+
+/// For a resume: frames 0 … last must be on disk (NNN.obj, and NNN.vtu when `vtu`). Throws
+/// std::invalid_argument naming the first missing one.
+void check_kept_frames(const std::filesystem::path& dir, int last, bool vtu);
+
+}  // namespace snh

@@ -1,0 +1,31 @@
+#pragma once
+// The scene's section parsers (internal to sim/), one file each: every one reads its keys from the
+// top-level object (or its own sub-object) and starts from its struct's defaults.
+#include <filesystem>
+#include <vector>
+
+#include "snh/sim/scene.hpp"
+#include "snh/sim/scene/keys.hpp"
+
+namespace snh::scene {
+
+/// "mesh": {"box": {...}} or {"file": "..."} (relative to the scene file's directory).
+[[nodiscard]] MeshSpec parse_mesh(Keys& top, const std::filesystem::path& source);
+/// "material" and "density".
+[[nodiscard]] MaterialSpec parse_material(Keys& top);
+/// "integrator", "dt", "end_time", "frames".
+[[nodiscard]] TimeSpec parse_time(Keys& top);
+/// "gravity" and "damping".
+[[nodiscard]] ForceSpec parse_forces(Keys& top);
+/// A selection's "region" or "indices" in the object k reads.
+[[nodiscard]] Selection parse_selection(Keys& k);
+/// "pins" (motions default to ending at end_time).
+[[nodiscard]] std::vector<PinSpec> parse_pins(Keys& top, double end_time);
+/// "initial".
+[[nodiscard]] std::vector<InitialOp> parse_initial(Keys& top);
+/// "solver".
+[[nodiscard]] SolverSpec parse_solver(Keys& top);
+/// "output" (the directory defaults to output/<file stem>).
+[[nodiscard]] OutputSpec parse_output(Keys& top, const std::filesystem::path& source);
+
+}  // namespace snh::scene

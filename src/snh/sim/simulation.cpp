@@ -1,0 +1,184 @@
+#include "snh/sim/simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "snh/sim/output.hpp"
+
+namespace snh {
+
+std::vector<std::uint8_t> kinematic_dof_flags(const std::vector<KinematicSet>& sets, Eigen::Index vertices) {
+  std::vector<std::uint8_t> flags(3 * vertices, 0);
+  std::vector<int> owner(3 * vertices, -1);
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const KinematicSet& s = sets[i];
+    if (!s.provider) throw std::invalid_argument(fmt::format("{}: no targets for its vertices", s.name));
+    for (int v : s.vertices) {
+      if (v < 0 || v >= vertices)
+        throw std::invalid_argument(fmt::format("{}: vertex index {} is out of range (the mesh has {} vertices)", s.name, v, vertices));
+      for (int a = 0; a < 3; ++a) {
+        if (!s.axes[a]) continue;
+        const std::size_t d = 3 * static_cast<std::size_t>(v) + a;
+        if (owner[d] >= 0 && owner[d] != static_cast<int>(i))
+          throw std::invalid_argument(fmt::format("{} holds the {} coordinate of vertex {}, which {} already holds: give each "
+                                                  "coordinate one motion",
+                                                  s.name, char('x' + a), v, sets[owner[d]].name));
+        owner[d] = static_cast<int>(i);
+        flags[d] = 1;
+      }
+    }
+  }
+  return flags;
+}
+
+Simulation::Simulation(SimulationSetup setup)
+    : setup_(std::move(setup)),
+      elastic_(setup_.mesh, setup_.materials, setup_.material_of_cell, setup_.weight_scale),
+      dofs_(kinematic_dof_flags(setup_.kinematic, setup_.mesh.vertex_count())),
+      inertia_(elastic_, dofs_, lumped_mass(elastic_, setup_.density),
+               {.dt = setup_.integrator == Integrator::backward_euler ? setup_.dt : 0.0,
+                .gravity = setup_.gravity,
+                .mass_damping = setup_.mass_damping,
+                .stiffness_damping = setup_.stiffness_damping}),
+      problem_(dofs_) {
+  if (dynamic() && !(setup_.dt > 0.0 && std::isfinite(setup_.dt)))
+    throw std::invalid_argument(fmt::format("backward Euler needs a time step > 0, got {}", setup_.dt));
+  problem_.add(elastic_);
+  // Inertia, damping and gravity: only where there is something to add (a quasi-static run without
+  // gravity minimises the elastic energy alone).
+  if (dynamic() || setup_.gravity != Eigen::Vector3d::Zero()) problem_.add(inertia_);
+  solver_ = make_linear_solver(setup_.linear, {.mesh = &elastic_.mesh(), .free_index = &dofs_.free_index()});
+  const Eigen::Index n = 3 * elastic_.mesh().vertex_count();
+  if (setup_.initial.size() == 0) x_ = Eigen::Map<const Eigen::VectorXd>(elastic_.mesh().vertices.data(), n);
+  else if (setup_.initial.size() != n)
+    throw std::invalid_argument(fmt::format("initial positions: expected {} numbers (3 per vertex), got {}", n, setup_.initial.size()));
+  else x_ = setup_.initial;
+  v_ = Eigen::VectorXd::Zero(n);
+  previous_ = x_;
+  rest_volume_ = rest_volumes(elastic_.rest()).sum();
+}
+
+void Simulation::place_kinematic(Eigen::VectorXd& state, double t) const {
+  Eigen::Matrix3Xd P;
+  for (const KinematicSet& s : setup_.kinematic) {
+    s.provider->targets(t, P);
+    for (std::size_t k = 0; k < s.vertices.size(); ++k)
+      for (int a = 0; a < 3; ++a)
+        if (s.axes[a]) state[3 * s.vertices[k] + a] = P(a, static_cast<Eigen::Index>(k));
+  }
+}
+
+std::vector<bool> Simulation::kinematic_vertices() const {
+  std::vector<bool> out(elastic_.mesh().vertex_count(), false);
+  for (const KinematicSet& s : setup_.kinematic)
+    for (int v : s.vertices) out[v] = true;
+  return out;
+}
+
+StepReport Simulation::step(double t, const NewtonOptions* newton) {
+  StepReport report;
+  report.substeps = 1;
+  const Eigen::VectorXd x_n = x_, previous_n = previous_;
+  const double h = setup_.dt;
+  // The guess: the inertial prediction (backward Euler), a linear extrapolation from the last two
+  // solutions, or for the first quasi-static step the setup's (the current state by default).
+  Eigen::VectorXd guess;
+  if (dynamic()) guess = x_ + h * v_;
+  else if (steps_ >= 1) guess = 2.0 * x_ - previous_;
+  else guess = setup_.first_guess ? setup_.first_guess(x_, t) : x_;
+  place_kinematic(guess, t);
+  inertia_.begin_step(x_n, v_);
+  if (!std::isfinite(problem_.energy(guess))) {  // the prediction leaves an energy's domain
+    guess = setup_.fallback_guess ? setup_.fallback_guess(x_n, t) : x_n;
+    place_kinematic(guess, t);
+  }
+  previous_ = x_n;
+  x_ = guess;
+  const NewtonReport r = newton_solve(problem_, x_, *solver_, newton ? *newton : setup_.newton);
+  report.newton_iterations = r.iterations;
+  report.line_search_steps = r.line_search_steps;
+  report.linear_iterations = r.linear_iterations;
+  report.factorizations = r.factorizations;
+  report.true_hessian_steps = r.true_hessian_steps;
+  report.residual = r.residual;
+  report.energy = r.energy;
+  report.assembly_seconds = r.assembly_seconds;
+  report.solve_seconds = r.solve_seconds;
+  report.residuals = r.residuals;
+  if (r.interrupted) {  // abandon the step: back to where it started
+    x_ = x_n;
+    previous_ = previous_n;
+    report.interrupted = true;
+    report.converged = false;
+    report.failure = r.failure;
+    return report;
+  }
+  if (dynamic()) v_ = (x_ - x_n) / h;
+  time_ = t;
+  if (!r.converged) {
+    report.converged = false;
+    report.failed_substep = 1;
+    report.failed_time = t;
+    report.failure = r.failure + worst_element(elastic_.deformation(x_.allFinite() ? x_ : x_n).min_J);
+    if (!x_.allFinite()) x_ = x_n;  // never keep a non-finite state
+    return report;
+  }
+  ++steps_;
+  return report;
+}
+
+StepReport Simulation::advance(double t_start, double h, int substeps, const NewtonOptions* newton,
+                               const std::function<void(int)>& on_substep) {
+  const SimulationState start = state();
+  StepReport frame;
+  for (int sub = 1; sub <= substeps; ++sub) {
+    const double t = t_start + sub * h;
+    if (on_substep) on_substep(sub);
+    const StepReport r = step(t, newton);
+    if (r.interrupted) {
+      restore(start);
+      frame.interrupted = true;
+      frame.converged = false;
+      frame.failure = r.failure;
+      return frame;
+    }
+    frame.substeps = sub;
+    frame.newton_iterations += r.newton_iterations;
+    frame.line_search_steps += r.line_search_steps;
+    frame.linear_iterations += r.linear_iterations;
+    frame.factorizations += r.factorizations;
+    frame.true_hessian_steps += r.true_hessian_steps;
+    frame.residual = std::max(frame.residual, r.residual);
+    frame.energy = r.energy;
+    frame.assembly_seconds += r.assembly_seconds;
+    frame.solve_seconds += r.solve_seconds;
+    frame.residuals.insert(frame.residuals.end(), r.residuals.begin(), r.residuals.end());
+    if (!r.converged) {
+      frame.converged = false;
+      frame.failed_substep = sub;
+      frame.failed_time = t;
+      frame.failure = r.failure;
+      return frame;
+    }
+  }
+  return frame;
+}
+
+SimulationState Simulation::state() const {
+  return {.x = x_, .aux = dynamic() ? v_ : previous_, .time = time_, .steps = steps_};
+}
+
+void Simulation::restore(const SimulationState& s) {
+  if (s.x.size() != x_.size() || s.aux.size() != x_.size())
+    throw std::invalid_argument(fmt::format("a saved state of {} numbers for a mesh of {} DOFs", s.x.size(), x_.size()));
+  x_ = s.x;
+  if (dynamic()) v_ = s.aux;
+  else previous_ = s.aux;
+  time_ = s.time;
+  steps_ = s.steps;
+}
+
+}  // namespace snh

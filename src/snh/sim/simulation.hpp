@@ -1,0 +1,129 @@
+#pragma once
+// A stepping simulation (DESIGN.md sim/), with no files: a mesh with its materials, kinematic sets whose
+// targets come from providers, and an integrator, solved by projected Newton on a Problem of energy terms
+// (elasticity, then inertia, damping and gravity). step(t) makes one solve to time t; advance() a frame
+// of equal substeps. Frames, stats and checkpoints are the driver's (driver.hpp).
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "snh/fem/dof_map.hpp"
+#include "snh/fem/elastic_term.hpp"
+#include "snh/fem/problem.hpp"
+#include "snh/material/registry.hpp"
+#include "snh/mesh/volume_mesh.hpp"
+#include "snh/sim/dynamics.hpp"
+#include "snh/sim/kinematics.hpp"
+#include "snh/solve/linear_solver.hpp"
+#include "snh/solve/newton.hpp"
+
+namespace snh {
+
+enum class Integrator { backward_euler, quasi_static };
+
+struct SimulationSetup {
+  VolumeMesh mesh;
+  std::vector<AnyMaterial> materials;     ///< one, or one per material_of_cell index
+  std::vector<int> material_of_cell;      ///< empty: materials[0] everywhere
+  Eigen::VectorXd weight_scale;           ///< per cell (empty: 1)
+  double density = 1.0;
+  Integrator integrator = Integrator::quasi_static;
+  double dt = 0.0;                        ///< backward Euler: the length of every step(t)
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
+  double mass_damping = 0.0, stiffness_damping = 0.0;
+  std::vector<KinematicSet> kinematic;
+  Eigen::VectorXd initial;                ///< 3 #V starting positions (empty: the rest positions)
+  LinearSolverOptions linear;
+  NewtonOptions newton;
+  /// Quasi-static: the guess of the first step (default: the current state), given the state and t;
+  /// kinematic targets are placed on it afterwards.
+  std::function<Eigen::VectorXd(const Eigen::VectorXd& x, double t)> first_guess;
+  /// The guess when the predicted one leaves an energy's domain (default: the last state), given the last
+  /// state and t; kinematic targets are placed on it afterwards.
+  std::function<Eigen::VectorXd(const Eigen::VectorXd& x, double t)> fallback_guess;
+};
+
+/// The kinematic flag of every DOF (3 #V) of these sets. Throws std::invalid_argument (one line, naming
+/// the sets) for a set without a provider, a vertex out of range, or a coordinate held by two sets.
+[[nodiscard]] std::vector<std::uint8_t> kinematic_dof_flags(const std::vector<KinematicSet>& sets, Eigen::Index vertices);
+
+/// One solve, or a frame of substeps.
+struct StepReport {
+  bool converged = true;
+  bool interrupted = false;     ///< NewtonOptions::should_stop stopped it; the state is back where it started
+  int substeps = 0;             ///< substeps completed (or tried, for a failure)
+  int newton_iterations = 0, line_search_steps = 0, linear_iterations = 0, factorizations = 0, true_hessian_steps = 0;
+  double residual = 0.0;        ///< the largest final ‖g‖
+  double energy = 0.0;          ///< the minimised energy at the end of the last solve
+  double assembly_seconds = 0.0, solve_seconds = 0.0;
+  std::vector<double> residuals;  ///< ‖g‖ at every Newton iteration, substep after substep
+  // Where a solve failed:
+  int failed_substep = 0;       ///< 1-based
+  double failed_time = 0.0;
+  std::string failure;          ///< Newton's reason and the worst element ("; worst element E (min det F = J)")
+};
+
+/// The state a checkpoint holds.
+struct SimulationState {
+  Eigen::VectorXd x;    ///< positions (3 #V)
+  Eigen::VectorXd aux;  ///< backward Euler: the velocity; quasi-static: the previous solution (extrapolation)
+  double time = 0.0;
+  int steps = 0;        ///< solves completed
+};
+
+class Simulation {
+ public:
+  /// Throws std::invalid_argument (one line) for inconsistent input: a kinematic vertex out of range, one
+  /// DOF driven by two sets, sizes that do not match.
+  explicit Simulation(SimulationSetup setup);
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  /// One solve to time t: backward Euler over dt from the current state, or a quasi-static solve with the
+  /// kinematic targets at t. Newton's on_iteration/should_stop come from `newton` (else the setup's).
+  StepReport step(double t, const NewtonOptions* newton = nullptr);
+  /// `substeps` solves at t_start + k·h, k = 1 … substeps (h = the setup's dt for backward Euler); stops at
+  /// the first that fails. An interrupted frame returns to the state it started from.
+  ///   on_substep  called before each substep with its number (progress lines)
+  StepReport advance(double t_start, double h, int substeps, const NewtonOptions* newton = nullptr,
+                     const std::function<void(int substep)>& on_substep = {});
+
+  [[nodiscard]] const Eigen::VectorXd& x() const { return x_; }
+  [[nodiscard]] const Eigen::VectorXd& v() const { return v_; }
+  [[nodiscard]] double time() const { return time_; }
+  [[nodiscard]] int steps() const { return steps_; }
+  [[nodiscard]] bool dynamic() const { return setup_.integrator == Integrator::backward_euler; }
+  [[nodiscard]] SimulationState state() const;
+  /// Continues from a saved state (sizes checked).
+  void restore(const SimulationState& s);
+
+  [[nodiscard]] const VolumeMesh& mesh() const { return elastic_.mesh(); }
+  [[nodiscard]] const ElasticTerm& elastic() const { return elastic_; }
+  [[nodiscard]] const TimeStepTerm& inertia() const { return inertia_; }
+  [[nodiscard]] Problem& problem() { return problem_; }
+  [[nodiscard]] const SimulationSetup& setup() const { return setup_; }
+  /// Per vertex: true if any of its DOFs is kinematic.
+  [[nodiscard]] std::vector<bool> kinematic_vertices() const;
+  /// Sets the kinematic DOFs of `state` to their targets at time t.
+  void place_kinematic(Eigen::VectorXd& state, double t) const;
+  /// The rest volume (Σ of the cells' weights).
+  [[nodiscard]] double rest_volume() const { return rest_volume_; }
+
+ private:
+  SimulationSetup setup_;
+  ElasticTerm elastic_;
+  DofMap dofs_;
+  TimeStepTerm inertia_;
+  Problem problem_;
+  std::unique_ptr<LinearSolver> solver_;
+  Eigen::VectorXd x_, v_, previous_;
+  double time_ = 0.0;
+  int steps_ = 0;
+  double rest_volume_ = 0.0;
+};
+
+}  // namespace snh
