@@ -16,6 +16,7 @@
 #include "snh/io/mesh_read.hpp"
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/surface.hpp"
+#include "snh/sim/stats.hpp"
 
 namespace snh {
 namespace {
@@ -258,7 +259,12 @@ json run_data(const fs::path& dir, const json& stats) {
     throw ReportError(fmt::format("{}: no \"{}\" array", (dir / "stats.json").string(), scene ? "frames" : "steps"));
   const json& rows = *rows_at;
   std::string status = ok ? (scene ? "finished" : "converged every step") : "";
-  if (!ok && signal) status = fmt::format("interrupted by signal {} after {} {}", signal, scene ? "frame" : "step", rows.empty() ? 0 : rows.back().value(scene ? "frame" : "step", 0));
+  const std::string run_status = stats.value("status", std::string());
+  if (run_status == "running")
+    status = fmt::format("unfinished: stats.json was last written while the run was going, after {} {} (it was killed, "
+                         "or is still running)",
+                         scene ? "frame" : "step", rows.empty() ? 0 : rows.back().value(scene ? "frame" : "step", 0));
+  else if (!ok && signal) status = fmt::format("interrupted by signal {} after {} {}", signal, scene ? "frame" : "step", rows.empty() ? 0 : rows.back().value(scene ? "frame" : "step", 0));
   else if (!ok && scene) status = "stopped: " + stats.value("failure", std::string("a frame failed"));
   else if (!ok) {
     status = "stopped: a step did not converge";
@@ -297,32 +303,26 @@ json run_data(const fs::path& dir, const json& stats) {
   d["meta"] = meta;
   d["tables"] = json::array();
 
-  // Plots, one point per step (stretch) or frame (scene).
+  // Plots, one point per step (stretch) or frame (scene), as the run's schema describes its columns (the
+  // table the writer used, for a stats.json from before the schema was written).
+  const json schema = stats.contains("schema") && stats.at("schema").is_object()
+                          ? stats.at("schema")
+                          : schema_json(*table_for(scene ? "frames" : "steps"));
   json plots = json::array();
-  const std::string g = scene ? "Per frame" : "Per step";
-  const json x = scene ? column(rows, "time") : column(rows, "step");
-  const std::string xl = scene ? "time" : "step";
-  plots.push_back(plot("newton", g, "Newton iterations", xl, "iterations", false, x,
-                       json::array({series("Newton iterations", column(rows, "newton_iterations")),
-                        series("line-search halvings", column(rows, "line_search_steps"))})));
-  plots.push_back(plot("residual", g, scene ? "Residual ‖g‖ (largest of the substeps)" : "Residual ‖f‖", xl,
-                       scene ? "‖g‖" : "‖f‖", true, x,
-                       json::array({series("residual", column(rows, "residual"))})));
-  if (scene)
-    plots.push_back(plot("energy", g, "Energy", xl, "energy", false, x,
-                         json::array({series("elastic", column(rows, "elastic_energy")), series("kinetic", column(rows, "kinetic_energy")),
-                          series("gravity", column(rows, "gravity_energy")), series("total", column(rows, "total_energy"))})));
-  else
-    plots.push_back(plot("energy", g, "Elastic energy", xl, "energy", false, x, json::array({series("energy", column(rows, "energy"))})));
-  plots.push_back(plot("volume", g, "Volume ratio (deformed / rest)", xl, "ratio", false, x,
-                       json::array({series("volume ratio", column(rows, "volume_ratio"))})));
-  plots.push_back(plot("min_J", g, "Smallest det F", xl, "min J", false, x, json::array({series("min J", column(rows, "min_J"))})));
-  json wall = json::array({series("wall", column(rows, "wall_seconds"))});
-  if (!scene) {
-    wall.push_back(series("assembly", column(rows, "assembly_seconds")));
-    wall.push_back(series("linear solve", column(rows, "solve_seconds")));
+  {
+    const std::string x_key = schema.value("x", std::string(scene ? "time" : "step"));
+    const json x = column(rows, x_key.c_str());
+    const std::string group = schema.value("group", std::string());
+    for (const json& p : schema.value("plots", json::array())) {
+      json series_list = json::array();
+      const std::string id = p.value("id", std::string());
+      for (const json& c : schema.value("columns", json::array()))
+        if (c.value("plot", std::string()) == id && c.contains("label"))
+          series_list.push_back(series(c.value("label", std::string()), column(rows, c.value("key", std::string()).c_str())));
+      plots.push_back(plot(id, group, p.value("title", std::string()), x_key, p.value("y_label", std::string()),
+                           p.value("log_y", false), x, series_list));
+    }
   }
-  plots.push_back(plot("wall", g, "Wall time", xl, "seconds", false, x, wall));
   d["plots"] = plots;
 
   d["mesh"] = nullptr;

@@ -46,8 +46,8 @@ RunDirectoryLock::~RunDirectoryLock() {
 }
 
 int clear_previous_run(const fs::path& dir) {
-  static const std::regex ours(R"(\d{3,}\.(obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html)"
-                               R"((\.tmp\.\d+)?|\.snh-write-test\.\d+)");
+  static const std::regex ours(R"((?:\d{3,}\.(?:obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html))"
+                               R"((?:\.tmp\.\d+)?|\.snh-write-test\.\d+)");
   std::vector<fs::path> doomed;
   std::error_code ec;
   for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {

@@ -1,0 +1,268 @@
+// The stepping core without files: a Simulation driven by kinematic providers (a Python script or a rig
+// sets targets the same way), its substeps, an interruption that restores the frame's start, the DOF
+// conflicts it refuses; scripted motions; the stats tables (one description drives JSON, CSV and resume);
+// and the statuses the driver writes.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "snh/mesh/box.hpp"
+#include "snh/sim/interrupt.hpp"
+#include "snh/sim/scene.hpp"
+#include "snh/sim/simulation.hpp"
+#include "snh/sim/stats.hpp"
+#include "snh/sim/stretch.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+/// Targets given point by point by the caller, as a script would set them before each step.
+class Scripted final : public KinematicProvider {
+ public:
+  explicit Scripted(Eigen::Matrix3Xd rest) : rest_(std::move(rest)) {}
+  void targets(double t, Eigen::Matrix3Xd& out) const override {
+    out = rest_;
+    out.row(1).array() += 0.2 * t;  // rises by 0.2 per unit time
+    ++calls;
+  }
+  mutable int calls = 0;
+
+ private:
+  Eigen::Matrix3Xd rest_;
+};
+
+/// A hex box whose bottom layer (y = −1) is held and top layer (y = 1) follows a Scripted provider.
+SimulationSetup pulled_box(Integrator integrator, std::shared_ptr<Scripted>* top_out = nullptr) {
+  SimulationSetup s;
+  s.mesh = box_hexes(2);
+  s.materials = {make_material("stable_neo_hookean", {1.0, 10.0})};
+  s.integrator = integrator;
+  s.dt = 0.1;
+  KinematicSet bottom{.name = "bottom"}, top{.name = "top"};
+  for (Eigen::Index v = 0; v < s.mesh.vertex_count(); ++v) {
+    if (s.mesh.vertices(1, v) == -1.0) bottom.vertices.push_back(static_cast<int>(v));
+    if (s.mesh.vertices(1, v) == 1.0) top.vertices.push_back(static_cast<int>(v));
+  }
+  bottom.provider = std::make_shared<ScriptedMotion>(s.mesh.vertices(Eigen::all, bottom.vertices), std::vector<Motion>{});
+  auto script = std::make_shared<Scripted>(s.mesh.vertices(Eigen::all, top.vertices));
+  top.provider = script;
+  if (top_out) *top_out = script;
+  s.kinematic = {bottom, top};
+  s.linear.name = "ldlt";
+  s.newton.tolerance = 1e-10;
+  return s;
+}
+
+TEST(Simulation, StepsQuasiStaticallyToTheProvidersTargets) {
+  std::shared_ptr<Scripted> script;
+  Simulation sim(pulled_box(Integrator::quasi_static, &script));
+  EXPECT_EQ(sim.steps(), 0);
+  for (int k = 1; k <= 3; ++k) {
+    const StepReport r = sim.step(0.5 * k);
+    ASSERT_TRUE(r.converged) << r.failure;
+    EXPECT_EQ(sim.steps(), k);
+    EXPECT_EQ(sim.time(), 0.5 * k);
+  }
+  // The top layer is where the script put it at t = 1.5; the body stretched in y only on average.
+  for (Eigen::Index v = 0; v < sim.mesh().vertex_count(); ++v)
+    if (sim.mesh().vertices(1, v) == 1.0) EXPECT_EQ(sim.x()[3 * v + 1], 1.0 + 0.2 * 1.5);
+  EXPECT_EQ(script->calls, 3) << "the provider is asked once per step";
+  const std::vector<bool> k = sim.kinematic_vertices();
+  EXPECT_EQ(std::count(k.begin(), k.end(), true), 18);
+}
+
+TEST(Simulation, AFrameOfSubstepsEqualsTheSameStepsOneByOne) {
+  Simulation a(pulled_box(Integrator::backward_euler)), b(pulled_box(Integrator::backward_euler));
+  const StepReport frame = a.advance(0.0, 0.1, 4);
+  ASSERT_TRUE(frame.converged);
+  EXPECT_EQ(frame.substeps, 4);
+  int newton = 0;
+  for (int k = 1; k <= 4; ++k) {
+    const StepReport r = b.step(0.1 * k);
+    ASSERT_TRUE(r.converged);
+    newton += r.newton_iterations;
+  }
+  EXPECT_EQ(a.x(), b.x());
+  EXPECT_EQ(a.v(), b.v());
+  EXPECT_EQ(frame.newton_iterations, newton);
+  EXPECT_EQ(a.steps(), 4);
+}
+
+TEST(Simulation, AnInterruptedFrameReturnsToItsStart) {
+  Simulation sim(pulled_box(Integrator::backward_euler));
+  ASSERT_TRUE(sim.advance(0.0, 0.1, 2).converged);
+  const SimulationState before = sim.state();
+  NewtonOptions newton = sim.setup().newton;
+  int calls = 0;
+  newton.should_stop = [&] { return ++calls > 3; };  // stops inside the second substep
+  const StepReport r = sim.advance(0.2, 0.1, 3, &newton);
+  EXPECT_TRUE(r.interrupted);
+  EXPECT_EQ(sim.x(), before.x);
+  EXPECT_EQ(sim.v(), before.aux);
+  EXPECT_EQ(sim.time(), before.time);
+  EXPECT_EQ(sim.steps(), before.steps);
+}
+
+TEST(Simulation, RefusesACoordinateHeldByTwoSetsAndBadSizes) {
+  SimulationSetup s = pulled_box(Integrator::quasi_static);
+  s.kinematic.push_back(s.kinematic[0]);
+  s.kinematic.back().name = "again";
+  s.kinematic.back().axes = {false, true, false};
+  try {
+    Simulation sim(s);
+    ADD_FAILURE() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "again holds the y coordinate of vertex 0, which bottom already holds: give each coordinate "
+                                     "one motion");
+  }
+  s = pulled_box(Integrator::quasi_static);
+  s.kinematic[1].vertices.push_back(999);
+  EXPECT_THROW(Simulation{s}, std::invalid_argument);
+  s = pulled_box(Integrator::quasi_static);
+  s.initial = Eigen::VectorXd::Zero(5);
+  EXPECT_THROW(Simulation{s}, std::invalid_argument);
+  s = pulled_box(Integrator::backward_euler);
+  s.dt = 0.0;
+  EXPECT_THROW(Simulation{s}, std::invalid_argument);
+}
+
+TEST(ScriptedMotion, ComposesItsMotionsInOrder) {
+  const Eigen::Matrix3Xd base = (Eigen::Matrix3Xd(3, 2) << 1, 3, 0, 0, 0, 0).finished();
+  const ScriptedMotion m(base, {Rotate{.axis = Eigen::Vector3d::UnitZ(), .radians = std::numbers::pi / 2, .center = {}, .start = 0, .end = 1},
+                                Translate{.by = Eigen::Vector3d(0, 0, 4), .start = 1, .end = 3},
+                                Scale{.factors = Eigen::Vector3d(3, 1, 1), .center = Eigen::Vector3d::Zero(), .start = 3, .end = 4}});
+  Eigen::Matrix3Xd P;
+  m.targets(0.0, P);
+  EXPECT_EQ(P, base);
+  m.targets(1.0, P);  // turned 90° about the centroid (2, 0, 0)
+  EXPECT_TRUE(P.isApprox((Eigen::Matrix3Xd(3, 2) << 2, 2, -1, 1, 0, 0).finished(), 1e-15));
+  m.targets(2.0, P);  // half way up
+  EXPECT_TRUE(P.row(2).isApprox(Eigen::RowVector2d(2, 2)));
+  m.targets(10.0, P);  // all of it, x scaled ×3 about the origin
+  EXPECT_TRUE(P.isApprox((Eigen::Matrix3Xd(3, 2) << 6, 6, -1, 1, 4, 4).finished(), 1e-15));
+}
+
+TEST(StatsTables, OneDescriptionDrivesJsonCsvAndResume) {
+  StepRecord r;
+  r.index = 3;
+  r.time = 0.75;
+  r.converged = false;
+  r.newton_iterations = 7;
+  r.residual = 1.5e-4;
+  r.energy = 2.25;
+  r.elastic_energy = std::numeric_limits<double>::infinity();
+  r.min_J = -0.5;
+  r.inverted = 2;
+  r.residuals = {1.0, 0.1, 1.5e-4};
+  r.failure = "no convergence";
+  for (const RecordTable* t : {&stretch_table(), &scene_table()}) {
+    const json j = to_json(*t, r);
+    const StepRecord back = from_json(*t, j);
+    EXPECT_EQ(to_json(*t, back), j) << t->records;
+    EXPECT_EQ(j.at(t->index), 3);
+    EXPECT_EQ(back.failure, "no convergence");
+    // Every CSV column is a field of the record, in the table's order.
+    std::string expected;
+    for (const RecordField& f : t->fields)
+      if (f.csv) expected += (expected.empty() ? "" : ",") + std::string(f.key);
+    EXPECT_EQ(csv_header(*t), expected);
+    const std::string row = csv_row(*t, r);
+    EXPECT_EQ(std::count(row.begin(), row.end(), ','), std::count(expected.begin(), expected.end(), ','));
+    // Every plot named by a field exists, and every plot has a field.
+    const json schema = schema_json(*t);
+    for (const json& p : schema["plots"]) {
+      int series = 0;
+      for (const json& c : schema["columns"]) series += c.value("plot", "") == p["id"];
+      EXPECT_GT(series, 0) << p["id"];
+    }
+    EXPECT_EQ(table_for(t->records), t);
+  }
+  EXPECT_TRUE(to_json(scene_table(), r)["elastic_energy"].is_null()) << "non-finite numbers are written as null";
+  EXPECT_TRUE(std::isnan(from_json(scene_table(), to_json(scene_table(), r)).elastic_energy));
+  // The columns these files have always had.
+  EXPECT_EQ(csv_header(stretch_table()), "step,converged,newton_iterations,line_search_steps,linear_iterations,factorizations,"
+                                         "residual,energy,wall_seconds,assembly_seconds,solve_seconds,min_J,inverted,volume_ratio");
+  EXPECT_EQ(csv_header(scene_table()), "frame,time,substeps,converged,newton_iterations,line_search_steps,linear_iterations,"
+                                       "factorizations,residual,elastic_energy,kinetic_energy,gravity_energy,total_energy,"
+                                       "volume_ratio,min_J,inverted,wall_seconds");
+  EXPECT_EQ(csv_row(stretch_table(), r), "3,0,7,0,0,0,1.500000e-04,2.25,0.000000,0.000000,0.000000,-0.5,2,1");
+}
+
+json stats_of(const fs::path& dir) {
+  std::ifstream in(dir / "stats.json");
+  return json::parse(in);
+}
+
+TEST(Driver, WritesTheRunsStatus) {
+  const fs::path d = fs::temp_directory_path() / ("snh_test_driver_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  std::ostringstream log;
+  StretchConfig c;
+  c.resolution = 2;
+  c.steps = 3;
+  c.out = d / "ok";
+  ASSERT_TRUE(run_stretch(c, log).all_converged);
+  json s = stats_of(c.out);
+  EXPECT_EQ(s["status"], "finished");
+  EXPECT_EQ(s["all_converged"], true);
+  EXPECT_EQ(s["schema"]["records"], "steps");
+  // A step that fails: "stopped".
+  c.out = d / "failed";
+  c.newton.max_iterations = 1;
+  c.newton.tolerance = 1e-14;
+  const StretchResult failed = run_stretch(c, log);
+  EXPECT_FALSE(failed.all_converged);
+  s = stats_of(c.out);
+  EXPECT_EQ(s["status"], "stopped");
+  EXPECT_EQ(s["all_converged"], false);
+  EXPECT_EQ(s["failure"].get<std::string>().rfind("step 1, no convergence in 1 Newton iterations", 0), 0u) << s["failure"];
+  // A signal: "interrupted".
+  c.out = d / "stopped";
+  c.newton = {};
+  c.newton.on_iteration = [](int it, double) {
+    if (it == 1) request_stop(SIGTERM);
+  };
+  const StretchResult stopped = run_stretch(c, log);
+  request_stop(0);
+  EXPECT_EQ(stopped.interrupted_by, SIGTERM);
+  s = stats_of(c.out);
+  EXPECT_EQ(s["status"], "interrupted");
+  EXPECT_EQ(s["interrupted_by_signal"], SIGTERM);
+  fs::remove_all(d);
+}
+
+TEST(SceneSections, MixedOrMeaninglessInputIsRefused) {
+  auto error_of = [](const char* text) {
+    try {
+      (void)parse_scene(json::parse(text), "s.json");
+    } catch (const SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // A centre means nothing to a translation.
+  EXPECT_EQ(error_of(R"({"pins": [{"indices": [0], "motion": [{"type": "translate", "by": [1, 0, 0], "center": [0, 0, 0]}]}]})")
+                .rfind("s.json: pins[0].motion[0].center: unknown key", 0),
+            0u);
+  // Two pin sets moving the same coordinate of a vertex.
+  EXPECT_EQ(error_of(R"({"pins": [{"indices": [0, 1]}, {"indices": [1], "axes": "y",
+                       "motion": [{"type": "translate", "by": [0, 1, 0]}]}]})"),
+            "s.json: pins[1] holds the y coordinate of vertex 1, which s.json: pins[0] already holds: give each coordinate one "
+            "motion");
+  // The same vertex held on different axes by two sets is fine.
+  EXPECT_EQ(error_of(R"({"pins": [{"indices": [0, 1], "axes": "x"}, {"indices": [1], "axes": "yz"}]})"), "");
+}
+
+}  // namespace
+}  // namespace snh
