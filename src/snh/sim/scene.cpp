@@ -137,7 +137,10 @@ std::vector<KinematicSet> scene_kinematics(const Scene& s, const VolumeMesh& mes
   const Eigen::Map<const Eigen::Matrix3Xd> X0(x0.data(), 3, mesh.vertex_count());
   for (std::size_t i = 0; i < s.pins.size(); ++i) {
     const std::string name = fmt::format("{}: pins[{}]", s.source.string(), i);
-    KinematicSet set{.name = name, .vertices = select_vertices(s.pins[i].select, mesh.vertices, name), .axes = s.pins[i].axes};
+    KinematicSet set;
+    set.name = name;
+    set.vertices = select_vertices(s.pins[i].select, mesh.vertices, name);
+    set.axes = s.pins[i].axes;
     set.provider = std::make_shared<ScriptedMotion>(X0(Eigen::all, set.vertices), s.pins[i].motions);
     sets.push_back(std::move(set));
   }

@@ -70,7 +70,8 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   const double lo_a = mesh.vertices.row(a).minCoeff(), hi_a = mesh.vertices.row(a).maxCoeff();
   const double centre = 0.5 * (lo_a + hi_a), half0 = 0.5 * (hi_a - lo_a), eps = 1e-9 * std::max(hi_a - lo_a, 1e-300);
   if (!(half0 > 0.0)) throw std::invalid_argument("the mesh is flat along the stretch axis");
-  KinematicSet layers{.name = "the pulled layers"};
+  KinematicSet layers;
+  layers.name = "the pulled layers";
   for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
     if (mesh.vertices(a, v) <= lo_a + eps) layers.vertices.push_back(static_cast<int>(v));
   for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
@@ -78,10 +79,13 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   const auto stretch = std::make_shared<AxisStretch>(mesh.vertices(Eigen::all, layers.vertices), a, centre, c.stretch, c.steps);
   layers.provider = stretch;
 
-  SimulationSetup setup{.mesh = mesh, .materials = {make_material(c.material, c.params, c.reparametrize)}};
+  SimulationSetup setup;
+  setup.mesh = mesh;
+  setup.materials = {make_material(c.material, c.params, c.reparametrize)};
   setup.integrator = Integrator::quasi_static;
   setup.kinematic = {layers};
-  setup.linear = {.name = c.solver, .reuse_factor = c.reuse_factor};
+  setup.linear.name = c.solver;
+  setup.linear.reuse_factor = c.reuse_factor;
   setup.newton = c.newton;
   // Step 1 starts from the rest state stretched affinely to the new boundary; an extrapolated guess
   // outside the energy's domain falls back to the last solution scaled along the axis to the new boundary

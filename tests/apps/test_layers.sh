@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Every file of a layer includes only headers of its own layer and of the layers below it (DESIGN.md):
+#   math <- material <- fem <- solve <- sim <- report, mesh beside material (knows math), io beside fem
+#   (knows mesh and math). One line per include that breaks an arrow, and a non-zero exit code.
+# Usage: test_layers.sh SRC_SNH_DIR
+set -u
+SRC="$1"
+declare -A allowed=(
+  [math]="math"
+  [material]="math material"
+  [mesh]="math mesh"
+  [io]="math mesh io"
+  [fem]="math material mesh fem"
+  [solve]="math material mesh fem solve"
+  [sim]="math material mesh io fem solve sim"
+  [report]="math material mesh io fem solve sim report"
+)
+bad=0 files=0
+for layer in "${!allowed[@]}"; do
+  while IFS= read -r file; do
+    files=$((files + 1))
+    while IFS= read -r used; do
+      case " ${allowed[$layer]} " in
+        *" $used "*) ;;
+        *) echo "FAIL: ${file#"$SRC"/} ($layer) includes snh/$used/: $layer may use only ${allowed[$layer]}"; bad=$((bad + 1)) ;;
+      esac
+    done < <(sed -n 's|^#include "snh/\([a-z]*\)/.*|\1|p' "$file")
+  done < <(find "$SRC/$layer" -name '*.hpp' -o -name '*.cpp')
+done
+unknown=$(find "$SRC" -mindepth 1 -maxdepth 1 -type d -printf '%f\n' | while read -r d; do [ -n "${allowed[$d]:-}" ] || echo "$d"; done)
+[ -z "$unknown" ] || { echo "FAIL: layers without arrows here: $unknown"; bad=$((bad + 1)); }
+echo "$files files checked, $bad includes against the layering"
+[ "$bad" -eq 0 ] && [ "$files" -gt 50 ]
