@@ -6,6 +6,10 @@
 
 #include "energies.hpp"
 
+#include <random>
+
+#include "snh/material/registry.hpp"
+
 namespace snh {
 namespace {
 
@@ -150,6 +154,54 @@ TEST(Registry, NamesAndErrors) {
   EXPECT_THROW((void)make_material("stable_neo_hookean", {1.0, std::nan("")}), ParameterError);
   EXPECT_THROW((void)make_material("stable_neo_hookean", {1.0, -0.1}), ParameterError);  // alpha needs lambda > 0
   EXPECT_THROW((void)make_material("neo_hookean", {-1.0, 10.0}), ParameterError);
+}
+
+}  // namespace
+}  // namespace snh
+
+namespace snh {
+namespace {
+
+/// ψ, P and ∂P/∂F but no route to an eigensystem: not a Material (the PSD projection could not use it).
+struct NoEigensystem {
+  static constexpr std::string_view name = "none", formula = "";
+  static constexpr bool inversion_safe = true;
+  static Lame from_linear(const Lame& l) { return l; }
+  Lame params() const { return {}; }
+  bool defined(const Mat3&) const { return true; }
+  double psi(const Mat3&) const { return 0.0; }
+  Mat3 pk1(const Mat3&) const { return Mat3::Zero(); }
+  Mat9 hessian(const Mat3&) const { return Mat9::Zero(); }
+};
+struct WithOwnEigensystem : NoEigensystem {
+  Eigensystem9 eigensystem() const { return {}; }
+};
+static_assert(!Material<NoEigensystem>, "a material needs one of the two eigensystem routes");
+static_assert(Material<WithOwnEigensystem> && !IsotropicMaterial<WithOwnEigensystem>);
+static_assert(IsotropicMaterial<Corotated> && IsotropicMaterial<StableNeoHookean> && Material<Linear>);
+
+/// point_terms (one SVD) gives what the separate calls give, bit for bit, for every energy and projection.
+TEST(PointTerms, EqualTheSeparateCallsBitForBit) {
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> n(0.0, 0.6);
+  for (std::string_view name : material_names()) {
+    const AnyMaterial any = make_material(name, {1.0, 10.0});
+    std::visit(
+        [&](const auto& m) {
+          for (int k = 0; k < 50; ++k) {
+            Mat3 F = Mat3::Identity();
+            for (int i = 0; i < 9; ++i) F.data()[i] += n(rng);
+            if (!m.defined(F)) F.col(0) *= -1.0;
+            for (PsdProjection p : {PsdProjection::none, PsdProjection::clamp, PsdProjection::abs}) {
+              const PointTerms t = point_terms(m, F, true, true, p);
+              EXPECT_EQ(t.psi, m.psi(F)) << name;
+              EXPECT_EQ(t.P, m.pk1(F)) << name;
+              EXPECT_EQ(t.H, projected_hessian(m, F, p)) << name << " " << to_string(p);
+            }
+          }
+        },
+        any);
+  }
 }
 
 }  // namespace

@@ -49,11 +49,12 @@ double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix
     const Eigen::Matrix<double, N, 3>& G = r.G[q];
     const double w = r.weight[q];
     const Mat3 F = X * G;
-    psi += w * m.psi(F);
-    if (grad) grad->noalias() += (w * m.pk1(F)) * G.transpose();
+    const PointTerms t = point_terms(m, F, grad != nullptr, K != nullptr, p);  // one SVD at most
+    psi += w * t.psi;
+    if (grad) grad->noalias() += (w * t.P) * G.transpose();
     if (K) {
       // With vec(F)_{3j+i} = Σ_a x_{a,i} G_{a,j}: K_{(a,i),(b,k)} = w Σ_{j,l} G_{a,j} H_{3j+i,3l+k} G_{b,l}.
-      const Mat9 H = w * projected_hessian(m, F, p);
+      const Mat9 H = w * t.H;
       Eigen::Matrix<double, 9, 3 * N> HB;
       for (int b = 0; b < N; ++b)
         for (int k = 0; k < 3; ++k)

@@ -13,7 +13,24 @@
 
 namespace snh {
 
-/// An energy density: ψ(F), P(F) = ∂ψ/∂F, ∂P/∂F (9x9, column-major vec), and whether F is in its domain.
+/// An energy whose Hessian's eigensystem comes from its signed singular values (MATH.md §4): ψ̂(σ), ∇ψ̂(σ)
+/// and the σ-frame eigenvalues, assembled with the SVD's rotations.
+template <class M>
+concept SigmaEigensystem = requires(const M m, const Vec3& s) {
+  { m.defined_sigma(s) } -> std::same_as<bool>;
+  { m.psi_sigma(s) } -> std::same_as<double>;
+  { m.grad_sigma(s) } -> std::same_as<Vec3>;
+  { m.sigma_eigenvalues(s) } -> std::same_as<SigmaEigenvalues>;
+};
+
+/// An energy that gives its Hessian's eigensystem directly (a quadratic energy: the same at every F).
+template <class M>
+concept OwnEigensystem = requires(const M m) {
+  { m.eigensystem() } -> std::same_as<Eigensystem9>;
+};
+
+/// An energy density: ψ(F), P(F) = ∂ψ/∂F, ∂P/∂F (9x9, column-major vec), whether F is in its domain, and
+/// one of the two routes to its Hessian's eigensystem (needed by the PSD projection).
 template <class M>
 concept Material = requires(const M m, const Mat3& F, const Lame& p) {
   { M::name } -> std::convertible_to<std::string_view>;
@@ -25,16 +42,11 @@ concept Material = requires(const M m, const Mat3& F, const Lame& p) {
   { m.psi(F) } -> std::same_as<double>;
   { m.pk1(F) } -> std::same_as<Mat3>;
   { m.hessian(F) } -> std::same_as<Mat9>;
-};
+} && (SigmaEigensystem<M> || OwnEigensystem<M>);
 
 /// An isotropic energy: also ψ̂(σ), ∇ψ̂(σ) and the σ-frame eigenvalues at signed singular values.
 template <class M>
-concept IsotropicMaterial = Material<M> && requires(const M m, const Vec3& s) {
-  { m.defined_sigma(s) } -> std::same_as<bool>;
-  { m.psi_sigma(s) } -> std::same_as<double>;
-  { m.grad_sigma(s) } -> std::same_as<Vec3>;
-  { m.sigma_eigenvalues(s) } -> std::same_as<SigmaEigenvalues>;
-};
+concept IsotropicMaterial = Material<M> && SigmaEigensystem<M>;
 
 /// The 9x9 eigensystem of ∂P/∂F at the F whose SVD is given (MATH.md §4).
 template <Material M>
@@ -81,6 +93,43 @@ template <Material M>
   } else {
     return rebuild(m.eigensystem(), p);
   }
+}
+
+/// ψ, P and the (projected) ∂P/∂F at one F, as the element loop needs them.
+struct PointTerms {
+  double psi = 0.0;
+  Mat3 P = Mat3::Zero();
+  Mat9 H = Mat9::Zero();
+};
+
+/// ψ(F), and when asked P(F) and projected_hessian(m, F, p), with the SVD of F computed at most once: for an
+/// energy of I1 (corotated, ARAP) ψ, P and ∂P/∂F all come from one SVD; otherwise only the projection
+/// needs it. The values are those of m.psi(F), m.pk1(F) and projected_hessian(m, F, p), bit for bit.
+template <Material M>
+[[nodiscard]] PointTerms point_terms(const M& m, const Mat3& F, bool want_P, bool want_H, PsdProjection p) {
+  PointTerms out;
+  if constexpr (requires { M::uses_I1; }) {
+    if constexpr (M::uses_I1) {
+      const Svd3 svd = rotation_variant_svd(F);
+      out.psi = m.psi_sigma(svd.sigma);
+      if (want_P) {
+        // Constructed, as pk1(F) returns it: Eigen evaluates a product assigned to an existing matrix in
+        // another order (the last bits differ).
+        const Mat3 P = svd.U * m.grad_sigma(svd.sigma).asDiagonal() * svd.V.transpose();
+        out.P = P;
+      }
+      if (want_H) {
+        if (p == PsdProjection::none)
+          out.H = rebuild(assemble_eigensystem(svd, m.sigma_eigenvalues(svd.sigma)), PsdProjection::none);
+        else out.H = projected_hessian(m, svd, p);
+      }
+      return out;
+    }
+  }
+  out.psi = m.psi(F);
+  if (want_P) out.P = m.pk1(F);
+  if (want_H) out.H = projected_hessian(m, F, p);
+  return out;
 }
 
 /// Everything about one F, with an explicit domain status.
