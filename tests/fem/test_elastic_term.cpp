@@ -9,8 +9,8 @@
 
 #include "snh/fem/elastic_term.hpp"
 #include "snh/fem/problem.hpp"
-#include "snh/math/finite_difference.hpp"
 #include "snh/mesh/box.hpp"
+#include "fem/problem_fd.hpp"
 
 namespace snh {
 namespace {
@@ -90,35 +90,9 @@ TEST_P(Assembly, GradientAndHessianMatchFiniteDifferences) {
   Eigen::VectorXd x = flatten(m.vertices);
   for (Eigen::Index i = 0; i < x.size(); ++i) x[i] = 1.1 * x[i] + n(rng);
 
-  Eigen::VectorXd g;
-  SparseLower H;
-  sys.evaluate(x, g, &H, PsdProjection::none);
-  const Eigen::MatrixXd Hfull = Eigen::MatrixXd(H).selfadjointView<Eigen::Lower>();
-
-  // As functions of the free DOFs.
-  const DofMap& dofs = sys.problem.dofs();
-  auto at = [&](const Eigen::VectorXd& y) {
-    Eigen::VectorXd z = x;
-    for (Eigen::Index d = 0; d < z.size(); ++d)
-      if (dofs.is_free(d)) z[d] = y[dofs.free_index()[d]];
-    return z;
-  };
-  const Eigen::VectorXd y = dofs.gather_free(x);
-  double best_g = 1e300, best_H = 1e300;
-  for (double eps : {1e-3, 1e-4, 1e-5}) {
-    const Eigen::VectorXd fd_g = fd_gradient([&](const Eigen::VectorXd& z) { return sys.elastic.energy(at(z)); }, y, eps);
-    const Eigen::MatrixXd fd_H = fd_jacobian(
-        [&](const Eigen::VectorXd& z) {
-          Eigen::VectorXd gz;
-          sys.evaluate(at(z), gz);
-          return gz;
-        },
-        y, eps);
-    best_g = std::min(best_g, (fd_g - g).norm() / g.norm());
-    best_H = std::min(best_H, (fd_H - Hfull).norm() / Hfull.norm());
-  }
-  EXPECT_LE(best_g, 1e-7) << name;
-  EXPECT_LE(best_H, 1e-7) << name;
+  const FdErrors e = problem_fd_errors(sys.problem, x);
+  EXPECT_LE(e.gradient, 1e-7) << name;
+  EXPECT_LE(e.hessian, 1e-7) << name;
 }
 
 TEST_P(Assembly, ProjectedHessianIsPositiveSemidefinite) {

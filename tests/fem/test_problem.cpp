@@ -6,8 +6,8 @@
 
 #include "snh/fem/elastic_term.hpp"
 #include "snh/fem/problem.hpp"
-#include "snh/math/finite_difference.hpp"
 #include "snh/mesh/box.hpp"
+#include "fem/problem_fd.hpp"
 
 namespace snh {
 namespace {
@@ -146,24 +146,9 @@ TEST(Problem, SumsItsTermsAndMatchesFiniteDifferences) {
   const double E = p.evaluate(x, g, &H, PsdProjection::none);
   EXPECT_DOUBLE_EQ(E, elastic.energy(x) + springs.energy(x));
   EXPECT_DOUBLE_EQ(E, p.energy(x));
-  const Eigen::MatrixXd Hd = Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>();
-  auto at = [&](const Eigen::VectorXd& y) {
-    Eigen::VectorXd z = x;
-    for (Eigen::Index d = 0; d < z.size(); ++d)
-      if (!fixed[d]) z[d] = y[p.dofs().free_index()[d]];
-    return z;
-  };
-  const Eigen::VectorXd y = p.dofs().gather_free(x);
-  const Eigen::VectorXd fd_g = fd_gradient([&](const Eigen::VectorXd& z) { return p.energy(at(z)); }, y, 1e-4);
-  const Eigen::MatrixXd fd_H = fd_jacobian(
-      [&](const Eigen::VectorXd& z) {
-        Eigen::VectorXd gz;
-        p.evaluate(at(z), gz, nullptr, PsdProjection::none);
-        return gz;
-      },
-      y, 1e-4);
-  EXPECT_LE((fd_g - g).norm(), 1e-8 * g.norm());
-  EXPECT_LE((fd_H - Hd).norm(), 1e-8 * Hd.norm());
+  const FdErrors e = problem_fd_errors(p, x);
+  EXPECT_LE(e.gradient, 1e-8);
+  EXPECT_LE(e.hessian, 1e-8);
   EXPECT_EQ(p.layouts_built(), 1);
 }
 

@@ -249,13 +249,20 @@ MeshFile read_vtu_file(const std::filesystem::path& path, VtuData* data) {
   std::size_t w_off = 0, w_types = 0, w_conn = 0;
   const std::vector<double> offsets = array("Cells", "offsets", n_cells, w_off);
   const std::vector<double> types = array("Cells", "types", n_cells, w_types);
-  long long total = n_cells ? static_cast<long long>(offsets.back()) : 0;
+  // Offsets, types and connectivity arrive as doubles: each must be a whole number a double holds exactly
+  // (|v| <= 2^53), never cast blindly (a cast of 2.4e28 to an integer is undefined).
+  auto whole = [&](double v, std::size_t at, const char* what) {
+    if (!(std::abs(v) <= 9007199254740992.0) || v != std::floor(v))
+      fail(at, fmt::format("{}: {:g} is not an index (a whole number no larger than 2^53)", what, v));
+    return static_cast<long long>(v);
+  };
+  long long total = n_cells ? whole(offsets.back(), w_off, "offsets") : 0;
   if (total < 0 || total > (1LL << 33)) fail(w_off, "implausible offsets");
   const std::vector<double> conn = array("Cells", "connectivity", total, w_conn);
   long long previous = 0;
   std::vector<long long> kept;  // the tet and hex cells, by index in the file
   for (long long c = 0; c < n_cells; ++c) {
-    const long long type = static_cast<long long>(types[c]), end = static_cast<long long>(offsets[c]);
+    const long long type = whole(types[c], w_types, "types"), end = whole(offsets[c], w_off, "offsets");
     if (end < previous || end > total) fail(w_off, fmt::format("cell {}: offsets are not increasing", c));
     if (type == 5 || type == 9 || type == 3 || type == 1) {  // surface / line / vertex cells: skipped
       previous = end;
@@ -266,7 +273,7 @@ MeshFile read_vtu_file(const std::filesystem::path& path, VtuData* data) {
     if (nodes < 0) fail(w_types, fmt::format("cell {} has unsupported VTK type {} (tets 10 and hexes 12 only)", c, type));
     if (end - previous != nodes) fail(w_off, fmt::format("cell {}: offsets give {} nodes for a {}-node cell", c, end - previous, nodes));
     std::vector<long long> ids(nodes);
-    for (int a = 0; a < nodes; ++a) ids[a] = static_cast<long long>(conn[previous + a]);
+    for (int a = 0; a < nodes; ++a) ids[a] = whole(conn[previous + a], w_conn, "connectivity");
     for (long long id : ids)
       if (id < 0 || id >= n_points) fail(w_conn, fmt::format("cell {} refers to point {}, which does not exist", c, id));
     b.cell(dummy, nodes == 4 ? CellType::tet4 : CellType::hex8, nodes == 4 ? ids : detail::hex_to_lattice(ids), 0);
