@@ -79,6 +79,13 @@ echo "my notes" > "$d/notes.txt"
   bad "the second run left the first one's files: $(ls "$d")"
 grep -q '"status": "finished"' "$d/stats.json" && ok || bad "status of a finished run"
 
+# A directory with a file of one of our names but no run of ours: refused, and the file kept.
+d="$work/theirs"
+mkdir -p "$d" && echo "<html>my page</html>" > "$d/index.html"
+out="$("$SNH" stretch --res 2 --steps 2 --out "$d" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "holds index.html but no snh run" && [ "$(cat "$d/index.html")" = "<html>my page</html>" ] \
+  && [ ! -e "$d/000.obj" ] && ok || bad "a directory that is not ours (exit $code): $out"
+
 # 4. --resume checks what it keeps: the frames, and the checkpoint's checksum.
 d="$work/resume"
 "$SNH" stretch --res 2 --steps 4 --out "$d" --no-report > /dev/null 2>&1

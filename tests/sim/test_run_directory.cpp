@@ -55,18 +55,40 @@ TEST(RunDirectory, ALockedDirectoryRefusesASecondRunUntilReleased) {
 
 TEST(RunDirectory, ClearingRemovesOnlyWhatARunOfOursWrites) {
   const fs::path d = fresh_dir("clear");
-  for (const char* f : {"000.obj", "012.vtu", "1234.obj", "frames.pvd", "stats.json", "stats.csv", "checkpoint.bin",
-                        "index.html", "stats.json.tmp.77", ".snh-write-test.5"})
+  for (const char* f : {"000.obj", "012.vtu", "1234.obj", "frames.pvd", "stats.json", "stats.csv", "index.html",
+                        "stats.json.tmp.77", ".snh-write-test.5"})
     std::ofstream(d / f) << "x";
   fs::create_directories(d / "report" / "frames");
   std::ofstream(d / "report" / "frames" / "000.js") << "x";
   for (const char* f : {"notes.txt", "12.obj", "mesh.vtu", "my_stats.json", "index.htm"}) std::ofstream(d / f) << "keep";
   fs::create_directories(d / "000.obj.d");
-  EXPECT_EQ(clear_previous_run(d), 11);
+  // No sign of a run of ours yet: the files are someone else's, and nothing is removed.
+  {
+    const RunDirectoryLock lock(d);
+    EXPECT_FALSE(lock.found_earlier());
+    EXPECT_NE(error_of([&] { (void)clear_previous_run(d, lock); }).find("but no snh run: an snh run would replace it"),
+              std::string::npos);
+  }
+  EXPECT_TRUE(fs::exists(d / "index.html"));
+  std::ofstream(d / "checkpoint.bin") << "x";
+  // The lock file of an earlier run (here the one just released) shows a run of ours.
+  const RunDirectoryLock lock(d);
+  EXPECT_TRUE(lock.found_earlier());
+  EXPECT_EQ(clear_previous_run(d, lock), 11);
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(d)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
-  EXPECT_EQ(left, (std::vector<std::string>{"000.obj.d", "12.obj", "index.htm", "mesh.vtu", "my_stats.json", "notes.txt"}));
+  EXPECT_EQ(left, (std::vector<std::string>{".snh-lock", "000.obj.d", "12.obj", "index.htm", "mesh.vtu", "my_stats.json",
+                                            "notes.txt"}));
+  fs::remove_all(d);
+}
+
+TEST(RunDirectory, AStatsFileOfSnhShowsARunOfOurs) {
+  const fs::path d = fresh_dir("ours");
+  std::ofstream(d / "stats.json") << "{\"snh_version\": \"0.1.0\", \"steps\": []}";  // a run from before the lock file
+  std::ofstream(d / "001.obj") << "x";
+  const RunDirectoryLock lock(d);
+  EXPECT_EQ(clear_previous_run(d, lock), 2);
   fs::remove_all(d);
 }
 

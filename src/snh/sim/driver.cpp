@@ -71,7 +71,7 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
     for (const json& j : history_for_resume(plan.out, table.records, resume_from->step + (table.has_initial ? 1 : 0)))
       result.records.push_back(from_json(table, j));
   } else {
-    (void)clear_previous_run(plan.out);
+    (void)clear_previous_run(plan.out, *lock);
   }
   write_stats(plan, result, "running");
 

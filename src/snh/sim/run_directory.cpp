@@ -2,6 +2,8 @@
 
 #include <cerrno>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <regex>
 #include <stdexcept>
 #include <system_error>
@@ -21,10 +23,13 @@ namespace fs = std::filesystem;
 RunDirectoryLock::RunDirectoryLock(const fs::path& dir) {
   ensure_writable_directory(dir);
   const fs::path path = dir / ".snh-lock";
+  std::error_code ec;
+  found_ = fs::exists(path, ec);
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0) throw WriteError(fmt::format("cannot create {}: {}", path.string(), std::strerror(errno)));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
+    if (err == ENOLCK || err == EINVAL || err == EOPNOTSUPP) return;  // a file system without locks: run unlocked
     char pid[32] = {};
     const ssize_t n = ::pread(fd_, pid, sizeof(pid) - 1, 0);
     ::close(fd_);
@@ -45,7 +50,23 @@ RunDirectoryLock::~RunDirectoryLock() {
   if (fd_ >= 0) ::close(fd_);  // releases the lock; the file stays (removing it would race a waiting run)
 }
 
-int clear_previous_run(const fs::path& dir) {
+namespace {
+
+/// True if dir shows an snh run: a checkpoint, or a stats.json or lab.json naming snh's version.
+bool holds_a_run_of_ours(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(dir / "checkpoint.bin", ec)) return true;
+  for (const char* f : {"stats.json", "lab.json"}) {
+    std::ifstream in(dir / f);
+    const std::string head((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (head.find("\"snh_version\"") != std::string::npos) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+int clear_previous_run(const fs::path& dir, const RunDirectoryLock& lock) {
   static const std::regex ours(R"((?:\d{3,}\.(?:obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html))"
                                R"((?:\.tmp\.\d+)?|\.snh-write-test\.\d+)");
   std::vector<fs::path> doomed;
@@ -56,6 +77,11 @@ int clear_previous_run(const fs::path& dir) {
     else if (std::regex_match(name, ours) && !e.is_directory(ec)) doomed.push_back(e.path());
   }
   if (ec) throw WriteError(fmt::format("cannot list {}: {}", dir.string(), ec.message()));
+  // Files with our names in a directory that shows no run of ours are someone else's: refuse to replace them.
+  if (!doomed.empty() && !lock.found_earlier() && !holds_a_run_of_ours(dir))
+    throw WriteError(fmt::format("{} holds {} but no snh run: an snh run would replace it; choose an empty or new output "
+                                 "directory",
+                                 dir.string(), doomed.front().filename().string()));
   for (const fs::path& p : doomed) {
     fs::remove_all(p, ec);
     if (ec) throw WriteError(fmt::format("cannot remove {} (left by an earlier run): {}", p.string(), ec.message()));

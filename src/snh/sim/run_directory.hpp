@@ -18,15 +18,21 @@ class RunDirectoryLock {
   ~RunDirectoryLock();
   RunDirectoryLock(const RunDirectoryLock&) = delete;
   RunDirectoryLock& operator=(const RunDirectoryLock&) = delete;
+  /// True if the lock file was there before (an earlier run of ours used the directory).
+  [[nodiscard]] bool found_earlier() const { return found_; }
 
  private:
   int fd_ = -1;
+  bool found_ = false;
 };
 
 /// Removes what a previous run of ours left in dir: NNN.obj and NNN.vtu frames, frames.pvd, stats.json,
 /// stats.csv, checkpoint.bin, index.html, the report/ directory and temporaries of interrupted writes.
-/// Other files stay. Returns the number of entries removed. Throws WriteError if one cannot be removed.
-int clear_previous_run(const std::filesystem::path& dir);
+/// Other files stay. Files with those names in a directory that shows no run of ours (no lock file found
+/// by `lock`, no checkpoint, no stats.json or lab.json naming snh's version) are someone else's: WriteError,
+/// naming one, and nothing is removed. Returns the number of entries removed. Throws WriteError if one
+/// cannot be removed.
+int clear_previous_run(const std::filesystem::path& dir, const RunDirectoryLock& lock);
 
 /// For a resume: frames 0 … last must be on disk (NNN.obj, and NNN.vtu when `vtu`). Throws
 /// std::invalid_argument naming the first missing one.
