@@ -49,7 +49,7 @@ else
 fi
 
 # 2. Two runs into one directory at once: the second is refused before it touches anything.
-"$TETCLI" 16 stable_neo_hookean 1.0 10.0 "$work/busy" > "$work/busy.log" 2>&1 &
+"$TETCLI" 20 stable_neo_hookean 1.0 10.0 "$work/busy" > "$work/busy.log" 2>&1 &
 pid=$!
 pids+=("$pid")
 if wait_for "$work/busy.log" "^step   1/" 60; then
