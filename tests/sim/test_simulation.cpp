@@ -91,11 +91,11 @@ TEST(Simulation, AFrameOfSubstepsEqualsTheSameStepsOneByOne) {
   for (int k = 1; k <= 4; ++k) {
     const StepReport r = b.step(0.1 * k);
     ASSERT_TRUE(r.converged);
-    newton += r.newton_iterations;
+    newton += r.newton.iterations;
   }
   EXPECT_EQ(a.x(), b.x());
   EXPECT_EQ(a.v(), b.v());
-  EXPECT_EQ(frame.newton_iterations, newton);
+  EXPECT_EQ(frame.newton.iterations, newton);
   EXPECT_EQ(a.steps(), 4);
 }
 

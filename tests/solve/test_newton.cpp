@@ -69,13 +69,21 @@ struct Toy {
   Problem problem;
 };
 
+NewtonOptions options(int max_iterations, double tolerance, double step_tolerance = 0.0) {
+  NewtonOptions o;
+  o.max_iterations = max_iterations;
+  o.tolerance = tolerance;
+  o.step_tolerance = step_tolerance;
+  return o;
+}
+
 const Eigen::VectorXd kStart = (Eigen::VectorXd(6) << 40.0, 0.5, 3.0, 7.0, 0.02, 1.5).finished();
 
 TEST(Newton, TrialsOutsideTheDomainShortenTheStepAndNeverEnterTheState) {
   Toy toy(false);
   Eigen::VectorXd x = kStart;
   auto solver = make_linear_solver({.name = "ldlt"});
-  const NewtonReport r = newton_solve(toy.problem, x, *solver, {.max_iterations = 200, .tolerance = 1e-10});
+  const NewtonReport r = newton_solve(toy.problem, x, *solver, options(200, 1e-10));
   ASSERT_TRUE(r.converged) << r.failure;
   EXPECT_GT(toy.term.outside, 0) << "some full steps left the domain";
   EXPECT_GT(r.line_search_steps, 0);
@@ -90,8 +98,8 @@ TEST(Newton, TheLineSearchStartsAtTheTermsStepBound) {
   Toy free(false), bounded(true);
   Eigen::VectorXd a = kStart, b = kStart;
   auto s1 = make_linear_solver({.name = "ldlt"}), s2 = make_linear_solver({.name = "ldlt"});
-  const NewtonReport ra = newton_solve(free.problem, a, *s1, {.max_iterations = 200, .tolerance = 1e-10});
-  const NewtonReport rb = newton_solve(bounded.problem, b, *s2, {.max_iterations = 200, .tolerance = 1e-10});
+  const NewtonReport ra = newton_solve(free.problem, a, *s1, options(200, 1e-10));
+  const NewtonReport rb = newton_solve(bounded.problem, b, *s2, options(200, 1e-10));
   ASSERT_TRUE(ra.converged && rb.converged);
   EXPECT_EQ(bounded.term.outside, 0) << "the bound keeps every trial inside the domain";
   EXPECT_EQ(bounded.term.bounds, rb.iterations) << "asked once per Newton step";
@@ -128,14 +136,14 @@ TEST(Newton, StopsOnTheStepSizeWhenAsked) {
   auto solver = make_linear_solver({.name = "ldlt"});
   // An unreachable residual tolerance: only the step-size rule can stop it.
   const NewtonReport r =
-      newton_solve(toy.problem, x, *solver, {.max_iterations = 200, .tolerance = 1e-300, .step_tolerance = 1e-9});
+      newton_solve(toy.problem, x, *solver, options(200, 1e-300, 1e-9));
   ASSERT_TRUE(r.converged) << r.failure;
   EXPECT_TRUE(r.converged_by_step);
   EXPECT_LE((x.array() - 1.0).abs().maxCoeff(), 1e-8);
   // Without it, the same solve runs out of iterations.
   Toy again(true);
   Eigen::VectorXd y = kStart;
-  const NewtonReport q = newton_solve(again.problem, y, *solver, {.max_iterations = 60, .tolerance = 1e-300});
+  const NewtonReport q = newton_solve(again.problem, y, *solver, options(60, 1e-300));
   EXPECT_FALSE(q.converged);
   EXPECT_FALSE(q.converged_by_step);
 }

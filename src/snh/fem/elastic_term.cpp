@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "snh/fem/buckets.hpp"
+
 namespace snh {
 namespace {
 
@@ -18,24 +20,6 @@ VolumeMesh checked(VolumeMesh mesh) {
       if (mesh.cells(a, c) < 0 || mesh.cells(a, c) >= n)
         throw std::invalid_argument(fmt::format("cell {} refers to vertex {} (mesh has {})", c, mesh.cells(a, c), n));
   return mesh;
-}
-
-/// Items grouped by an integer key in [0, keys), by counting sort: items[start[k] .. start[k+1]) have
-/// key k, in the order emitted. for_each_pair(emit) must call emit(key, item) for every pair, the same
-/// way each time (it is called twice: to count, then to fill).
-struct Buckets {
-  std::vector<int> start, items;
-};
-template <class ForEachPair>
-Buckets bucket(int keys, ForEachPair&& for_each_pair) {
-  Buckets b;
-  b.start.assign(keys + 1, 0);
-  for_each_pair([&](int key, int) { ++b.start[key + 1]; });
-  for (int k = 0; k < keys; ++k) b.start[k + 1] += b.start[k];
-  b.items.resize(b.start[keys]);
-  std::vector<int> fill(b.start.begin(), b.start.end() - 1);
-  for_each_pair([&](int key, int item) { b.items[fill[key]++] = item; });
-  return b;
 }
 
 /// Energy, gradient (3 by N) and stiffness (3N by 3N, DOF 3a+i) of one element at node positions X.
@@ -76,8 +60,6 @@ Eigen::Matrix<double, 3, N> gather_nodes(const VolumeMesh& mesh, Eigen::Index c,
   for (int a = 0; a < N; ++a) X.col(a) = x.segment<3>(3 * mesh.cells(a, c));
   return X;
 }
-
-
 
 /// The cells of each material (every cell's index is below `materials`).
 std::vector<std::vector<int>> cells_by_material(const std::vector<int>& material_of, std::size_t materials) {
@@ -202,19 +184,7 @@ std::vector<int> ElasticTerm::scatter_map(const HessianLayout& layout) const {
 }
 
 double ElasticTerm::energy(const Eigen::VectorXd& x) const {
-  std::vector<double> per(mesh_.cell_count());
-  for_each_material([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
-    using R = typename std::decay_t<decltype(rest)>::value_type;
-#pragma omp parallel for schedule(static) if (count * R::points >= parallel_threshold_)
-    for (Eigen::Index i = 0; i < count; ++i) {
-      const Eigen::Index c = list ? list[i] : i;
-      per[c] = element_terms<std::decay_t<decltype(m)>, R::nodes, R::points>(
-          m, rest[c], gather_nodes<R::nodes>(mesh_, c, x), nullptr, nullptr, PsdProjection::none);
-    }
-  });
-  double total = 0.0;
-  for (double e : per) total += e;  // fixed order: deterministic
-  return total;
+  return assemble(x, nullptr, nullptr, nullptr, PsdProjection::none);
 }
 
 double ElasticTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
@@ -283,7 +253,7 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
       },
       rest_);
   double total = 0.0;
-  for (double e : per) total += e;
+  for (double e : per) total += e;  // fixed order: deterministic
   return total;
 }
 

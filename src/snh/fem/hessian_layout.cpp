@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "snh/fem/buckets.hpp"
+
 namespace snh {
 namespace {
 
@@ -16,26 +18,22 @@ std::atomic<std::uint64_t> next_layout_id{1};
 HessianLayout::HessianLayout(std::vector<int> numbering, int size, const std::vector<const Stencil*>& stencils)
     : numbering_(std::move(numbering)), id_(next_layout_id++) {
   const Eigen::Index vertices = static_cast<Eigen::Index>(numbering_.size()) / 3;
-  // Vertex -> groups, by counting sort over (vertex, group) pairs: starts[v] .. starts[v+1].
-  std::vector<int> starts(vertices + 1, 0);
+  // Every group of every stencil, and vertex -> the groups it is in.
+  std::vector<std::pair<const Stencil*, int>> groups;  // (stencil, index of the group's first vertex)
   for (const Stencil* s : stencils)
-    for (int v : s->vertices) ++starts[v + 1];
-  for (Eigen::Index v = 0; v < vertices; ++v) starts[v + 1] += starts[v];
-  std::vector<std::pair<const Stencil*, int>> groups(starts[vertices]);  // (stencil, first index of the group)
-  {
-    std::vector<int> fill(starts.begin(), starts.end() - 1);
-    for (const Stencil* s : stencils)
-      for (std::size_t i = 0; i < s->vertices.size(); ++i)
-        groups[fill[s->vertices[i]]++] = {s, static_cast<int>(i - i % s->arity)};
-  }
+    for (Eigen::Index g = 0; g < s->groups(); ++g) groups.emplace_back(s, static_cast<int>(g * s->arity));
+  const Buckets vertex_groups = bucket(static_cast<int>(vertices), [&](auto&& emit) {
+    for (std::size_t g = 0; g < groups.size(); ++g)
+      for (int k = 0; k < groups[g].first->arity; ++k) emit(groups[g].first->vertices[groups[g].second + k], static_cast<int>(g));
+  });
   // Vertex neighbours: every vertex sharing a group with it, and itself; sorted.
   neighbour_start_.assign(vertices + 1, 0);
   std::vector<int> list;
   for (Eigen::Index v = 0; v < vertices; ++v) {
     list.clear();
     list.push_back(static_cast<int>(v));
-    for (int i = starts[v]; i < starts[v + 1]; ++i) {
-      const auto& [s, first] = groups[i];
+    for (int i = vertex_groups.start[v]; i < vertex_groups.start[v + 1]; ++i) {
+      const auto& [s, first] = groups[vertex_groups.items[i]];
       list.insert(list.end(), s->vertices.begin() + first, s->vertices.begin() + first + s->arity);
     }
     std::sort(list.begin(), list.end());
@@ -43,7 +41,6 @@ HessianLayout::HessianLayout(std::vector<int> numbering, int size, const std::ve
     neighbours_.insert(neighbours_.end(), list.begin(), list.end());
     neighbour_start_[v + 1] = static_cast<int>(neighbours_.size());
   }
-  groups.clear();
 
   // Columns in numbering order; column c (DOF d) holds the numbered DOFs of d's neighbours with number >= c.
   std::vector<int> dof_of(size, -1);

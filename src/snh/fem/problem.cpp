@@ -47,17 +47,12 @@ void Problem::update_layout(const Eigen::VectorXd& x) {
   for (Term* t : terms_) t->bind(layout_);
 }
 
-const HessianLayout& Problem::layout() {
-  if (!have_layout_) update_layout(Eigen::VectorXd::Zero(dofs_.dofs()));
-  return layout_;
-}
-
 double Problem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, HessianMatrix* hessian,
                          PsdProjection projection) {
-  update_layout(x);
   Eigen::VectorXd full = Eigen::VectorXd::Zero(x.size());
   std::optional<HessianValues> values;
-  if (hessian) {
+  if (hessian) {  // only a Hessian needs the layout (and the varying stencils at x)
+    update_layout(x);
     if (hessian->layout != layout_.id()) {
       hessian->matrix = layout_.pattern();
       hessian->layout = layout_.id();

@@ -1,9 +1,9 @@
 #pragma once
 // What Newton minimises (DESIGN.md fem/): a sum of energy terms over the free DOFs of a DofMap, the
 // kinematic DOFs held at their values in x. The problem owns the Hessian layout over the free DOFs: the
-// union of the terms' stencils, built when the first evaluation needs it and rebuilt (each term's bind()
-// called again) when a term whose stencil varies couples vertices the layout does not; fixed stencils
-// (elasticity) are asked once.
+// union of the terms' stencils, built by the first evaluation that asks for a Hessian and rebuilt (each
+// term's bind() called again) when a term whose stencil varies couples vertices the layout does not;
+// fixed stencils (elasticity) are asked once.
 #include <cstdint>
 #include <vector>
 
@@ -36,8 +36,6 @@ class Problem {
   /// the Hessian on the free DOFs, its pattern replaced first if it is not the current layout's.
   /// Returns +∞ (gradient and Hessian not meaningful) where a term is undefined.
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, HessianMatrix* hessian, PsdProjection projection);
-  /// The current layout (built on first use).
-  [[nodiscard]] const HessianLayout& layout();
   /// The smallest max_step over the terms for the step dx on the free DOFs (free_count()).
   [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx_free) const;
   /// Tells every term that Newton accepted x.

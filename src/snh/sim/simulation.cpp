@@ -36,8 +36,8 @@ std::vector<std::uint8_t> kinematic_dof_flags(const std::vector<KinematicSet>& s
 
 Simulation::Simulation(SimulationSetup setup)
     : setup_(std::move(setup)),
-      elastic_(setup_.mesh, setup_.materials, setup_.material_of_cell, setup_.weight_scale),
-      dofs_(kinematic_dof_flags(setup_.kinematic, setup_.mesh.vertex_count())),
+      elastic_(std::move(setup_.mesh), setup_.materials, setup_.material_of_cell, setup_.weight_scale),
+      dofs_(kinematic_dof_flags(setup_.kinematic, elastic_.mesh().vertex_count())),
       inertia_(elastic_, dofs_, lumped_mass(elastic_, setup_.density),
                {.dt = setup_.integrator == Integrator::backward_euler ? setup_.dt : 0.0,
                 .gravity = setup_.gravity,
@@ -55,7 +55,7 @@ Simulation::Simulation(SimulationSetup setup)
   if (setup_.initial.size() == 0) x_ = Eigen::Map<const Eigen::VectorXd>(elastic_.mesh().vertices.data(), n);
   else if (setup_.initial.size() != n)
     throw std::invalid_argument(fmt::format("initial positions: expected {} numbers (3 per vertex), got {}", n, setup_.initial.size()));
-  else x_ = setup_.initial;
+  else x_ = std::move(setup_.initial);
   v_ = Eigen::VectorXd::Zero(n);
   previous_ = x_;
   rest_volume_ = rest_volumes(elastic_.rest()).sum();
@@ -97,17 +97,8 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
   }
   previous_ = x_n;
   x_ = guess;
-  const NewtonReport r = newton_solve(problem_, x_, *solver_, newton ? *newton : setup_.newton);
-  report.newton_iterations = r.iterations;
-  report.line_search_steps = r.line_search_steps;
-  report.linear_iterations = r.linear_iterations;
-  report.factorizations = r.factorizations;
-  report.true_hessian_steps = r.true_hessian_steps;
-  report.residual = r.residual;
-  report.energy = r.energy;
-  report.assembly_seconds = r.assembly_seconds;
-  report.solve_seconds = r.solve_seconds;
-  report.residuals = r.residuals;
+  report.newton = newton_solve(problem_, x_, *solver_, newton ? *newton : setup_.newton);
+  const NewtonReport& r = report.newton;
   if (r.interrupted) {  // abandon the step: back to where it started
     x_ = x_n;
     previous_ = previous_n;
@@ -146,16 +137,17 @@ StepReport Simulation::advance(double t_start, double h, int substeps, const New
       return frame;
     }
     frame.substeps = sub;
-    frame.newton_iterations += r.newton_iterations;
-    frame.line_search_steps += r.line_search_steps;
-    frame.linear_iterations += r.linear_iterations;
-    frame.factorizations += r.factorizations;
-    frame.true_hessian_steps += r.true_hessian_steps;
-    frame.residual = std::max(frame.residual, r.residual);
-    frame.energy = r.energy;
-    frame.assembly_seconds += r.assembly_seconds;
-    frame.solve_seconds += r.solve_seconds;
-    frame.residuals.insert(frame.residuals.end(), r.residuals.begin(), r.residuals.end());
+    NewtonReport& sum = frame.newton;
+    sum.iterations += r.newton.iterations;
+    sum.line_search_steps += r.newton.line_search_steps;
+    sum.linear_iterations += r.newton.linear_iterations;
+    sum.factorizations += r.newton.factorizations;
+    sum.true_hessian_steps += r.newton.true_hessian_steps;
+    sum.residual = std::max(sum.residual, r.newton.residual);
+    sum.energy = r.newton.energy;
+    sum.assembly_seconds += r.newton.assembly_seconds;
+    sum.solve_seconds += r.newton.solve_seconds;
+    sum.residuals.insert(sum.residuals.end(), r.newton.residuals.begin(), r.newton.residuals.end());
     if (!r.converged) {
       frame.converged = false;
       frame.failed_substep = sub;

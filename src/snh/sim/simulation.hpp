@@ -56,11 +56,9 @@ struct StepReport {
   bool converged = true;
   bool interrupted = false;     ///< NewtonOptions::should_stop stopped it; the state is back where it started
   int substeps = 0;             ///< substeps completed (or tried, for a failure)
-  int newton_iterations = 0, line_search_steps = 0, linear_iterations = 0, factorizations = 0, true_hessian_steps = 0;
-  double residual = 0.0;        ///< the largest final ‖g‖
-  double energy = 0.0;          ///< the minimised energy at the end of the last solve
-  double assembly_seconds = 0.0, solve_seconds = 0.0;
-  std::vector<double> residuals;  ///< ‖g‖ at every Newton iteration, substep after substep
+  /// Newton's counts and times summed over the substeps, with the largest final residual, the last
+  /// solve's energy and every residual, substep after substep.
+  NewtonReport newton;
   // Where a solve failed:
   int failed_substep = 0;       ///< 1-based
   double failed_time = 0.0;
@@ -105,6 +103,7 @@ class Simulation {
   [[nodiscard]] const ElasticTerm& elastic() const { return elastic_; }
   [[nodiscard]] const TimeStepTerm& inertia() const { return inertia_; }
   [[nodiscard]] Problem& problem() { return problem_; }
+  /// The setup (its mesh moved into the elastic term: mesh(); its initial positions into x()).
   [[nodiscard]] const SimulationSetup& setup() const { return setup_; }
   /// Per vertex: true if any of its DOFs is kinematic.
   [[nodiscard]] std::vector<bool> kinematic_vertices() const;
