@@ -1,0 +1,36 @@
+#pragma once
+// Points embedded in a volume mesh (DESIGN.md embed/): each point stores a cell and the weights of that
+// cell's vertices at rest (trilinear in a lattice cube, barycentric in a tet), so that it follows the
+// deformed volume as x = Σ w_i x_i.
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "snh/embed/lattice.hpp"
+#include "snh/mesh/volume_mesh.hpp"
+
+namespace snh {
+
+struct Embedding {
+  std::vector<int> cell;    ///< #p: the cell holding each point
+  Eigen::MatrixXi vertex;   ///< k by #p (k = 8 for hexes, 4 for tets): the cell's vertices
+  Eigen::MatrixXd weight;   ///< k by #p: their weights (sum 1)
+
+  /// The points for volume positions X (3 by #V of the mesh embedded in): 3 by #p.
+  [[nodiscard]] Eigen::Matrix3Xd apply(const Eigen::Matrix3Xd& X) const;
+  /// The same for a flat 3 #V position vector.
+  [[nodiscard]] Eigen::Matrix3Xd apply(const Eigen::VectorXd& x) const;
+};
+
+/// Trilinear weights of points in the lattice's cubes. Throws std::invalid_argument naming the first point
+/// that lies in no cube of the lattice.
+///   points  3 by #p
+[[nodiscard]] Embedding embed_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& points);
+
+/// Barycentric weights of points in a tet mesh: the tet containing each point (on a shared face, the one
+/// whose smallest barycentric coordinate is largest); a point outside every tet by more than 1e-6 of the
+/// mesh's size is an error (std::invalid_argument naming it), one just outside takes the nearest tet's
+/// weights clamped to the tet.
+[[nodiscard]] Embedding embed_in_tets(const VolumeMesh& tets, const Eigen::Matrix3Xd& points);
+
+}  // namespace snh

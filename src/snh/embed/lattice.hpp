@@ -1,0 +1,29 @@
+#pragma once
+// A hexahedral lattice embedding a closed surface (DESIGN.md embed/), as the paper's Figure 1: the cubes of
+// a regular grid that overlap the solid, i.e. every cube a surface triangle passes through (an exact
+// triangle-box overlap test) and every cube wholly inside (the winding number at its centre, asked once per
+// connected region of cubes the surface does not touch).
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "snh/mesh/volume_mesh.hpp"
+
+namespace snh {
+
+struct Lattice {
+  VolumeMesh mesh;            ///< hex8 cells in VolumeMesh corner order; only the vertices the cells use
+  Eigen::Vector3d origin;     ///< the grid's lowest corner
+  double spacing = 0.0;       ///< the cubes' edge length
+  Eigen::Vector3i dims;       ///< cubes along x, y, z
+  std::vector<int> cell_at;   ///< dims.prod(): the cell of cube (i, j, k) at i + dims.x · (j + dims.y · k), or −1
+  [[nodiscard]] int cube_index(int i, int j, int k) const { return i + dims.x() * (j + dims.y() * k); }
+};
+
+/// The lattice of a closed surface with `resolution` cubes along the bounding box's longest side (the grid
+/// padded by a small fraction of a cube so no surface point lies on its outer faces). Throws
+/// std::invalid_argument for resolution < 1 or a surface with no extent.
+///   V  3 by #V;  F  3 by #F, outward
+[[nodiscard]] Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution);
+
+}  // namespace snh

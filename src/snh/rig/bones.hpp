@@ -1,0 +1,46 @@
+#pragma once
+// Bones and the flesh they hold (DESIGN.md rig/): a bone is the segment from a joint to each of its child
+// joints (a leaf joint with no child is a point), moving rigidly with the joint; the volume vertices inside
+// a bone's capsule are bound to it and follow it exactly (hard constraints, as HOBAK binds them).
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "snh/rig/skeleton.hpp"
+
+namespace snh {
+
+struct Bone {
+  std::string name;    ///< "joint" for a point, "joint>child" for a segment
+  int joint = 0;       ///< the joint it moves with
+  int child = -1;      ///< the child joint its segment reaches; −1 for a point
+  Eigen::Vector3d a, b;  ///< the segment's ends at rest (world); a == b for a point
+  double radius = 0.0;   ///< capsule radius
+};
+
+/// The bones of a skeleton at rest (radius 0): one per (joint, child) pair, one point per childless joint.
+///   rest_world  the joints' world transforms at rest (Skeleton::world of the rest pose)
+[[nodiscard]] std::vector<Bone> bones_of(const Skeleton& skeleton, const std::vector<Eigen::Affine3d>& rest_world);
+
+/// Distance from p to the segment [a, b].
+[[nodiscard]] double segment_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& p);
+
+/// The default capsule radius of every bone: half the mean distance from the bone to the surface vertices
+/// nearest to it (the vertices whose closest bone it is; a bone that is closest to none gets half the
+/// distance to the nearest surface vertex).
+///   surface  3 by #s surface vertices
+[[nodiscard]] std::vector<double> default_radii(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface);
+
+/// Volume vertices bound to bones: those within some bone's capsule, each bound to the bone whose capsule
+/// holds it most deeply (largest radius − distance). Lists are in vertex order.
+struct Binding {
+  std::vector<int> vertex;  ///< bound volume vertices
+  std::vector<int> bone;    ///< the bone of each
+  [[nodiscard]] std::vector<int> count_per_bone(int bones) const;
+};
+///   X  3 by #V volume rest positions
+[[nodiscard]] Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X);
+
+}  // namespace snh
