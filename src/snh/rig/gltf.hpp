@@ -36,13 +36,18 @@ struct RiggedModel {
   std::vector<Eigen::Matrix4d> inverse_bind;  ///< per joint
   std::vector<Clip> clips;
   /// How the hierarchy was found: "file" (the nodes' children), or "names" (a skin whose joints are all
-  /// siblings, as WebXR hands store them: the chain rebuilt from the WebXR Hand Input joint names).
+  /// siblings, as WebXR hands store them: the chain rebuilt from the WebXR Hand Input joint names, every
+  /// joint's world rest transform kept; not done when a clip animates the joints, whose keys are local to
+  /// the file's flat hierarchy).
   std::string hierarchy = "file";
 };
 
 /// Reads a skinned mesh from a .glb or .gltf file: the first skinned mesh node of the default scene (all
-/// its triangle primitives). Throws RigError naming the file and the fault: not glTF, truncated, no
-/// skinned mesh, a primitive that is not triangles, weights or joints out of range, a non-finite value.
+/// its triangle primitives). Transforms of nodes between a joint and its parent joint (or the scene root)
+/// are folded into its rest transform, and into its clips' keys (those nodes must then scale uniformly).
+/// Throws RigError naming the file and the fault: not glTF, truncated, no skinned mesh, a primitive that is
+/// not triangles, weights or joints out of range, a non-finite value, a sparse accessor, more than four
+/// joint influences (a non-zero WEIGHTS_1), a file over 1 GiB.
 [[nodiscard]] RiggedModel read_gltf(const std::filesystem::path& path);
 
 /// The clip of this name, or of this 0-based index written in decimal. Throws RigError listing the clips.

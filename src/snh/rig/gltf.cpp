@@ -1,0 +1,736 @@
+#include "snh/rig/gltf.hpp"
+
+// Debian's libtinygltf is built with its stb_image loaders and file-system callbacks, so the header is
+// included as is (no TINYGLTF_NO_* macros: the defaults the header's inline constructor names are the
+// library's). Images are never decoded: a loader that ignores them is installed before every load.
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <string_view>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <fmt/format.h>
+
+#include "snh/rig/skinning.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+static_assert(std::endian::native == std::endian::little, "glTF buffers are little-endian; this reader copies them as is");
+
+/// Files larger than this are refused before they are read (glTF binaries are limited to 4 GiB anyway).
+constexpr std::uintmax_t max_file_bytes = std::uintmax_t{1} << 30;
+
+/// Text from a file or from tinygltf on one line: its lines joined by "; ", other control characters as spaces.
+std::string one_line(std::string_view text) {
+  std::string out, line;
+  const auto flush = [&] {
+    const auto first = line.find_first_not_of(' '), last = line.find_last_not_of(' ');
+    if (first != std::string::npos) {
+      if (!out.empty()) out += "; ";
+      out += line.substr(first, last - first + 1);
+    }
+    line.clear();
+  };
+  for (const char ch : text) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (ch == '\n' || ch == '\r') flush();
+    else line += (c < 0x20 || c == 0x7f) ? ' ' : ch;
+  }
+  flush();
+  return out;
+}
+
+[[noreturn]] void fail(const fs::path& path, const std::string& what) {
+  throw RigError(fmt::format("{}: {}", one_line(path.string()), what));
+}
+
+/// The whole file, checked to be a readable regular file of a sensible size, followed by 16 zero bytes (a
+/// margin for tinygltf's GLB chunk parsing, which may look a few bytes past a chunk that ends the file).
+std::vector<unsigned char> read_file(const fs::path& path, std::size_t& size) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (!fs::exists(st)) fail(path, ec && ec != std::errc::no_such_file_or_directory ? fmt::format("cannot open ({})", ec.message())
+                                                                                    : std::string("no such file"));
+  if (fs::is_directory(st)) fail(path, "a directory, not a glTF file");
+  if (!fs::is_regular_file(st)) fail(path, "not a regular file");
+  const std::uintmax_t n = fs::file_size(path, ec);
+  if (ec) fail(path, fmt::format("cannot read its size ({})", ec.message()));
+  if (n == 0) fail(path, "empty file, not glTF");
+  if (n > max_file_bytes) fail(path, fmt::format("too large for a glTF model ({} bytes; at most {})", n, max_file_bytes));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, "cannot open the file");
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(n) + 16, 0);
+  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(n));
+  if (static_cast<std::uintmax_t>(in.gcount()) != n)
+    fail(path, fmt::format("cannot read the file (read {} of {} bytes)", in.gcount(), n));
+  size = static_cast<std::size_t>(n);
+  return bytes;
+}
+
+bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+  return true;
+}
+
+/// The file parsed by tinygltf: a GLB container if it starts with "glTF", else glTF JSON.
+tinygltf::Model load(const fs::path& path) {
+  std::size_t size = 0;
+  const std::vector<unsigned char> bytes = read_file(path, size);
+  const bool binary = size >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  if (!binary) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext == ".glb") fail(path, "not a glTF binary (it does not start with \"glTF\")");
+    std::size_t i = size >= 3 && bytes[0] == 0xEF && bytes[1] == 0xBB && bytes[2] == 0xBF ? 3 : 0;  // UTF-8 BOM
+    while (i < size && (bytes[i] == ' ' || bytes[i] == '\t' || bytes[i] == '\n' || bytes[i] == '\r')) ++i;
+    if (i == size || bytes[i] != '{') fail(path, "not glTF (neither a glTF binary nor a JSON object)");
+  }
+  if (size > std::numeric_limits<unsigned int>::max()) fail(path, "too large for tinygltf");
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(&ignore_image, nullptr);
+  tinygltf::Model model;
+  std::string err, warn;
+  bool ok = false;
+  const std::string base = path.parent_path().string();
+  try {
+    if (binary)
+      ok = loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(size), base);
+    else
+      ok = loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+                                      static_cast<unsigned int>(size), base);
+  } catch (const std::exception& e) {  // tinygltf indexes with .at() in places
+    ok = false;
+    err = e.what();
+  }
+  if (!ok) {
+    std::string why = one_line(err.empty() ? warn : err);
+    if (why.empty()) why = "tinygltf could not load it";
+    fail(path, fmt::format("not a valid glTF {}: {}", binary ? "binary" : "file", why));
+  }
+  return model;
+}
+
+int type_components(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT2: return 4;
+    case TINYGLTF_TYPE_MAT3: return 9;
+    case TINYGLTF_TYPE_MAT4: return 16;
+    default: return 0;
+  }
+}
+
+std::string type_name(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return "SCALAR";
+    case TINYGLTF_TYPE_VEC2: return "VEC2";
+    case TINYGLTF_TYPE_VEC3: return "VEC3";
+    case TINYGLTF_TYPE_VEC4: return "VEC4";
+    case TINYGLTF_TYPE_MAT2: return "MAT2";
+    case TINYGLTF_TYPE_MAT3: return "MAT3";
+    case TINYGLTF_TYPE_MAT4: return "MAT4";
+    default: return fmt::format("type {}", type);
+  }
+}
+
+int component_bytes(int component) {
+  switch (component) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+  }
+}
+
+std::string component_name(int component) {
+  switch (component) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return "byte";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return "unsigned byte";
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return "short";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return "unsigned short";
+    case TINYGLTF_COMPONENT_TYPE_INT: return "int";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return "unsigned int";
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return "float";
+    default: return fmt::format("component type {}", component);
+  }
+}
+
+/// One component at p as a double; integers mapped to [0, 1] or [−1, 1] when `normalize` (glTF 2.0 §3.11).
+double component(const unsigned char* p, int type, bool normalize) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+      const auto v = static_cast<std::int8_t>(p[0]);
+      return normalize ? std::max(v / 127.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalize ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+      std::int16_t v;
+      std::memcpy(&v, p, 2);
+      return normalize ? std::max(v / 32767.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+      std::uint16_t v;
+      std::memcpy(&v, p, 2);
+      return normalize ? v / 65535.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+      std::uint32_t v;
+      std::memcpy(&v, p, 4);
+      return normalize ? v / 4294967295.0 : v;
+    }
+    default: {
+      float v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+  }
+}
+
+/// A node's transform when the spec's TRS is not enough: translation · rotation · scale from a 4 by 4 matrix.
+/// Returns an empty string and sets `out`, or the reason it cannot be decomposed.
+std::string decompose(const Eigen::Matrix4d& m, Transform& out) {
+  if (!m.allFinite()) return "has a value that is not finite";
+  if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-6) return "is not affine (last row not 0 0 0 1)";
+  const Eigen::Matrix3d a = m.topLeftCorner<3, 3>();
+  const Eigen::Vector3d s = a.colwise().norm().transpose();
+  if (!(s.minCoeff() > 1e-12 * std::max(1.0, s.maxCoeff()))) return "has a zero scale";
+  const Eigen::Matrix3d r = a * s.cwiseInverse().asDiagonal();
+  if (r.determinant() < 0) return "mirrors (a negative scale)";
+  // Columns orthogonal up to float32 storage (about 1e-7) and the products of a few of them.
+  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-4) return "shears (not translation, rotation, scale)";
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  out.translation = m.block<3, 1>(0, 3);
+  out.rotation = Eigen::Quaterniond(Eigen::Matrix3d(svd.matrixU() * svd.matrixV().transpose())).normalized();
+  out.scale = s;
+  return {};
+}
+
+/// The 25 joints of the WebXR Hand Input API and the parent of each (by name; "" for the wrist).
+const std::vector<std::pair<std::string, std::string>>& webxr_hand_joints() {
+  static const std::vector<std::pair<std::string, std::string>> joints = [] {
+    std::vector<std::pair<std::string, std::string>> j{{"wrist", ""}};
+    const auto chain = [&](const std::string& finger, std::vector<std::string> bones) {
+      std::string parent = "wrist";
+      for (const std::string& b : bones) {
+        j.emplace_back(finger + "-" + b, parent);
+        parent = finger + "-" + b;
+      }
+    };
+    chain("thumb", {"metacarpal", "phalanx-proximal", "phalanx-distal", "tip"});
+    for (const char* f : {"index-finger", "middle-finger", "ring-finger", "pinky-finger"})
+      chain(f, {"metacarpal", "phalanx-proximal", "phalanx-intermediate", "phalanx-distal", "tip"});
+    return j;
+  }();
+  return joints;
+}
+
+/// Reads one tinygltf model into a RiggedModel; every fault is a RigError naming the file.
+class Builder {
+ public:
+  Builder(const fs::path& path, const tinygltf::Model& m) : path_(path), m_(m) {}
+
+  RiggedModel build() {
+    RiggedModel out;
+    out.source = path_;
+    link_nodes();
+    const int node = find_skinned_node();
+    const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(node)];
+    if (n.skin < 0 || n.skin >= static_cast<int>(m_.skins.size()))
+      fail(fmt::format("node {} refers to skin {}, which does not exist", node_name(node), n.skin));
+    if (n.mesh < 0 || n.mesh >= static_cast<int>(m_.meshes.size()))
+      fail(fmt::format("node {} refers to mesh {}, which does not exist", node_name(node), n.mesh));
+    read_skin(m_.skins[static_cast<std::size_t>(n.skin)], n.skin, out);
+    read_mesh(n.mesh, out);
+    weld(out);
+    read_animations(out);
+    if (all_roots(out.skeleton) && !animated_) rebuild_from_names(out);
+    check_rest(out);
+    return out;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { snh::fail(path_, what); }
+
+  std::string node_name(int i) const {
+    const std::string& name = m_.nodes[static_cast<std::size_t>(i)].name;
+    return name.empty() ? fmt::format("{}", i) : fmt::format("{} \"{}\"", i, one_line(name));
+  }
+
+  /// The parent of every node, checking that the children links form a forest.
+  void link_nodes() {
+    const int n = static_cast<int>(m_.nodes.size());
+    parent_.assign(m_.nodes.size(), -1);
+    for (int i = 0; i < n; ++i)
+      for (const int c : m_.nodes[static_cast<std::size_t>(i)].children) {
+        if (c < 0 || c >= n) fail(fmt::format("node {} has child {}, which does not exist", node_name(i), c));
+        if (parent_[static_cast<std::size_t>(c)] >= 0)
+          fail(fmt::format("node {} is a child of two nodes ({} and {})", c, parent_[static_cast<std::size_t>(c)], i));
+        parent_[static_cast<std::size_t>(c)] = i;
+      }
+    std::vector<char> state(m_.nodes.size(), 0);  // 0 unseen, 1 on the current walk, 2 reaches a root
+    for (int i = 0; i < n; ++i) {
+      std::vector<int> walk;
+      int j = i;
+      while (j >= 0 && state[static_cast<std::size_t>(j)] == 0) {
+        state[static_cast<std::size_t>(j)] = 1;
+        walk.push_back(j);
+        j = parent_[static_cast<std::size_t>(j)];
+      }
+      if (j >= 0 && state[static_cast<std::size_t>(j)] == 1) fail(fmt::format("the node hierarchy has a cycle through node {}", j));
+      for (const int k : walk) state[static_cast<std::size_t>(k)] = 2;
+    }
+  }
+
+  /// The first node with a mesh and a skin, depth first through the default scene (scene 0 if none is named;
+  /// every root node if the file has no scene).
+  int find_skinned_node() const {
+    std::vector<int> roots;
+    if (!m_.scenes.empty()) {
+      const int s = m_.defaultScene >= 0 && m_.defaultScene < static_cast<int>(m_.scenes.size()) ? m_.defaultScene : 0;
+      roots = m_.scenes[static_cast<std::size_t>(s)].nodes;
+    } else {
+      for (int i = 0; i < static_cast<int>(m_.nodes.size()); ++i)
+        if (parent_[static_cast<std::size_t>(i)] < 0) roots.push_back(i);
+    }
+    std::vector<int> stack(roots.rbegin(), roots.rend());
+    std::vector<char> seen(m_.nodes.size(), 0);
+    while (!stack.empty()) {
+      const int i = stack.back();
+      stack.pop_back();
+      if (i < 0 || i >= static_cast<int>(m_.nodes.size())) fail(fmt::format("the scene refers to node {}, which does not exist", i));
+      if (seen[static_cast<std::size_t>(i)]) continue;  // a scene listing a node twice
+      seen[static_cast<std::size_t>(i)] = 1;
+      const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(i)];
+      if (n.mesh >= 0 && n.skin >= 0) return i;
+      stack.insert(stack.end(), n.children.rbegin(), n.children.rend());
+    }
+    fail("no skinned mesh (a mesh node with a skin)");
+  }
+
+  /// A node's local transform as TRS (from its matrix if it has one).
+  Transform node_transform(int i) const {
+    const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(i)];
+    Transform t;
+    if (!n.matrix.empty()) {
+      if (n.matrix.size() != 16) fail(fmt::format("node {} has a matrix of {} numbers, not 16", node_name(i), n.matrix.size()));
+      const Eigen::Matrix4d m = Eigen::Map<const Eigen::Matrix4d>(n.matrix.data());  // column-major, as glTF stores it
+      if (const std::string why = decompose(m, t); !why.empty()) fail(fmt::format("the matrix of node {} {}", node_name(i), why));
+      return t;
+    }
+    const auto vec = [&](const std::vector<double>& v, std::size_t size, const char* what) {
+      if (v.size() != size) fail(fmt::format("node {} has a {} of {} numbers, not {}", node_name(i), what, v.size(), size));
+      for (const double x : v)
+        if (!std::isfinite(x)) fail(fmt::format("node {} has a {} that is not finite", node_name(i), what));
+    };
+    if (!n.translation.empty()) {
+      vec(n.translation, 3, "translation");
+      t.translation = Eigen::Vector3d(n.translation[0], n.translation[1], n.translation[2]);
+    }
+    if (!n.rotation.empty()) {
+      vec(n.rotation, 4, "rotation");
+      const Eigen::Quaterniond q(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]);
+      if (!(q.norm() > 1e-6)) fail(fmt::format("node {} has a rotation quaternion of length {}", node_name(i), q.norm()));
+      t.rotation = q.normalized();
+    }
+    if (!n.scale.empty()) {
+      vec(n.scale, 3, "scale");
+      t.scale = Eigen::Vector3d(n.scale[0], n.scale[1], n.scale[2]);
+    }
+    return t;
+  }
+
+  Transform decomposed(const Eigen::Matrix4d& m, const std::string& what) const {
+    Transform t;
+    if (const std::string why = decompose(m, t); !why.empty()) fail(fmt::format("{} {}", what, why));
+    return t;
+  }
+
+  void read_skin(const tinygltf::Skin& skin, int skin_index, RiggedModel& out) {
+    const int nodes = static_cast<int>(m_.nodes.size());
+    const int joints = static_cast<int>(skin.joints.size());
+    if (joints == 0) fail(fmt::format("skin {} has no joints", skin_index));
+    joint_of_node_.assign(m_.nodes.size(), -1);
+    for (int j = 0; j < joints; ++j) {
+      const int node = skin.joints[static_cast<std::size_t>(j)];
+      if (node < 0 || node >= nodes) fail(fmt::format("joint {} of skin {} is node {}, which does not exist", j, skin_index, node));
+      if (joint_of_node_[static_cast<std::size_t>(node)] >= 0)
+        fail(fmt::format("node {} appears twice among the joints of skin {}", node_name(node), skin_index));
+      joint_of_node_[static_cast<std::size_t>(node)] = j;
+    }
+    out.skeleton.joints.resize(static_cast<std::size_t>(joints));
+    between_.clear();
+    for (int j = 0; j < joints; ++j) {
+      const int node = skin.joints[static_cast<std::size_t>(j)];
+      Joint& joint = out.skeleton.joints[static_cast<std::size_t>(j)];
+      const std::string& name = m_.nodes[static_cast<std::size_t>(node)].name;
+      joint.name = name.empty() ? fmt::format("joint{}", j) : name;
+      // Nodes between the joint and its nearest joint ancestor (or the scene root) fold into its rest transform.
+      Eigen::Matrix4d between = Eigen::Matrix4d::Identity();
+      int p = parent_[static_cast<std::size_t>(node)];
+      while (p >= 0 && joint_of_node_[static_cast<std::size_t>(p)] < 0) {
+        between = node_transform(p).matrix().matrix() * between;
+        p = parent_[static_cast<std::size_t>(p)];
+      }
+      joint.parent = p >= 0 ? joint_of_node_[static_cast<std::size_t>(p)] : -1;
+      joint.rest = node_transform(node);
+      between_.push_back(between);
+      if (between != Eigen::Matrix4d::Identity())
+        joint.rest = decomposed(between * joint.rest.matrix().matrix(),
+                                fmt::format("the rest transform of joint {} (its ancestors' transforms folded in)", node_name(node)));
+    }
+    out.inverse_bind.assign(static_cast<std::size_t>(joints), Eigen::Matrix4d::Identity());
+    if (skin.inverseBindMatrices >= 0) {
+      const Eigen::MatrixXd ib = accessor(skin.inverseBindMatrices, fmt::format("the inverse bind matrices of skin {}", skin_index),
+                                          TINYGLTF_TYPE_MAT4, {TINYGLTF_COMPONENT_TYPE_FLOAT}, false);
+      if (ib.cols() < joints)
+        fail(fmt::format("skin {} has {} joints but {} inverse bind matrices", skin_index, joints, ib.cols()));
+      if (!ib.allFinite()) fail(fmt::format("an inverse bind matrix of skin {} is not finite", skin_index));
+      for (int j = 0; j < joints; ++j)
+        out.inverse_bind[static_cast<std::size_t>(j)] = Eigen::Map<const Eigen::Matrix4d>(ib.col(j).data());
+    }
+  }
+
+  /// An accessor's elements, one column each (components in rows), bounds-checked against its buffer view and
+  /// buffer. `components`: the component types allowed; integers are normalized when `normalize`.
+  Eigen::MatrixXd accessor(int index, const std::string& what, int type, std::initializer_list<int> components,
+                           bool normalize) const {
+    if (index < 0 || index >= static_cast<int>(m_.accessors.size()))
+      fail(fmt::format("{}: accessor {} does not exist", what, index));
+    const tinygltf::Accessor& a = m_.accessors[static_cast<std::size_t>(index)];
+    const std::string where = fmt::format("{} (accessor {})", what, index);
+    if (a.type != type) fail(fmt::format("{}: {} where {} is expected", where, type_name(a.type), type_name(type)));
+    if (std::find(components.begin(), components.end(), a.componentType) == components.end())
+      fail(fmt::format("{}: components of type {} are not supported here", where, component_name(a.componentType)));
+    if (a.sparse.isSparse) fail(fmt::format("{}: sparse accessors are not supported", where));
+    if (a.count == 0) fail(fmt::format("{}: no elements", where));
+    if (a.bufferView < 0 || a.bufferView >= static_cast<int>(m_.bufferViews.size()))
+      fail(fmt::format("{}: buffer view {} does not exist", where, a.bufferView));
+    const tinygltf::BufferView& v = m_.bufferViews[static_cast<std::size_t>(a.bufferView)];
+    if (v.buffer < 0 || v.buffer >= static_cast<int>(m_.buffers.size()))
+      fail(fmt::format("{}: buffer view {} refers to buffer {}, which does not exist", where, a.bufferView, v.buffer));
+    const std::vector<unsigned char>& data = m_.buffers[static_cast<std::size_t>(v.buffer)].data;
+    if (v.byteOffset > data.size() || v.byteLength > data.size() - v.byteOffset)
+      fail(fmt::format("{}: buffer view {} (bytes {} to {}) lies outside buffer {} of {} bytes", where, a.bufferView,
+                       v.byteOffset, v.byteOffset + v.byteLength, v.buffer, data.size()));
+    const int comps = type_components(a.type);
+    const std::size_t bytes = static_cast<std::size_t>(component_bytes(a.componentType));
+    const std::size_t element = static_cast<std::size_t>(comps) * bytes;
+    const std::size_t stride = v.byteStride == 0 ? element : v.byteStride;
+    if (stride < element) fail(fmt::format("{}: a byte stride of {} for elements of {} bytes", where, stride, element));
+    // The last element must end inside the view: byteOffset + (count − 1) · stride + element ≤ byteLength.
+    if (a.byteOffset > v.byteLength || element > v.byteLength - a.byteOffset ||
+        a.count - 1 > (v.byteLength - a.byteOffset - element) / stride)
+      fail(fmt::format("{}: {} elements of {} bytes (stride {}) from byte {} overrun buffer view {} of {} bytes", where, a.count,
+                       element, stride, a.byteOffset, a.bufferView, v.byteLength));
+    const unsigned char* base = data.data() + v.byteOffset + a.byteOffset;
+    Eigen::MatrixXd out(comps, static_cast<Eigen::Index>(a.count));
+    for (std::size_t i = 0; i < a.count; ++i)
+      for (int c = 0; c < comps; ++c)
+        out(c, static_cast<Eigen::Index>(i)) =
+            component(base + i * stride + static_cast<std::size_t>(c) * bytes, a.componentType, normalize);
+    return out;
+  }
+
+  void read_mesh(int mesh_index, RiggedModel& out) const {
+    const tinygltf::Mesh& mesh = m_.meshes[static_cast<std::size_t>(mesh_index)];
+    if (mesh.primitives.empty()) fail(fmt::format("mesh {} has no primitives", mesh_index));
+    const int joints = out.skeleton.size();
+    std::vector<Eigen::Vector3d> xyz;
+    std::vector<Eigen::Vector4i> jidx;
+    std::vector<Eigen::Vector4d> jw;
+    std::vector<Eigen::Vector3i> tri;
+    for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
+      const tinygltf::Primitive& prim = mesh.primitives[p];
+      const std::string where = fmt::format("mesh {} primitive {}", mesh_index, p);
+      if (prim.mode != TINYGLTF_MODE_TRIANGLES)
+        fail(fmt::format("{}: mode {} is not triangles (4); only triangle lists are supported", where, prim.mode));
+      const auto attribute = [&](const char* name) {
+        const auto it = prim.attributes.find(name);
+        if (it == prim.attributes.end()) fail(fmt::format("{}: no {} attribute", where, name));
+        return it->second;
+      };
+      const Eigen::MatrixXd pos = accessor(attribute("POSITION"), where + " POSITION", TINYGLTF_TYPE_VEC3,
+                                           {TINYGLTF_COMPONENT_TYPE_FLOAT}, false);
+      const Eigen::MatrixXd jnt = accessor(attribute("JOINTS_0"), where + " JOINTS_0", TINYGLTF_TYPE_VEC4,
+                                           {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT}, false);
+      const std::initializer_list<int> weight_types{TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT};
+      const Eigen::MatrixXd wgt = accessor(attribute("WEIGHTS_0"), where + " WEIGHTS_0", TINYGLTF_TYPE_VEC4, weight_types, true);
+      const Eigen::Index n = pos.cols();
+      if (jnt.cols() != n || wgt.cols() != n)
+        fail(fmt::format("{}: {} positions, {} JOINTS_0 and {} WEIGHTS_0", where, n, jnt.cols(), wgt.cols()));
+      if (const auto it = prim.attributes.find("WEIGHTS_1"); it != prim.attributes.end()) {
+        const Eigen::MatrixXd more = accessor(it->second, where + " WEIGHTS_1", TINYGLTF_TYPE_VEC4, weight_types, true);
+        for (Eigen::Index v = 0; v < more.cols(); ++v)
+          if (!(more.col(v).cwiseAbs().maxCoeff() == 0.0))
+            fail(fmt::format("{}: vertex {} has more than 4 joint influences (WEIGHTS_1), which is not supported", where, v));
+      }
+      if (xyz.size() + static_cast<std::size_t>(n) > static_cast<std::size_t>(std::numeric_limits<int>::max() / 4))
+        fail(fmt::format("{}: too many vertices", where));
+      const int offset = static_cast<int>(xyz.size());
+      for (Eigen::Index v = 0; v < n; ++v) {
+        if (!pos.col(v).allFinite()) fail(fmt::format("{}: vertex {} has a position that is not finite", where, v));
+        Eigen::Vector4d w = wgt.col(v);
+        if (!w.allFinite() || w.minCoeff() < 0.0)
+          fail(fmt::format("{}: vertex {} has joint weights {} {} {} {} (each must be finite and at least 0)", where, v, w(0), w(1),
+                           w(2), w(3)));
+        const double sum = w.sum();
+        if (!(sum > 0.0)) fail(fmt::format("{}: vertex {} has joint weights that are all zero", where, v));
+        Eigen::Vector4i j;
+        for (int k = 0; k < 4; ++k) {
+          const double jk = jnt(k, v);
+          if (jk >= joints)
+            fail(fmt::format("{}: vertex {} is bound to joint {}, but the skin has {} joints", where, v,
+                             static_cast<long long>(jk), joints));
+          j(k) = static_cast<int>(jk);
+        }
+        xyz.emplace_back(pos.col(v));
+        jidx.push_back(j);
+        jw.emplace_back(w / sum);
+      }
+      if (prim.indices >= 0) {
+        const Eigen::MatrixXd idx = accessor(prim.indices, where + " indices", TINYGLTF_TYPE_SCALAR,
+                                             {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                              TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
+                                             false);
+        if (idx.cols() % 3 != 0) fail(fmt::format("{}: {} indices, not a multiple of 3", where, idx.cols()));
+        for (Eigen::Index i = 0; i < idx.cols(); ++i)
+          if (idx(0, i) >= static_cast<double>(n))
+            fail(fmt::format("{}: index {} refers to vertex {}, but the primitive has {} vertices", where, i,
+                             static_cast<long long>(idx(0, i)), n));
+        for (Eigen::Index t = 0; t < idx.cols() / 3; ++t)
+          tri.emplace_back(offset + static_cast<int>(idx(0, 3 * t)), offset + static_cast<int>(idx(0, 3 * t + 1)),
+                           offset + static_cast<int>(idx(0, 3 * t + 2)));
+      } else {
+        if (n % 3 != 0) fail(fmt::format("{}: {} vertices without indices, not a multiple of 3", where, n));
+        for (int t = 0; t < static_cast<int>(n / 3); ++t) tri.emplace_back(offset + 3 * t, offset + 3 * t + 1, offset + 3 * t + 2);
+      }
+    }
+    if (tri.empty()) fail(fmt::format("mesh {} has no triangles", mesh_index));
+    const auto cols = [](std::size_t n) { return static_cast<Eigen::Index>(n); };
+    out.vertices.resize(3, cols(xyz.size()));
+    out.joint_index.resize(4, cols(xyz.size()));
+    out.joint_weight.resize(4, cols(xyz.size()));
+    for (std::size_t v = 0; v < xyz.size(); ++v) {
+      out.vertices.col(cols(v)) = xyz[v];
+      out.joint_index.col(cols(v)) = jidx[v];
+      out.joint_weight.col(cols(v)) = jw[v];
+    }
+    out.triangles.resize(3, cols(tri.size()));
+    for (std::size_t t = 0; t < tri.size(); ++t) out.triangles.col(cols(t)) = tri[t];
+  }
+
+  /// Vertices at the same position (bitwise, +0 and −0 alike) merged, in order of first appearance; triangles
+  /// that lose a corner to the merge dropped from the welded surface.
+  static void weld(RiggedModel& out) {
+    std::map<std::array<std::uint64_t, 3>, int> index;
+    const Eigen::Index n = out.vertices.cols();
+    out.weld.assign(static_cast<std::size_t>(n), -1);
+    std::vector<Eigen::Index> first;
+    for (Eigen::Index v = 0; v < n; ++v) {
+      std::array<std::uint64_t, 3> key;
+      for (int c = 0; c < 3; ++c) key[static_cast<std::size_t>(c)] = std::bit_cast<std::uint64_t>(out.vertices(c, v) + 0.0);
+      const auto [it, added] = index.try_emplace(key, static_cast<int>(first.size()));
+      if (added) first.push_back(v);
+      out.weld[static_cast<std::size_t>(v)] = it->second;
+    }
+    out.surface_vertices.resize(3, static_cast<Eigen::Index>(first.size()));
+    for (std::size_t s = 0; s < first.size(); ++s) out.surface_vertices.col(static_cast<Eigen::Index>(s)) = out.vertices.col(first[s]);
+    std::vector<Eigen::Vector3i> kept;
+    for (Eigen::Index t = 0; t < out.triangles.cols(); ++t) {
+      Eigen::Vector3i w;
+      for (int c = 0; c < 3; ++c) w(c) = out.weld[static_cast<std::size_t>(out.triangles(c, t))];
+      if (w(0) != w(1) && w(1) != w(2) && w(0) != w(2)) kept.push_back(w);
+    }
+    out.surface_triangles.resize(3, static_cast<Eigen::Index>(kept.size()));
+    for (std::size_t t = 0; t < kept.size(); ++t) out.surface_triangles.col(static_cast<Eigen::Index>(t)) = kept[t];
+  }
+
+  void read_animations(RiggedModel& out) {
+    for (std::size_t ai = 0; ai < m_.animations.size(); ++ai) {
+      const tinygltf::Animation& anim = m_.animations[ai];
+      Clip clip;
+      clip.name = anim.name.empty() ? fmt::format("animation{}", ai) : anim.name;
+      const std::string label =
+          anim.name.empty() ? fmt::format("animation {}", ai) : fmt::format("animation {} \"{}\"", ai, one_line(anim.name));
+      for (std::size_t ci = 0; ci < anim.channels.size(); ++ci) {
+        const tinygltf::AnimationChannel& ch = anim.channels[ci];
+        const std::string where = fmt::format("{} channel {}", label, ci);
+        ChannelPath path;
+        if (ch.target_path == "translation") path = ChannelPath::translation;
+        else if (ch.target_path == "rotation") path = ChannelPath::rotation;
+        else if (ch.target_path == "scale") path = ChannelPath::scale;
+        else continue;  // morph target weights (or an extension's path): not a joint's transform
+        if (ch.target_node < 0) continue;  // no node: animated by an extension
+        if (ch.target_node >= static_cast<int>(m_.nodes.size()))
+          fail(fmt::format("{}: targets node {}, which does not exist", where, ch.target_node));
+        const int joint = joint_of_node_[static_cast<std::size_t>(ch.target_node)];
+        if (joint < 0) continue;  // a node that is not one of the skin's joints
+        if (ch.sampler < 0 || ch.sampler >= static_cast<int>(anim.samplers.size()))
+          fail(fmt::format("{}: sampler {} does not exist", where, ch.sampler));
+        const tinygltf::AnimationSampler& s = anim.samplers[static_cast<std::size_t>(ch.sampler)];
+        const std::string sw = fmt::format("{} sampler {}", label, ch.sampler);
+        Channel c;
+        c.joint = joint;
+        c.path = path;
+        if (s.interpolation.empty() || s.interpolation == "LINEAR") c.interpolation = Interpolation::linear;
+        else if (s.interpolation == "STEP") c.interpolation = Interpolation::step;
+        else if (s.interpolation == "CUBICSPLINE") c.interpolation = Interpolation::cubic_spline;
+        else fail(fmt::format("{}: unknown interpolation \"{}\"", sw, one_line(s.interpolation)));
+        const Eigen::MatrixXd in = accessor(s.input, sw + " input", TINYGLTF_TYPE_SCALAR, {TINYGLTF_COMPONENT_TYPE_FLOAT}, false);
+        c.times.assign(in.data(), in.data() + in.size());
+        for (std::size_t k = 0; k < c.times.size(); ++k) {
+          if (!std::isfinite(c.times[k])) fail(fmt::format("{}: key time {} is not finite", sw, k));
+          if (k > 0 && !(c.times[k] > c.times[k - 1]))
+            fail(fmt::format("{}: key times are not strictly increasing ({} then {})", sw, c.times[k - 1], c.times[k]));
+        }
+        const bool rotation = path == ChannelPath::rotation;
+        const Eigen::MatrixXd values =
+            rotation ? accessor(s.output, sw + " output", TINYGLTF_TYPE_VEC4,
+                                {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                 TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
+                                true)
+                     : accessor(s.output, sw + " output", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, false);
+        const std::size_t per_key = c.interpolation == Interpolation::cubic_spline ? 3 : 1;
+        if (static_cast<std::size_t>(values.cols()) != per_key * c.times.size())
+          fail(fmt::format("{}: {} key times but {} output values{}", sw, c.times.size(), values.cols(),
+                           per_key == 3 ? " (CUBICSPLINE needs 3 per key)" : ""));
+        if (!values.allFinite()) fail(fmt::format("{}: an output value is not finite", sw));
+        c.values = values;
+        if (rotation)
+          for (std::size_t k = 0; k < c.times.size(); ++k) {
+            const auto col = static_cast<Eigen::Index>(per_key == 3 ? 3 * k + 1 : k);
+            const double len = c.values.col(col).norm();
+            if (!(len > 1e-6)) fail(fmt::format("{}: key {} is a rotation quaternion of length {}", sw, k, len));
+            if (per_key == 1) c.values.col(col) /= len;
+          }
+        if (between_[static_cast<std::size_t>(joint)] != Eigen::Matrix4d::Identity())
+          fold_in(between_[static_cast<std::size_t>(joint)], c, out.skeleton.joints[static_cast<std::size_t>(joint)].name);
+        clip.channels.push_back(std::move(c));
+        animated_ = true;
+      }
+      out.clips.push_back(std::move(clip));
+    }
+  }
+
+  /// A channel of a joint below non-joint nodes whose transforms B were folded into its rest transform: its
+  /// keys made relative to the joint's parent (or the model) too. For B a similarity (uniform scale s, rotation
+  /// R, translation b): translation t → b + s·R·t, rotation q → R·q, scale σ → s·σ; these maps are affine, so
+  /// they commute with every interpolation (tangents take the linear part only).
+  void fold_in(const Eigen::Matrix4d& between, Channel& c, const std::string& joint) const {
+    Transform b;
+    const std::string what = fmt::format("joint \"{}\" is animated below nodes whose transforms", one_line(joint));
+    if (const std::string why = decompose(between, b); !why.empty()) fail(fmt::format("{}: the product {}", what, why));
+    const double s = b.scale.mean();
+    if ((b.scale.array() - s).abs().maxCoeff() > 1e-6 * s)
+      fail(fmt::format("{} scale non-uniformly ({} {} {}): not supported", what, b.scale(0), b.scale(1), b.scale(2)));
+    const bool cubic = c.interpolation == Interpolation::cubic_spline;
+    for (Eigen::Index k = 0; k < c.values.cols(); ++k) {
+      const bool tangent = cubic && k % 3 != 1;
+      // Element by element: GCC 12 wrongly warns of AVX-512 loads past a fixed-size vector copied from or to a
+      // dynamic-size column.
+      Eigen::Vector4d v = Eigen::Vector4d::Zero();
+      for (Eigen::Index r = 0; r < c.values.rows(); ++r) v(r) = c.values(r, k);
+      switch (c.path) {
+        case ChannelPath::translation:
+          v.head<3>() = s * (b.rotation * Eigen::Vector3d(v.head<3>()));
+          if (!tangent) v.head<3>() += b.translation;
+          break;
+        case ChannelPath::rotation: v = (b.rotation * Eigen::Quaterniond(v(3), v(0), v(1), v(2))).coeffs(); break;
+        case ChannelPath::scale: v *= s; break;
+      }
+      for (Eigen::Index r = 0; r < c.values.rows(); ++r) c.values(r, k) = v(r);
+    }
+  }
+
+  /// Finite values can still overflow when composed: the rest pose and its skinning matrices must be finite.
+  void check_rest(const RiggedModel& out) const {
+    std::vector<Eigen::Affine3d> world;
+    try {
+      world = out.skeleton.world(out.skeleton.rest_pose());
+    } catch (const std::invalid_argument& e) {
+      fail(fmt::format("at rest, {}", one_line(e.what())));
+    }
+    for (std::size_t j = 0; j < world.size(); ++j)
+      if (!(world[j].matrix() * out.inverse_bind[j]).allFinite())
+        fail(fmt::format("joint \"{}\": its rest transform times its inverse bind matrix is not finite",
+                         one_line(out.skeleton.joints[j].name)));
+    try {
+      (void)skin_vertices(out, world);
+    } catch (const std::invalid_argument& e) {
+      fail(fmt::format("at rest, {}", one_line(e.what())));
+    }
+  }
+
+  static bool all_roots(const Skeleton& s) {
+    return std::all_of(s.joints.begin(), s.joints.end(), [](const Joint& j) { return j.parent < 0; });
+  }
+
+  /// A skin whose joints are all roots and named exactly as the WebXR Hand Input joints: the chain rebuilt from
+  /// the names, every joint's world rest transform kept.
+  void rebuild_from_names(RiggedModel& out) const {
+    Skeleton& s = out.skeleton;
+    const auto& hand = webxr_hand_joints();
+    if (s.joints.size() != hand.size()) return;
+    for (const auto& [name, parent] : hand)
+      if (s.find(name) < 0) return;  // with 25 distinct names found among 25 joints, the names match exactly
+    std::vector<Eigen::Affine3d> world;
+    for (const Joint& j : s.joints) world.push_back(j.rest.matrix());
+    for (const auto& [name, parent] : hand)
+      s.joints[static_cast<std::size_t>(s.find(name))].parent = parent.empty() ? -1 : s.find(parent);
+    for (std::size_t j = 0; j < s.joints.size(); ++j) {
+      Joint& joint = s.joints[j];
+      if (joint.parent < 0) continue;
+      const Eigen::Matrix4d local = (world[static_cast<std::size_t>(joint.parent)].inverse() * world[j]).matrix();
+      joint.rest = decomposed(local, fmt::format("the rest transform of joint \"{}\" relative to \"{}\"", one_line(joint.name),
+                                                 one_line(s.joints[static_cast<std::size_t>(joint.parent)].name)));
+    }
+    out.hierarchy = "names";
+  }
+
+  const fs::path& path_;
+  const tinygltf::Model& m_;
+  std::vector<int> parent_;         ///< per node: its parent node, or −1
+  std::vector<int> joint_of_node_;  ///< per node: its joint in the skin, or −1
+  std::vector<Eigen::Matrix4d> between_;  ///< per joint: the nodes' transforms folded into its rest transform
+  bool animated_ = false;           ///< some clip animates a joint
+};
+
+}  // namespace
+
+RiggedModel read_gltf(const std::filesystem::path& path) {
+  const tinygltf::Model model = load(path);
+  return Builder(path, model).build();
+}
+
+const Clip& find_clip(const RiggedModel& model, const std::string& name_or_index) {
+  for (const Clip& c : model.clips)
+    if (c.name == name_or_index) return c;
+  if (!name_or_index.empty() && name_or_index.size() <= 9 &&
+      std::all_of(name_or_index.begin(), name_or_index.end(), [](unsigned char c) { return c >= '0' && c <= '9'; })) {
+    const std::size_t i = std::stoul(name_or_index);
+    if (i < model.clips.size()) return model.clips[i];
+  }
+  std::string names;
+  for (const Clip& c : model.clips) names += (names.empty() ? "" : ", ") + one_line(c.name);
+  throw RigError(fmt::format("{}: no animation clip \"{}\" ({})", one_line(model.source.string()), one_line(name_or_index),
+                             model.clips.empty() ? std::string("the model has no animation clip") : "clips: " + names));
+}
+
+}  // namespace snh
