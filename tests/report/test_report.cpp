@@ -1,7 +1,8 @@
 // The browser report's data, checked against the run it describes: the .vtu data arrays read
 // back, the surface (counts, cells, rest positions), every frame's positions and fields against the
-// .vtu frames, the legend ranges against stats.json, the plots' lengths, the lab's tables and links,
-// and one-line errors for directories it cannot describe.
+// .vtu frames, the legend ranges against stats.json, the plots' lengths, a flesh run's render surface
+// and bones against its files, the lab's tables and links, and one-line errors for directories it
+// cannot describe (a flesh run's files at fault named).
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -19,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "snh/io/mesh_read.hpp"
+#include "snh/io/obj.hpp"
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/report/render.hpp"
@@ -291,6 +293,7 @@ TEST(RunReport, SceneReportUsesTimeAndItsPins) {
   EXPECT_EQ(sum.frames, 5);
   const json d = js_payload(s.output.dir / "report" / "data.js", "window.SNH_REPORT = ", ";");
   EXPECT_EQ(d["title"], "snh run hanging.json");
+  EXPECT_TRUE(d["render"].is_null());  // not a flesh run
   EXPECT_EQ(d["mesh"]["pinned_count"], 9);
   EXPECT_EQ(d["mesh"]["frames"][4]["label"], "frame 4");
   EXPECT_NEAR(d["mesh"]["frames"][4]["time"].get<double>(), 0.2, 1e-12);
@@ -299,6 +302,225 @@ TEST(RunReport, SceneReportUsesTimeAndItsPins) {
     EXPECT_EQ(p["x_label"], "time");
   }
   fs::remove_all(s.output.dir);
+}
+
+/// A flesh-like run directory: a small scene run, then what a flesh run adds (surface/ and lbs/ frames of an
+/// octahedron, bones.json, flesh.usda, and stats.json's flesh keys and render volumes), as `snh flesh` writes them.
+struct FleshRun {
+  fs::path dir;
+  int frames = 0;
+  Eigen::Matrix3Xi triangles;
+  std::vector<Eigen::Matrix3Xd> flesh, lbs;
+  std::vector<std::string> bones = {"shoulder>elbow", "wrist"};
+  std::vector<std::vector<double>> segments;  ///< per frame, 6 per bone
+};
+
+FleshRun flesh_run(const std::string& name) {
+  FleshRun f;
+  Scene s;
+  s.mesh.element = CellType::hex8;
+  s.mesh.resolution = 2;
+  s.time.end_time = 0.2;
+  s.time.frames = 4;
+  s.forces.gravity = Eigen::Vector3d(0, -9.8, 0);
+  PinSpec pin;
+  pin.select.region = Eigen::AlignedBox3d(Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d(1, 1, 1));
+  s.pins.push_back(pin);
+  s.output.dir = f.dir = fresh_dir(name);
+  s.run.command_line = "snh flesh arm.glb";
+  std::ostringstream log;
+  const SceneResult r = run_scene(s, log);
+  EXPECT_TRUE(r.all_converged);
+  f.frames = static_cast<int>(r.frames.size());
+
+  Eigen::Matrix3Xd octahedron(3, 6);
+  octahedron << 0.5, -0.5, 0, 0, 0, 0,  //
+      0, 0, 0.5, -0.5, 0, 0,            //
+      0, 0, 0, 0, 0.5, -0.5;
+  f.triangles.resize(3, 8);
+  f.triangles << 0, 2, 1, 3, 0, 3, 1, 2,  //
+      2, 1, 3, 0, 3, 1, 2, 0,             //
+      4, 4, 4, 4, 5, 5, 5, 5;
+  fs::create_directories(f.dir / "surface");
+  fs::create_directories(f.dir / "lbs");
+  json bone_frames = json::array();
+  for (int i = 0; i < f.frames; ++i) {
+    f.flesh.push_back(octahedron * (1.0 + 0.1 * i));
+    f.lbs.push_back((octahedron * (1.0 - 0.05 * i)).colwise() + Eigen::Vector3d(0.0, -0.02 * i, 0.0));
+    write_obj(f.dir / "surface" / fmt::format("{:03d}.obj", i), f.flesh.back(), f.triangles);
+    write_obj(f.dir / "lbs" / fmt::format("{:03d}.obj", i), f.lbs.back(), f.triangles);
+    f.segments.push_back({0.0, 0.4, 0.0, 0.1 * i, -0.4, 0.0, 0.3, -0.6 - 0.1 * i, 0.0, 0.3, -0.6 - 0.1 * i, 0.0});
+    bone_frames.push_back({{"time", 0.05 * i},
+                           {"segments", {std::vector<double>(f.segments[i].begin(), f.segments[i].begin() + 6),
+                                         std::vector<double>(f.segments[i].begin() + 6, f.segments[i].end())}}});
+  }
+  std::ofstream(f.dir / "bones.json") << json{{"bones", f.bones}, {"frames", bone_frames}}.dump() << "\n";
+  std::ofstream(f.dir / "flesh.usda") << "#usda 1.0\n";
+  json stats = json::parse(slurp(f.dir / "stats.json"));
+  for (json& row : stats["frames"]) {
+    const int i = row["frame"];
+    row["surface_volume_ratio"] = 1.0 - 0.001 * i;
+    row["lbs_volume_ratio"] = 1.0 - 0.02 * i;
+  }
+  stats["schema"]["columns"].push_back({{"key", "surface_volume_ratio"}, {"label", "flesh"}, {"plot", "render_volume"}});
+  stats["schema"]["columns"].push_back(
+      {{"key", "lbs_volume_ratio"}, {"label", "linear blend skinning"}, {"plot", "render_volume"}});
+  stats["schema"]["plots"].push_back({{"id", "render_volume"},
+                                      {"title", "Volume inside the render surface (posed / rest)"},
+                                      {"y_label", "ratio"},
+                                      {"log_y", false}});
+  stats["model"] = "arm.glb";
+  stats["volume"] = "lattice";
+  stats["animation"] = "wave";
+  stats["bound_vertices"] = 9;
+  stats["bones"] = {{{"name", "shoulder>elbow"}, {"radius", 0.2}, {"bound", 9}},
+                    {{"name", "wrist"}, {"radius", 0.1}, {"bound", 0}}};
+  stats["usd"] = "flesh.usda";
+  std::ofstream(f.dir / "stats.json") << stats.dump(2) << "\n";
+  return f;
+}
+
+/// The value of the meta line `label` ("" when there is none).
+json meta_value(const json& d, const std::string& label) {
+  for (const json& m : d["meta"])
+    if (m[0] == label) return m[1];
+  return "";
+}
+
+TEST(RunReport, FleshRunRenderSurfaceBonesAndSettings) {
+  const FleshRun f = flesh_run("flesh");
+  ASSERT_EQ(f.frames, 5);
+  const ReportSummary sum = write_report(f.dir);
+  EXPECT_EQ(sum.frames, 5);
+  const json d = js_payload(f.dir / "report" / "data.js", "window.SNH_REPORT = ", ";");
+  const json& r = d["render"];
+  ASSERT_TRUE(r.is_object());
+  EXPECT_EQ(r["vertex_count"], 6);
+  EXPECT_EQ(r["triangle_count"], 8);
+  const auto tri = decode<std::uint32_t>(r["triangles"]);
+  ASSERT_EQ(tri.size(), 24u);
+  for (int t = 0; t < 8; ++t)
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(tri[3 * t + a], static_cast<std::uint32_t>(f.triangles(a, t)));
+  EXPECT_EQ(r["bones"], json(f.bones));
+
+  // Each frame's file: the flesh and skinned positions of its OBJ files, and the bones of bones.json.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (int i = 0; i < f.frames; ++i) {
+    const json fd =
+        js_payload(f.dir / d["mesh"]["frames"][i]["src"].get<std::string>(), fmt::format("snhReportFrame({}, ", i), ");");
+    const auto flesh = decode<float>(fd["render"]["flesh"]), lbs = decode<float>(fd["render"]["lbs"]),
+               bones = decode<float>(fd["render"]["bones"]);
+    ASSERT_EQ(flesh.size(), 18u);
+    ASSERT_EQ(lbs.size(), 18u);
+    ASSERT_EQ(bones.size(), 12u);
+    for (int v = 0; v < 6; ++v)
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(flesh[3 * v + a], f.flesh[i](a, v), 1e-6) << "frame " << i;
+        EXPECT_NEAR(lbs[3 * v + a], f.lbs[i](a, v), 1e-6) << "frame " << i;
+        for (const Eigen::Matrix3Xd* x : {&f.flesh[i], &f.lbs[i]}) {
+          lo[a] = std::min(lo[a], (*x)(a, v));
+          hi[a] = std::max(hi[a], (*x)(a, v));
+        }
+      }
+    for (int k = 0; k < 12; ++k) {
+      EXPECT_NEAR(bones[k], f.segments[i][k], 1e-6) << "frame " << i;
+      lo[k % 3] = std::min(lo[k % 3], f.segments[i][k]);
+      hi[k % 3] = std::max(hi[k % 3], f.segments[i][k]);
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(r["bounds"]["min"][a].get<double>(), lo[a], 1e-9);
+    EXPECT_NEAR(r["bounds"]["max"][a].get<double>(), hi[a], 1e-9);
+  }
+
+  // The render volumes: one plot, both curves, one point per frame.
+  const json* render_volume = nullptr;
+  for (const json& p : d["plots"])
+    if (p["id"] == "render_volume") render_volume = &p;
+  ASSERT_NE(render_volume, nullptr);
+  ASSERT_EQ((*render_volume)["series"].size(), 2u);
+  EXPECT_EQ((*render_volume)["series"][0]["label"], "flesh");
+  EXPECT_EQ((*render_volume)["series"][1]["label"], "linear blend skinning");
+  EXPECT_NEAR((*render_volume)["series"][1]["y"][4].get<double>(), 0.92, 1e-12);
+
+  // The settings of a flesh run, and the USD stage linked.
+  EXPECT_EQ(meta_value(d, "model"), "arm.glb");
+  EXPECT_EQ(meta_value(d, "animation"), "wave");
+  EXPECT_EQ(meta_value(d, "flesh volume"), "hexahedral lattice (lattice)");
+  EXPECT_EQ(meta_value(d, "resolution"), "2");
+  EXPECT_EQ(meta_value(d, "bound vertices"), "9");
+  EXPECT_EQ(meta_value(d, "bones"), "2 (binding no vertex: wrist)");
+  EXPECT_EQ(meta_value(d, "USD stage"), (json{{"text", "flesh.usda"}, {"href", "flesh.usda"}}));
+  fs::remove(f.dir / "flesh.usda");
+  (void)write_report(f.dir);
+  EXPECT_EQ(meta_value(read_report_data(f.dir), "USD stage"), "");  // no link to a file that is not there
+
+  // Without bones.json, the surfaces alone.
+  fs::remove(f.dir / "bones.json");
+  (void)write_report(f.dir);
+  const json without = read_report_data(f.dir);
+  EXPECT_TRUE(without["render"]["bones"].is_null());
+  EXPECT_FALSE(js_payload(f.dir / "report" / "frames" / "002.js", "snhReportFrame(2, ", ");")["render"].contains("bones"));
+  fs::remove_all(f.dir);
+}
+
+TEST(RunReport, FleshRunFilesAtFaultAreNamedInOneLine) {
+  const FleshRun f = flesh_run("flesh_errors");
+  auto message = [&] {
+    try {
+      (void)write_report(f.dir);
+    } catch (const ReportError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  // One line that starts with the file at fault.
+  auto starts = [](const std::string& m, const fs::path& p) {
+    return m.rfind(p.string() + ":", 0) == 0 && m.find('\n') == std::string::npos;
+  };
+  ASSERT_EQ(message(), "no error");
+  const fs::path s2 = f.dir / "surface" / "002.obj", l3 = f.dir / "lbs" / "003.obj", bones = f.dir / "bones.json";
+  const std::string good_s2 = slurp(s2), good_l3 = slurp(l3), good_bones = slurp(bones);
+
+  std::ofstream(s2) << "v 0 0 0\nv 1 0 x\n";  // malformed
+  std::string m = message();
+  EXPECT_TRUE(starts(m, s2)) << m;
+  EXPECT_NE(m.find(":2:"), std::string::npos) << m;
+  std::ofstream(s2) << good_s2.substr(0, good_s2.find("\nf ") + 1);  // cut short: no triangles
+  m = message();
+  EXPECT_TRUE(starts(m, s2)) << m;
+  std::ofstream(s2) << "v 0 0 0\n" << good_s2;  // a vertex too many
+  EXPECT_EQ(message(), s2.string() + ": 7 vertices and 8 triangles, but surface/000.obj has 6 and 8");
+  std::ofstream(s2) << good_s2;
+
+  fs::remove(l3);
+  m = message();
+  EXPECT_TRUE(starts(m, l3)) << m;
+  EXPECT_NE(m.find("frame 3 (003.vtu)"), std::string::npos) << m;
+  std::string flipped = good_l3;  // the same counts, another triangle
+  flipped.replace(flipped.rfind("f "), std::string::npos, "f 1 2 6\n");
+  std::ofstream(l3) << flipped;
+  EXPECT_EQ(message(), l3.string() + ": its triangles are not those of surface/000.obj");
+  std::ofstream(l3) << good_l3;
+
+  std::ofstream(bones) << good_bones.substr(0, good_bones.size() / 2);
+  m = message();
+  EXPECT_TRUE(starts(m, bones) && m.find("not valid JSON") != std::string::npos) << m;
+  json b = json::parse(good_bones);
+  b["frames"].erase(b["frames"].begin() + 1);
+  std::ofstream(bones) << b.dump();
+  EXPECT_EQ(message(), bones.string() + ": 4 frames, but frames.pvd has 5");
+  b = json::parse(good_bones);
+  b["frames"][2]["segments"][1].erase(5);
+  std::ofstream(bones) << b.dump();
+  EXPECT_EQ(message(), bones.string() + ": frame 2: a segment is not [ax, ay, az, bx, by, bz]");
+  b = json::parse(good_bones);
+  b["bones"].push_back("elbow>wrist");
+  std::ofstream(bones) << b.dump();
+  EXPECT_EQ(message(), bones.string() + ": frame 0 does not have one segment for each of the 3 bones");
+  std::ofstream(bones) << good_bones;
+  EXPECT_EQ(message(), "no error");
+  fs::remove_all(f.dir);
 }
 
 TEST(RunReport, RunWithoutVtuFramesHasPlotsButNo3DView) {

@@ -14,6 +14,7 @@
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/base64.hpp"
 #include "snh/io/mesh_read.hpp"
+#include "snh/io/surface_read.hpp"
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/sim/stats.hpp"
@@ -104,9 +105,118 @@ struct Range {
   }
 };
 
+/// The render surface of a flesh run: for each frame NNN.vtu, surface/NNN.obj (the surface simulated as
+/// flesh) and lbs/NNN.obj (posed by linear blend skinning), every file with the triangles of surface/000.obj;
+/// and, when bones.json is there, the bones' segments of every frame. frame() gives what a frame's file
+/// holds of it, summary() the "render" object of data.js.
+class RenderSurface {
+ public:
+  RenderSurface(const fs::path& dir, std::size_t frame_count) : dir_(dir) {
+    const SurfaceMesh first = read(dir / "surface" / "000.obj");
+    triangles_ = first.triangles;
+    vertex_count_ = first.vertices.cols();
+    if (fs::exists(dir / "bones.json")) read_bones(dir / "bones.json", frame_count);
+  }
+
+  /// Frame i's positions (the frame's .vtu file is `vtu`): {"flesh", "lbs", "bones"}, base64 Float32.
+  json frame(std::size_t i, const std::string& vtu) {
+    const std::string name = fs::path(vtu).stem().string() + ".obj";
+    json out;
+    for (const char* part : {"surface", "lbs"}) {
+      const fs::path path = dir_ / part / name;
+      if (!fs::exists(path))
+        throw ReportError(fmt::format("{}: missing: a flesh run writes one per frame, and frame {} ({}) has none",
+                                      path.string(), i, vtu));
+      const SurfaceMesh s = read(path);
+      if (s.vertices.cols() != vertex_count_ || s.triangles.cols() != triangles_.cols())
+        throw ReportError(fmt::format("{}: {} vertices and {} triangles, but surface/000.obj has {} and {}", path.string(),
+                                      s.vertices.cols(), s.triangles.cols(), vertex_count_, triangles_.cols()));
+      if (s.triangles != triangles_)
+        throw ReportError(fmt::format("{}: its triangles are not those of surface/000.obj", path.string()));
+      std::vector<float> xyz(3 * vertex_count_);
+      for (Eigen::Index v = 0; v < vertex_count_; ++v)
+        for (int a = 0; a < 3; ++a) {
+          xyz[3 * v + a] = static_cast<float>(s.vertices(a, v));
+          bounds_[a].add(s.vertices(a, v));
+        }
+      out[part == std::string_view("surface") ? "flesh" : "lbs"] = encode(xyz);
+    }
+    if (has_bones_) {
+      std::vector<float> segments(bones_[i].begin(), bones_[i].end());
+      for (std::size_t k = 0; k < segments.size(); ++k) bounds_[k % 3].add(bones_[i][k]);
+      out["bones"] = encode(segments);
+    }
+    return out;
+  }
+
+  [[nodiscard]] json summary() const {
+    std::vector<std::uint32_t> tri(triangles_.data(), triangles_.data() + triangles_.size());
+    json lo = json::array(), hi = json::array();
+    for (const Range& r : bounds_) {
+      const json lh = r.to_json(0.0);
+      lo.push_back(lh[0]);
+      hi.push_back(lh[1]);
+    }
+    return {{"vertex_count", vertex_count_},
+            {"triangle_count", triangles_.cols()},
+            {"triangles", encode(tri)},
+            {"bones", has_bones_ ? json(bone_names_) : json(nullptr)},
+            {"bounds", {{"min", lo}, {"max", hi}}}};
+  }
+
+ private:
+  static SurfaceMesh read(const fs::path& path) {
+    try {
+      return read_surface(path);
+    } catch (const MeshError& e) {
+      throw ReportError(e.what());
+    }
+  }
+
+  /// bones.json: {"bones": [names], "frames": [{"time", "segments": [[ax, ay, az, bx, by, bz] per bone]} per frame]}.
+  void read_bones(const fs::path& path, std::size_t frame_count) {
+    has_bones_ = true;
+    const json b = read_json(path);
+    auto fail = [&](const std::string& what) { throw ReportError(fmt::format("{}: {}", path.string(), what)); };
+    if (!b.is_object() || !b.contains("bones") || !b.at("bones").is_array() || !b.contains("frames") ||
+        !b.at("frames").is_array())
+      fail("not a bones file: it needs \"bones\" (names) and \"frames\" (segments) arrays");
+    for (const json& n : b.at("bones")) {
+      if (!n.is_string()) fail("a bone's name is not a string");
+      bone_names_.push_back(n.get<std::string>());
+    }
+    const json& frames = b.at("frames");
+    if (frames.size() != frame_count) fail(fmt::format("{} frames, but frames.pvd has {}", frames.size(), frame_count));
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const json* segments = frames[i].is_object() && frames[i].contains("segments") ? &frames[i].at("segments") : nullptr;
+      if (!segments || !segments->is_array() || segments->size() != bone_names_.size())
+        fail(fmt::format("frame {} does not have one segment for each of the {} bones", i, bone_names_.size()));
+      std::vector<double> flat;
+      for (const json& s : *segments) {
+        if (!s.is_array() || s.size() != 6) fail(fmt::format("frame {}: a segment is not [ax, ay, az, bx, by, bz]", i));
+        for (const json& v : s) {
+          if (!v.is_number() || !std::isfinite(v.get<double>()))
+            fail(fmt::format("frame {}: a segment has a value that is not a finite number", i));
+          flat.push_back(v.get<double>());
+        }
+      }
+      bones_.push_back(std::move(flat));
+    }
+  }
+
+  fs::path dir_;
+  Eigen::Matrix3Xi triangles_;
+  Eigen::Index vertex_count_ = 0;
+  std::vector<std::string> bone_names_;
+  bool has_bones_ = false;                  ///< bones.json was read
+  std::vector<std::vector<double>> bones_;  ///< per frame: 6 values per bone
+  Range bounds_[3];
+};
+
 /// The 3D part of a run's report: reads the .vtu frames listed in frames.pvd, writes report/frames/NNN.js
-/// (surface positions and fields of each frame) and returns the "mesh" object of data.js.
-json write_frames(const fs::path& dir, const std::string& frame_word) {
+/// (surface positions and fields of each frame, and a flesh run's render surface) and returns the "mesh"
+/// object of data.js; `render` is set to the "render" object of a flesh run (surface/000.obj there), else null.
+json write_frames(const fs::path& dir, const std::string& frame_word, json& render) {
   std::vector<std::pair<double, std::string>> pvd;
   try {
     pvd = read_pvd(dir / "frames.pvd");
@@ -115,6 +225,8 @@ json write_frames(const fs::path& dir, const std::string& frame_word) {
   }
   const fs::path frames_dir = dir / "report" / "frames";
   fs::create_directories(frames_dir);
+  std::optional<RenderSurface> render_surface;
+  if (fs::exists(dir / "surface" / "000.obj")) render_surface.emplace(dir, pvd.size());
 
   auto read_frame = [&](std::size_t i) {
     try {
@@ -189,6 +301,7 @@ json write_frames(const fs::path& dir, const std::string& frame_word) {
       hi = hi.cwiseMax(p);
     }
     frame_json["x"] = encode(xyz);
+    if (render_surface) frame_json["render"] = render_surface->frame(i, pvd[i].second);
     for (Field& f : fields) {
       std::vector<float> values;
       if (f.per == "cell") {
@@ -214,6 +327,7 @@ json write_frames(const fs::path& dir, const std::string& frame_word) {
     if (!fs::remove(frames_dir / fmt::format("{:03d}.js", i), ec)) break;
   }
 
+  render = render_surface ? render_surface->summary() : json(nullptr);
   json field_list = json::array();
   for (const Field& f : fields) {
     const json r = f.range.to_json(0.0);
@@ -237,6 +351,32 @@ json write_frames(const fs::path& dir, const std::string& frame_word) {
           {"fields", field_list},
           {"default_field", fields.front().name},
           {"frames", frames}};
+}
+
+/// A flesh run's own settings (stats.json of `snh flesh`, or of a scene with a "flesh" section): the flesh
+/// volume, the vertices the bones bind, the bones, and a link to the USD stage when it is there.
+void flesh_meta(json& meta, const fs::path& dir, const json& stats) {
+  if (const auto it = stats.find("volume"); it != stats.end() && it->is_string()) {
+    const std::string v = it->get<std::string>();
+    meta.push_back({"flesh volume", v == "lattice" ? "hexahedral lattice (lattice)"
+                                    : v == "tets"  ? "tetrahedra from TetGen (tets)"
+                                                   : v});
+  }
+  meta_from(meta, stats, "bound_vertices", "bound vertices");
+  if (const auto it = stats.find("bones"); it != stats.end() && it->is_array()) {
+    std::string unbound;
+    int count = 0;
+    for (const json& b : *it) {
+      ++count;
+      if (b.is_object() && b.value("bound", 1) == 0)
+        unbound += (unbound.empty() ? "" : ", ") + b.value("name", std::string("?"));
+    }
+    meta.push_back(
+        {"bones", unbound.empty() ? std::to_string(count) : fmt::format("{} (binding no vertex: {})", count, unbound)});
+  }
+  const std::string usd =
+      stats.contains("usd") && stats.at("usd").is_string() ? stats.at("usd").get<std::string>() : "flesh.usda";
+  if (fs::exists(dir / usd)) meta.push_back({"USD stage", {{"text", usd}, {"href", usd}}});
 }
 
 /// The report data of a stretch run (tetcli, hexcli, snh stretch) or a scene (snh run).
@@ -278,10 +418,12 @@ json run_data(const fs::path& dir, const json& stats) {
     const char* label;
     const char* unit = "";
   };
-  static constexpr Setting kRunAndMaterial[] = {
-      {"command_line", "command line"}, {"program", "program"}, {"scene", "scene file"}, {"element", "element"},
-      {"resolution", "resolution"}, {"mesh_file", "mesh file"}, {"vertices", "vertices"}, {"cells", "cells"},
-      {"material", "material"}, {"mu", "μ"}, {"lambda", "λ"}};
+  static constexpr Setting kRun[] = {
+      {"command_line", "command line"}, {"program", "program"}, {"scene", "scene file"}, {"model", "model"},
+      {"animation", "animation"}, {"model_vertices", "model vertices"}, {"model_triangles", "model triangles"},
+      {"joints", "joints"}, {"element", "element"}, {"resolution", "resolution"}, {"mesh_file", "mesh file"},
+      {"vertices", "vertices"}, {"cells", "cells"}};
+  static constexpr Setting kMaterial[] = {{"material", "material"}, {"mu", "μ"}, {"lambda", "λ"}};
   static constexpr Setting kSolverAndTotals[] = {
       {"density", "density"}, {"integrator", "integrator"}, {"dt", "dt"}, {"end_time", "end time"},
       {"gravity", "gravity"}, {"mass_damping", "mass damping"}, {"stiffness_damping", "stiffness damping"},
@@ -291,7 +433,9 @@ json run_data(const fs::path& dir, const json& stats) {
       {"total_seconds", "total time", " s"}, {"peak_memory_mib", "peak memory", " MiB"},
       {"middle_width", "middle width"}, {"snh_version", "snh version"}};
   json meta = json::array();
-  for (const Setting& m : kRunAndMaterial) meta_from(meta, stats, m.key, m.label, m.unit);
+  for (const Setting& m : kRun) meta_from(meta, stats, m.key, m.label, m.unit);
+  flesh_meta(meta, dir, stats);
+  for (const Setting& m : kMaterial) meta_from(meta, stats, m.key, m.label, m.unit);
   if (stats.contains("mu") && stats.contains("lambda") && stats.at("mu").is_number() && stats.at("lambda").is_number()) {
     const double mu = stats.at("mu").get<double>(), lambda = stats.at("lambda").get<double>();
     meta.push_back({"ν = λ / (2(λ + μ))", fmt::format("{:.6g}", lambda / (2.0 * (lambda + mu)))});
@@ -326,7 +470,8 @@ json run_data(const fs::path& dir, const json& stats) {
   d["plots"] = plots;
 
   d["mesh"] = nullptr;
-  if (fs::exists(dir / "frames.pvd")) d["mesh"] = write_frames(dir, scene ? "frame" : "step");
+  d["render"] = nullptr;
+  if (fs::exists(dir / "frames.pvd")) d["mesh"] = write_frames(dir, scene ? "frame" : "step", d["render"]);
   else d["meta"].push_back({"3D view", "none: the run wrote no .vtu frames (frames.pvd is missing)"});
   return d;
 }
