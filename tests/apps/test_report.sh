@@ -2,7 +2,8 @@
 # The browser report end to end: runs write index.html (unless --no-report), `snh report` rewrites it
 # and reports bad directories in one line, `snh render` checks its arguments and (with Chromium) saves
 # a PNG; then the pages are opened in headless Chromium by Playwright (viewer/test/report.test.mjs): a
-# stretch run, a scene and a lab report, and the rendered PNG.
+# stretch run, a scene, a flesh run (the scene's directory made flesh-like by viewer/test/make-flesh-run.mjs)
+# and a lab report, and the rendered PNGs.
 # Usage: test_report.sh SNH TETCLI VIEWER_DIR SCENES_DIR
 set -u
 SNH="$1" TETCLI="$2" VIEWER="$3" SCENES="$4"
@@ -21,6 +22,16 @@ out="$("$TETCLI" 3 stable_neo_hookean 1.0 10.0 "$work/tetcli" 2>&1)"; code=$?
   "$work/tetcli/report/data.js" && ok || bad "tetcli writes its report (exit $code): $out"
 out="$("$SNH" run "$SCENES/hanging_bar.json" --out "$work/scene" 2>&1)"; code=$?
 [ "$code" -eq 0 ] && [ -f "$work/scene/index.html" ] && ok || bad "snh run writes its report (exit $code): $out"
+# A flesh run's report: the render surface (surface/, lbs/), bones.json and the USD stage; a malformed
+# surface frame is named in one line.
+cp -r "$work/scene" "$work/flesh"
+out="$(node "$VIEWER/test/make-flesh-run.mjs" "$work/flesh" 2>&1 && "$SNH" report "$work/flesh" 2>&1)"; code=$?
+[ "$code" -eq 0 ] && grep -q '"render":{"bones":\["root>middle","middle>tip","tip"\]' "$work/flesh/report/data.js" \
+  && grep -q '"render":{"bones":"' "$work/flesh/report/frames/060.js" && ok || bad "snh report of a flesh run (exit $code): $out"
+cp -r "$work/flesh" "$work/flesh-bad" && printf 'v 1 2\n' > "$work/flesh-bad/surface/005.obj"
+out="$("$SNH" report "$work/flesh-bad" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -q "^snh: error: $work/flesh-bad/surface/005.obj:1: " \
+  && ok || bad "report with a malformed surface frame (exit $code): $out"
 "$SNH" stretch --res 2 --steps 2 --no-report --out "$work/quiet" > "$work/quiet.log" 2>&1
 [ -f "$work/quiet/stats.json" ] && [ ! -e "$work/quiet/index.html" ] && ! grep -q "^report:" "$work/quiet.log" \
   && ok || bad "--no-report writes no report"
@@ -68,6 +79,9 @@ else
   run_node "stretch run, lab and render" SNH_TEST_RUN_DIR="$work/run" SNH_TEST_CHECK_MIN_J=1 SNH_TEST_LAB_DIR="$work/lab" \
     SNH_TEST_RENDER_PNG="$work/run4.png" SNH_TEST_RENDER_SIZE=640x480
   run_node "scene" SNH_TEST_RUN_DIR="$work/scene"
+  out="$("$SNH" render "$work/flesh" --width 640 --height 480 --out "$work/flesh.png" 2>&1)"; code=$?
+  [ "$code" -eq 0 ] && [ "$out" = "$work/flesh.png (640x480)" ] && ok || bad "snh render of a flesh run (exit $code): $out"
+  run_node "flesh run and its render" SNH_TEST_FLESH_DIR="$work/flesh" SNH_TEST_RENDER_PNG="$work/flesh.png" SNH_TEST_RENDER_SIZE=640x480
   run_node "a lab simulation's own report" SNH_TEST_RUN_DIR="$work/lab/inversion/reflected/stable_neo_hookean"
 fi
 

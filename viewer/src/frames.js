@@ -5,8 +5,10 @@ import { decodeBase64, message } from './util.js';
 const LOAD_TIMEOUT_MS = 60000;
 
 export class FrameStore {
-  constructor(mesh) {
+  /** mesh: the report's mesh; render: a flesh run's render surface (data.render), whose frames it also decodes. */
+  constructor(mesh, render = null) {
     this.mesh = mesh;
+    this.render = render;
     this.loaded = new Map(); // index -> Promise of the decoded frame (kept once loaded)
     this.waiting = new Map(); // index -> {resolve, reject} while its script loads
     window.snhReportFrame = (index, raw) => this.receive(index, raw);
@@ -16,7 +18,10 @@ export class FrameStore {
     return this.mesh.frames.length;
   }
 
-  /** The decoded frame {x: Float32Array, fields: {name: Float32Array}}; loads its file once. */
+  /**
+   * The decoded frame {x: Float32Array, fields: {name: Float32Array}, render: {flesh, lbs, bones} (a flesh
+   * run: Float32Arrays; bones only with bones) or null}; loads its file once.
+   */
   get(index) {
     if (!Number.isInteger(index) || index < 0 || index >= this.count) {
       return Promise.reject(new Error(`no frame ${index} (the report has ${this.count})`));
@@ -86,6 +91,25 @@ export class FrameStore {
       if (v.length !== n) throw new Error(`field "${f.name}" has ${v.length} values, expected ${n} (one per ${f.per})`);
       fields[f.name] = v;
     }
-    return { x, fields };
+    return { x, fields, render: this.render ? this.decodeRender(raw.render) : null };
+  }
+
+  decodeRender(raw) {
+    const r = this.render;
+    if (!raw || typeof raw !== 'object') throw new Error('no render surface "render", though the report has one');
+    const out = {};
+    for (const name of ['flesh', 'lbs']) {
+      out[name] = decodeBase64(raw[name], Float32Array, `render surface "${name}"`);
+      if (out[name].length !== 3 * r.vertex_count) {
+        throw new Error(`render surface "${name}" has ${out[name].length} values, expected ${3 * r.vertex_count}`);
+      }
+    }
+    if (Array.isArray(r.bones)) {
+      out.bones = decodeBase64(raw.bones, Float32Array, 'bones');
+      if (out.bones.length !== 6 * r.bones.length) {
+        throw new Error(`"bones" has ${out.bones.length} values, expected ${6 * r.bones.length} (6 per bone)`);
+      }
+    }
+    return out;
   }
 }

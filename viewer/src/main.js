@@ -12,7 +12,7 @@ import { BACKGROUND, MeshView } from './view3d.js';
 const noMesh = () => Promise.reject(new Error('the report has no mesh'));
 const hooks = {
   ready: false, errors: [], frameCount: 0, frame: -1, setFrame: noMesh, field: null, setField: noMesh,
-  legend: null, plots: [], background: BACKGROUND.slice(),
+  legend: null, plots: [], background: BACKGROUND.slice(), show: null, setShow: noMesh,
 };
 window.snhReport = hooks;
 
@@ -24,7 +24,10 @@ function record(e) {
 window.addEventListener('error', (e) => record(e.error || e.message));
 window.addEventListener('unhandledrejection', (e) => record(e.reason));
 
-/** Settings from the location hash: #render&frame=5&field=psi&wireframe=1, or #frame=N&field=NAME. */
+/**
+ * Settings from the location hash: #render&frame=5&field=psi&wireframe=1, or #frame=N&field=NAME; a flesh
+ * run also show=flesh|lbs|volume and bones=0.
+ */
 function hashSettings() {
   const h = location.hash.replace(/^#/, '');
   const q = new URLSearchParams(h);
@@ -35,6 +38,8 @@ function hashSettings() {
     field: q.get('field'),
     wireframe: flag('wireframe', false),
     pins: flag('pins', true),
+    show: q.get('show'),
+    bones: flag('bones', true),
   };
 }
 
@@ -57,10 +62,20 @@ function viewBox(data, withCaption) {
   return { box, parts };
 }
 
-function meshInfo(m) {
+function meshInfo(m, r) {
   const s = m.surface || {};
+  const render = r ? ` — render surface: ${r.vertex_count} vertices, ${r.triangle_count} triangles` +
+    (Array.isArray(r.bones) ? ` · ${r.bones.length} bones` : '') : '';
   return `${m.element || ''} mesh · ${m.vertex_count} vertices · ${m.cell_count} cells · ${m.pinned_count} pinned` +
-    ` — surface: ${s.vertex_count} vertices, ${s.triangle_count} triangles · ${m.frames.length} frames`;
+    ` — surface: ${s.vertex_count} vertices, ${s.triangle_count} triangles${render} · ${m.frames.length} frames`;
+}
+
+/** What a flesh run shows first: the hash's choice, else the flesh (the volume for other runs). */
+function showFromHash(value, render) {
+  if (!render) return null;
+  if (value === null || value === '') return 'flesh';
+  if (!['flesh', 'lbs', 'volume'].includes(value)) throw new Error(`no "${value}" to show (flesh, lbs or volume)`);
+  return value;
 }
 
 async function renderMode(root, data, s) {
@@ -72,12 +87,16 @@ async function renderMode(root, data, s) {
     if (!mesh) throw new Error('the report has no mesh (the run wrote no frames)');
     if (!mesh.frames || !mesh.frames.length) throw new Error('the report has no frames');
     const frame = frameFromHash(s.frame, mesh.frames.length) ?? 0;
-    const view = new MeshView(box, mesh);
+    const render = data.render || null;
+    const show = showFromHash(s.show, render);
+    const view = new MeshView(box, mesh, render);
     view.setWireframe(s.wireframe);
     view.setPinsVisible(s.pins);
-    const player = new Player({ mesh, store: new FrameStore(mesh), view, hooks, parts, onError: record });
+    view.setBonesVisible(s.bones);
+    const player = new Player({ mesh, store: new FrameStore(mesh, render), view, hooks, parts, onError: record });
     const field = s.field || mesh.default_field || (mesh.fields[0] && mesh.fields[0].name);
     if (field) await player.setField(field);
+    if (show) player.setShow(show);
     await player.setFrame(frame);
     await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
     hooks.ready = true;
@@ -95,7 +114,8 @@ function meshSection(data, s) {
   const mesh = data.mesh;
   const { box, parts } = viewBox(data, false);
   const section = el('section', { class: 'snh-section snh-viewer' },
-    el('div', { class: 'snh-section-head' }, el('h2', {}, 'Deformation'), el('p', { class: 'snh-mesh-info' }, meshInfo(mesh))),
+    el('div', { class: 'snh-section-head' }, el('h2', {}, 'Deformation'),
+      el('p', { class: 'snh-mesh-info' }, meshInfo(mesh, data.render))),
     box);
   const fail = (e) => {
     record(e);
@@ -105,8 +125,9 @@ function meshSection(data, s) {
   async function start() {
     try {
       if (!mesh.frames || !mesh.frames.length) throw new Error('the report has no frames');
-      const store = new FrameStore(mesh);
-      const view = new MeshView(box, mesh);
+      const render = data.render || null;
+      const store = new FrameStore(mesh, render);
+      const view = new MeshView(box, mesh, render);
       const player = new Player({ mesh, store, view, hooks, parts, onError: record });
       // A bad frame or field in the hash is reported, and the default used.
       const bad = [];
@@ -114,10 +135,13 @@ function meshSection(data, s) {
       const frame = pick(() => frameFromHash(s.frame, store.count)) ?? 0;
       const field = (s.field && pick(() => player.fieldByName(s.field).name)) ||
         mesh.default_field || (mesh.fields[0] && mesh.fields[0].name);
+      const show = pick(() => showFromHash(s.show, render)) || (render ? 'flesh' : null);
       view.setWireframe(s.wireframe);
       view.setPinsVisible(s.pins);
-      section.append(player.buildControls({ frame, wireframe: s.wireframe, pins: s.pins }));
+      view.setBonesVisible(s.bones);
+      section.append(player.buildControls({ frame, wireframe: s.wireframe, pins: s.pins, bones: s.bones }));
       if (field) await player.setField(field);
+      if (show) player.setShow(show);
       try {
         await player.setFrame(frame);
       } catch (e) {

@@ -3,19 +3,26 @@ import { el } from './util.js';
 
 const KIND_NAMES = { stretch: 'stretch run', scene: 'scene run', lab: 'lab report' };
 
+/** A meta value: text, or a link ({text, href}: a file of the run, such as its USD stage). */
+function metaValue(v) {
+  if (v === null || v === undefined) return '–';
+  if (typeof v === 'object' && v.href) return el('a', { href: v.href }, v.text ?? v.href);
+  return String(v);
+}
+
 export function header(data) {
   const status = data.status || {};
   const ok = status.ok !== false;
   const meta = Array.isArray(data.meta) ? data.meta : [];
   return el('header', { class: 'snh-header' },
-    el('div', { class: 'snh-kicker' }, KIND_NAMES[data.kind] || data.kind || 'report',
+    el('div', { class: 'snh-kicker' }, data.render ? 'flesh run' : KIND_NAMES[data.kind] || data.kind || 'report',
       data.generated_by ? el('span', { class: 'snh-generated' }, ` · ${data.generated_by}`) : null),
     el('h1', { class: 'snh-title' }, data.title || 'snh report'),
     el('div', { class: `snh-status ${ok ? 'snh-status-ok' : 'snh-status-fail'}`, role: 'status' },
       el('span', { class: 'snh-status-icon', 'aria-hidden': 'true' }, ok ? '✓' : '✗'),
       el('span', {}, status.text || (ok ? 'ok' : 'failed'))),
     meta.length
-      ? el('dl', { class: 'snh-meta' }, meta.map(([k, v]) => el('div', {}, el('dt', {}, k), el('dd', {}, v === null ? '–' : String(v)))))
+      ? el('dl', { class: 'snh-meta' }, meta.map(([k, v]) => el('div', {}, el('dt', {}, k), el('dd', {}, metaValue(v)))))
       : null);
 }
 

@@ -1,7 +1,8 @@
-// Playback of the mesh frames: the controls (play, slider, field, wireframe, pins), the keys,
-// the legend, and the frame/field state that the test hooks expose.
+// Playback of the mesh frames: the controls (play, slider, field, wireframe, pins; for a flesh run what is
+// shown and the bones), the keys, the legend, and the frame/field state that the test hooks expose.
 import { fieldColors } from './colormap.js';
 import { el, fmt4, fmtTime, message } from './util.js';
+import { SHOWS } from './view3d.js';
 
 const FRAME_MS = 100; // ~10 frames per second
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -22,6 +23,11 @@ export class Player {
     hooks.frameCount = store.count;
     hooks.setFrame = (i) => this.setFrame(i);
     hooks.setField = (name) => this.setField(name);
+    hooks.show = view.show;
+    hooks.setShow = (what) => this.setShow(what);
+    hooks.setBones = (on) => this.setBonesVisible(on);
+    hooks.visible = () => view.visibility();
+    hooks.bones = () => Array.from(view.bonePositions || []);
   }
 
   fieldByName(name) {
@@ -62,6 +68,7 @@ export class Player {
   draw(data) {
     this.view.setPositions(data.x);
     if (this.field) this.view.setColors(this.field, data.fields[this.field.name], this.colors);
+    if (data.render) this.view.setRender(data.render);
     this.view.render();
     this.showMessage('');
     const label = this.frameLabel(this.frame);
@@ -69,7 +76,33 @@ export class Player {
       this.ui.slider.value = String(this.frame);
       this.ui.label.textContent = label;
     }
-    if (this.parts.caption) this.parts.caption.lastChild.textContent = label;
+    this.updateCaption();
+  }
+
+  /** Render mode's caption: the frame, and for a flesh run what is shown. */
+  updateCaption() {
+    if (!this.parts.caption || this.frame < 0) return;
+    const shown = this.view.skins ? ` · ${SHOWS.find(([k]) => k === this.view.show)[1]}` : '';
+    this.parts.caption.lastChild.textContent = this.frameLabel(this.frame) + shown;
+  }
+
+  /** A flesh run: shows 'flesh' or 'lbs' (the render surface, simulated or skinned) or 'volume' (coloured by the field). */
+  setShow(what) {
+    this.view.setShow(what);
+    this.hooks.show = what;
+    if (this.ui) {
+      for (const b of this.ui.shows) b.setAttribute('aria-pressed', b.dataset.show === what ? 'true' : 'false');
+      this.ui.field.disabled = what !== 'volume';
+    }
+    this.updateLegend();
+    this.updateCaption();
+    this.view.render();
+  }
+
+  setBonesVisible(on) {
+    this.view.setBonesVisible(on);
+    if (this.ui && this.ui.bones) this.ui.bones.checked = !!on;
+    this.view.render();
   }
 
   frameLabel(i) {
@@ -86,7 +119,8 @@ export class Player {
   updateLegend() {
     const f = this.field;
     const lg = this.parts.legend;
-    lg.hidden = false;
+    lg.hidden = !f || this.view.show !== 'volume'; // the colours are the volume's only
+    if (!f) return;
     this.hooks.legend = { field: f.name, min: f.min, max: f.max };
     lg.dataset.field = f.name;
     lg.dataset.min = String(f.min);
@@ -166,11 +200,30 @@ export class Player {
     ui.wire.addEventListener('change', () => { this.view.setWireframe(ui.wire.checked); this.view.render(); });
     ui.pins = el('input', { type: 'checkbox', id: 'snh-pins', checked: initial.pins, disabled: !this.view.pinIndex.length });
     ui.pins.addEventListener('change', () => { this.view.setPinsVisible(ui.pins.checked); this.view.render(); });
+    // A flesh run: what is shown (a switch), and its bones.
+    const flesh = !!this.view.skins;
+    ui.shows = flesh
+      ? SHOWS.map(([key, label]) => el('button', {
+        type: 'button', class: 'snh-seg', id: `snh-show-${key}`, 'data-show': key,
+        'aria-pressed': key === this.view.show ? 'true' : 'false',
+        onclick: () => { try { this.setShow(key); } catch (e) { this.onError(e); } },
+      }, label))
+      : [];
+    const boneCount = flesh ? this.view.boneNames.length : 0;
+    ui.bones = flesh ? el('input', { type: 'checkbox', id: 'snh-bones', checked: initial.bones, disabled: !boneCount }) : null;
+    if (ui.bones) ui.bones.addEventListener('change', () => this.setBonesVisible(ui.bones.checked));
+    ui.field.disabled = this.view.show !== 'volume';
     this.ui = ui;
     this.updatePlayButton();
     document.addEventListener('keydown', (e) => this.onKey(e));
     return el('div', { class: 'snh-controls' },
       el('div', { class: 'snh-controls-row' }, ui.prev, ui.play, ui.next, ui.slider, ui.label),
+      flesh
+        ? el('div', { class: 'snh-controls-row' },
+          el('div', { class: 'snh-control snh-show', role: 'group', 'aria-label': 'surface shown' },
+            el('span', {}, 'Show'), el('span', { class: 'snh-segs' }, ui.shows)),
+          el('label', { class: 'snh-control' }, ui.bones, ` bones (${boneCount})`))
+        : null,
       el('div', { class: 'snh-controls-row' },
         el('label', { class: 'snh-control' }, 'Colour by ', ui.field),
         el('label', { class: 'snh-control' }, ui.wire, ' wireframe'),

@@ -1,11 +1,16 @@
 // The 3D view: the run's boundary surface, coloured by a field, with orbit controls.
 // The geometry is non-indexed (3 vertices per triangle) so that cell colours and normals stay flat.
+// A flesh run adds its render surface (smooth, indexed), simulated or posed by linear blend skinning, and
+// its bones as lines drawn over everything: one of flesh, lbs or the volume is shown at a time.
 import {
   AmbientLight, BufferAttribute, BufferGeometry, Color, DirectionalLight, DoubleSide, LineBasicMaterial,
   LineSegments, Mesh, MeshBasicMaterial, MeshLambertMaterial, Object3D, PerspectiveCamera, Points, PointsMaterial,
   Scene, Vector3, WebGLRenderer,
 } from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
+import { LineMaterial } from 'three/examples/jsm/lines/LineMaterial.js';
+import { LineSegments2 } from 'three/examples/jsm/lines/LineSegments2.js';
+import { LineSegmentsGeometry } from 'three/examples/jsm/lines/LineSegmentsGeometry.js';
 import { decodeBase64 } from './util.js';
 
 /** The background colour (sRGB 0-255); tests compare pixels against it. */
@@ -13,6 +18,11 @@ export const BACKGROUND = [224, 228, 233];
 const FOV = 30; // degrees, vertical
 const VIEW_DIR = new Vector3(0.9, 0.55, 1.35).normalize(); // from front-right, above; y is up
 const CREASE_COS = Math.cos((35 * Math.PI) / 180); // feature edges: where the surface bends more
+/** What a flesh run's view can show, with the labels of its switch. */
+export const SHOWS = [['flesh', 'flesh'], ['lbs', 'skinning (LBS)'], ['volume', 'volume']];
+const SKIN_SRGB = { flesh: [226, 168, 142], lbs: [146, 170, 206] }; // warm for the flesh, cool for the comparison
+const BONE_COLOR = 0x16233f;
+const BONE_WIDTH = 3; // CSS pixels
 
 /** The surface's edges as [a, b, t1, t2] (vertices, triangles; t2 = -1 on an open edge). */
 function surfaceEdges(tris, n) {
@@ -34,7 +44,8 @@ function surfaceEdges(tris, n) {
 }
 
 export class MeshView {
-  constructor(container, mesh) {
+  /** mesh: the report's mesh; render: its flesh run's render surface (data.render), or null. */
+  constructor(container, mesh, render = null) {
     const s = mesh.surface;
     const n = s.vertex_count;
     this.tris = decodeBase64(s.triangles, Uint32Array, 'surface triangles');
@@ -92,11 +103,19 @@ export class MeshView {
       this.scene.add(o);
     }
     this.setPositions(rest);
+    this.show = 'volume';
+    this.wireOn = false;
+    this.pinsOn = true;
+    this.bonesOn = true;
+    this.renderData = null; // the render part of the frame drawn
+    this.renderFrame = 0; // counts the frames given, so that a surface shown again is filled only if stale
+    this.skins = null;
+    if (render) this.addRender(render);
 
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.addEventListener('change', () => this.render());
     this.controls.addEventListener('start', () => { this.userMoved = true; });
-    this.bounds = mesh.bounds;
+    this.bounds = unionBounds(mesh.bounds, render && render.bounds);
     this.userMoved = false;
     this.resize();
     new ResizeObserver(() => requestAnimationFrame(() => this.resize())).observe(container);
@@ -155,12 +174,119 @@ export class MeshView {
     this.geometry.attributes.color.needsUpdate = true;
   }
 
+  /** The render surfaces (flesh and lbs, sharing the triangles) and the bones of a flesh run. */
+  addRender(r) {
+    const n = r.vertex_count;
+    const tris = decodeBase64(r.triangles, Uint32Array, 'render triangles');
+    if (tris.length !== 3 * r.triangle_count) throw new Error('render: the triangle count does not match');
+    if (tris.some((v) => v >= n)) throw new Error('render: a triangle refers to a vertex past the surface');
+    this.skins = {};
+    for (const name of ['flesh', 'lbs']) {
+      const geometry = new BufferGeometry();
+      geometry.setAttribute('position', new BufferAttribute(new Float32Array(3 * n), 3));
+      geometry.setIndex(new BufferAttribute(tris, 1));
+      const color = new Color().setRGB(...SKIN_SRGB[name].map((c) => c / 255), 'srgb');
+      const solid = new Mesh(geometry, new MeshLambertMaterial({
+        color, side: DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+      }));
+      const wire = new Mesh(geometry, new MeshBasicMaterial({
+        color: 0x202020, wireframe: true, transparent: true, opacity: 0.3,
+      }));
+      for (const o of [solid, wire]) {
+        o.frustumCulled = false;
+        this.scene.add(o);
+      }
+      this.skins[name] = { geometry, solid, wire, filled: -1 };
+    }
+    // Bones: segments drawn over the surfaces (they lie inside them), their ends as dots.
+    this.boneNames = Array.isArray(r.bones) ? r.bones : [];
+    this.bonePositions = new Float32Array(6 * this.boneNames.length);
+    this.boneGeometry = new LineSegmentsGeometry();
+    this.boneMaterial = new LineMaterial({ color: BONE_COLOR, linewidth: BONE_WIDTH, depthTest: false, transparent: true });
+    this.boneLines = new LineSegments2(this.boneGeometry, this.boneMaterial);
+    this.boneEndGeometry = new BufferGeometry();
+    this.boneEndGeometry.setAttribute('position', new BufferAttribute(this.bonePositions, 3));
+    this.boneEnds = new Points(this.boneEndGeometry, new PointsMaterial({
+      color: BONE_COLOR, size: 7, sizeAttenuation: false, depthTest: false, transparent: true,
+    }));
+    if (this.bonePositions.length) this.boneGeometry.setPositions(this.bonePositions);
+    for (const o of [this.boneLines, this.boneEnds]) {
+      o.frustumCulled = false;
+      o.renderOrder = 10;
+      this.scene.add(o);
+    }
+    this.show = 'flesh';
+    this.applyVisibility();
+  }
+
+  /** A frame's render part ({flesh, lbs, bones}: Float32Arrays); only the surface in view is updated now. */
+  setRender(r) {
+    if (!this.skins || !r) return;
+    this.renderData = r;
+    this.renderFrame++;
+    this.updateSkin();
+    if (r.bones) {
+      this.bonePositions.set(r.bones);
+      this.boneEndGeometry.attributes.position.needsUpdate = true;
+      if (this.bonePositions.length) this.boneGeometry.setPositions(this.bonePositions);
+    }
+  }
+
+  updateSkin() {
+    const skin = this.skins && this.skins[this.show];
+    if (!skin || !this.renderData || skin.filled === this.renderFrame) return;
+    skin.geometry.attributes.position.array.set(this.renderData[this.show]);
+    skin.geometry.attributes.position.needsUpdate = true;
+    skin.geometry.computeVertexNormals(); // indexed: smooth across the triangles
+    skin.filled = this.renderFrame;
+  }
+
+  /** Shows 'flesh' or 'lbs' (a flesh run's render surface) or 'volume' (the boundary, coloured by a field). */
+  setShow(what) {
+    if (what !== 'volume' && !(this.skins && this.skins[what])) throw new Error(`nothing to show as "${what}"`);
+    this.show = what;
+    this.updateSkin();
+    this.applyVisibility();
+  }
+
+  applyVisibility() {
+    const volume = this.show === 'volume';
+    this.solid.visible = volume;
+    this.creases.visible = volume;
+    this.wire.visible = volume && this.wireOn;
+    this.pins.visible = volume && this.pinsOn;
+    if (!this.skins) return;
+    for (const [name, skin] of Object.entries(this.skins)) {
+      skin.solid.visible = name === this.show;
+      skin.wire.visible = name === this.show && this.wireOn;
+    }
+    const bones = this.bonesOn && this.bonePositions.length > 0;
+    this.boneLines.visible = bones;
+    this.boneEnds.visible = bones;
+  }
+
+  /** Which parts are drawn (for the test hooks). */
+  visibility() {
+    const s = this.skins;
+    return {
+      volume: this.solid.visible, flesh: !!s && s.flesh.solid.visible, lbs: !!s && s.lbs.solid.visible,
+      bones: !!s && this.boneLines.visible,
+    };
+  }
+
   setWireframe(on) {
-    this.wire.visible = !!on;
+    this.wireOn = !!on;
+    this.applyVisibility();
   }
 
   setPinsVisible(on) {
-    this.pins.visible = !!on;
+    this.pinsOn = !!on;
+    this.applyVisibility();
+  }
+
+  setBonesVisible(on) {
+    this.bonesOn = !!on;
+    if (this.skins) this.applyVisibility();
   }
 
   /** Puts the camera where the whole of `bounds` is in view. */
@@ -185,6 +311,7 @@ export class MeshView {
     this.renderer.setSize(w, h);
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
+    if (this.boneMaterial) this.boneMaterial.resolution.set(w, h);
     if (!this.userMoved) this.frameBounds();
     this.render();
   }
@@ -192,4 +319,10 @@ export class MeshView {
   render() {
     this.renderer.render(this.scene, this.camera);
   }
+}
+
+/** The box around two {min, max} boxes (either may be missing). */
+function unionBounds(a, b) {
+  if (!a || !b) return a || b;
+  return { min: a.min.map((v, k) => Math.min(v, b.min[k])), max: a.max.map((v, k) => Math.max(v, b.max[k])) };
 }

@@ -3,10 +3,12 @@
 //   SNH_TEST_RUN_DIR        a stretch (or scene) run's directory: page, 3D view, slider, plots, legend
 //   SNH_TEST_CHECK_MIN_J=1  also: the legend's min for J = min over stats.json of min_J (and 1)
 //   SNH_TEST_LAB_DIR        a lab report's directory: tables and plots
+//   SNH_TEST_FLESH_DIR      a flesh run's directory (or one made by test/make-flesh-run.mjs): the switch among
+//                           flesh, skinning and volume, the bones and their frames, the render volume plot
 //   SNH_TEST_RENDER_PNG     a PNG taken in render mode, with SNH_TEST_RENDER_SIZE=WxH: size, not blank
 // Chromium: /usr/bin/chromium, or SNH_TEST_CHROMIUM.
 import assert from 'node:assert/strict';
-import { readFileSync } from 'node:fs';
+import { existsSync, readFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { after, before, test } from 'node:test';
 import { pathToFileURL } from 'node:url';
@@ -16,12 +18,13 @@ import { PNG } from 'pngjs';
 const env = process.env;
 const RUN = env.SNH_TEST_RUN_DIR;
 const LAB = env.SNH_TEST_LAB_DIR;
+const FLESH = env.SNH_TEST_FLESH_DIR;
 const RENDER = env.SNH_TEST_RENDER_PNG;
 const TIMEOUT = 30000;
 let browser;
 
 before(async () => {
-  if (!RUN && !LAB) return;
+  if (!RUN && !LAB && !FLESH) return;
   browser = await chromium.launch({
     executablePath: env.SNH_TEST_CHROMIUM || '/usr/bin/chromium',
     headless: true,
@@ -31,13 +34,13 @@ before(async () => {
 });
 after(async () => browser && browser.close());
 
-/** Opens DIR/index.html and waits for the report; `problems` collects console errors and page errors. */
-async function open(dir) {
+/** Opens DIR/index.html (with `hash`) and waits for the report; `problems` collects console errors and page errors. */
+async function open(dir, hash = '') {
   const page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
   const problems = [];
   page.on('console', (m) => m.type() === 'error' && problems.push(`console: ${m.text()}`));
   page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
-  await page.goto(pathToFileURL(join(dir, 'index.html')).href);
+  await page.goto(pathToFileURL(join(dir, 'index.html')).href + hash);
   await page.waitForFunction(() => window.snhReport && window.snhReport.ready, null, { timeout: TIMEOUT });
   return { page, problems };
 }
@@ -86,6 +89,8 @@ test('stretch run report', { skip: !RUN && 'SNH_TEST_RUN_DIR is not set', timeou
   const middle = [Math.floor(w / 3), Math.floor(h / 3), Math.floor((2 * w) / 3), Math.floor((2 * h) / 3)];
   const covered = fraction(first, (p) => differs(p, bg), middle);
   assert.ok(covered > 0.03, `the mesh covers ${(100 * covered).toFixed(1)}% of the canvas' middle third`);
+  // Only a flesh run has the switch among flesh, skinning and volume.
+  assert.equal(await page.locator('#snh-show-flesh').count(), report.render ? 1 : 0);
 
   // The slider to the last frame: the frame and the picture change.
   const count = await page.evaluate(() => window.snhReport.frameCount);
@@ -158,6 +163,91 @@ test('stretch run report', { skip: !RUN && 'SNH_TEST_RUN_DIR is not set', timeou
   }
   await assertNoErrors(page, problems);
   await page.close();
+});
+
+test('flesh run report', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', timeout: 90000 }, async () => {
+  const report = readReport(FLESH);
+  assert.ok(report.render, 'data.js has a "render" part');
+  const bones = JSON.parse(readFileSync(join(FLESH, 'bones.json'), 'utf8'));
+  const { page, problems } = await open(FLESH);
+  const canvasShot = async () => PNG.sync.read(await page.locator('.snh-view canvas').screenshot());
+  const changedBetween = (a, b) => fraction(b, (p, x, y) => differs(p, pixel(a, x, y)));
+  const visible = () => page.evaluate(() => window.snhReport.visible());
+  const pressed = () => page.$$eval('.snh-seg', (bs) => bs.filter((b) => b.getAttribute('aria-pressed') === 'true').map((b) => b.dataset.show));
+
+  // The flesh first, with its bones; the volume's colours (legend, field) are not in use.
+  assert.deepEqual(await page.$$eval('.snh-seg', (bs) => bs.map((b) => b.textContent)), ['flesh', 'skinning (LBS)', 'volume']);
+  assert.deepEqual(await pressed(), ['flesh']);
+  assert.deepEqual(await visible(), { flesh: true, lbs: false, volume: false, bones: true });
+  assert.ok(await page.$eval('#snh-legend', (e) => e.hidden), 'no legend over the flesh');
+  assert.ok(await page.$eval('#snh-field', (e) => e.disabled), 'the field select is off over the flesh');
+  const bg = await page.evaluate(() => window.snhReport.background);
+  const flesh = await canvasShot();
+  const covered = fraction(flesh, (p) => differs(p, bg));
+  assert.ok(covered > 0.03, `the flesh covers ${(100 * covered).toFixed(1)}% of the canvas`);
+
+  // The switch: each choice shows its mesh alone, and the picture changes.
+  await page.click('#snh-show-lbs');
+  assert.deepEqual(await pressed(), ['lbs']);
+  assert.deepEqual(await visible(), { flesh: false, lbs: true, volume: false, bones: true });
+  const lbs = await canvasShot();
+  assert.ok(changedBetween(flesh, lbs) > 0.01, `skinning changes ${(100 * changedBetween(flesh, lbs)).toFixed(2)}% of the pixels`);
+  await page.click('#snh-show-volume');
+  assert.deepEqual(await visible(), { flesh: false, lbs: false, volume: true, bones: true });
+  assert.equal(await page.evaluate(() => window.snhReport.show), 'volume');
+  assert.ok(!(await page.$eval('#snh-legend', (e) => e.hidden)), 'the legend is back with the volume');
+  assert.ok(!(await page.$eval('#snh-field', (e) => e.disabled)), 'the field select is on with the volume');
+  const vol = await canvasShot();
+  assert.ok(changedBetween(lbs, vol) > 0.01, `the volume changes ${(100 * changedBetween(lbs, vol)).toFixed(2)}% of the pixels`);
+  await page.click('#snh-show-flesh');
+  assert.deepEqual(await visible(), { flesh: true, lbs: false, volume: false, bones: true });
+
+  // The bones follow the frames: at each frame shown, the segments of bones.json.
+  const segmentsAt = (k) => bones.frames[k].segments.flat();
+  const near = (a, b) => a.length === b.length && a.every((v, i) => Math.abs(v - b[i]) <= 1e-5 * Math.max(1, Math.abs(b[i])));
+  const count = report.mesh.frames.length;
+  assert.ok(count > 2 && bones.frames.length === count, 'a frame of bones per frame');
+  const atFirst = await page.evaluate(() => window.snhReport.bones());
+  assert.ok(near(atFirst, segmentsAt(0)), 'frame 0 draws the bones of bones.json\'s frame 0');
+  const first = await canvasShot();
+  await page.$eval('#snh-frame-slider', (el, v) => {
+    el.value = String(v);
+    el.dispatchEvent(new Event('input', { bubbles: true }));
+  }, count - 1);
+  await page.waitForFunction((n) => window.snhReport.frame === n, count - 1, { timeout: TIMEOUT });
+  const atLast = await page.evaluate(() => window.snhReport.bones());
+  assert.ok(near(atLast, segmentsAt(count - 1)), 'the last frame draws the bones of bones.json\'s last frame');
+  const moved = Math.max(...atLast.map((v, i) => Math.abs(v - atFirst[i])));
+  assert.ok(moved > 1e-3, `the bones move by ${moved} between the first and the last frame`);
+  const lastShot = await canvasShot();
+  assert.ok(changedBetween(first, lastShot) > 0.005, 'the last frame changes the picture');
+
+  // The bones' toggle hides them, and the picture shows it.
+  await page.uncheck('#snh-bones');
+  assert.equal((await visible()).bones, false);
+  const noBones = await canvasShot();
+  assert.ok(changedBetween(lastShot, noBones) > 0.0005, `hiding the bones changes ${(100 * changedBetween(lastShot, noBones)).toFixed(3)}% of the pixels`);
+  await page.check('#snh-bones');
+  assert.equal((await visible()).bones, true);
+
+  // The volume inside the render surface: flesh and skinning, one point per frame each.
+  const plot = (await page.evaluate(() => window.snhReport.plots)).find((p) => p.id === 'render_volume');
+  assert.ok(plot, 'a render_volume plot');
+  assert.equal(plot.series.length, 2, `the render_volume plot has 2 series: ${JSON.stringify(plot.series)}`);
+  assert.equal(plot.points, readSteps(FLESH).length);
+  const legendRows = await page.$$eval('.snh-plot[data-plot-id="render_volume"] .u-legend .u-series', (rows) => rows.length);
+  assert.equal(legendRows, 3, 'the chart\'s legend: x, flesh, skinning');
+  // The USD stage is linked among the settings.
+  assert.equal(await page.locator('.snh-meta a[href="flesh.usda"]').count(), existsSync(join(FLESH, 'flesh.usda')) ? 1 : 0);
+  await assertNoErrors(page, problems);
+  await page.close();
+
+  // The hash picks what is shown first and hides the bones.
+  const again = await open(FLESH, '#show=lbs&bones=0');
+  assert.deepEqual(await again.page.evaluate(() => window.snhReport.visible()), { flesh: false, lbs: true, volume: false, bones: false });
+  assert.equal(await again.page.$eval('#snh-bones', (e) => e.checked), false);
+  await assertNoErrors(again.page, again.problems);
+  await again.page.close();
 });
 
 test('lab report', { skip: !LAB && 'SNH_TEST_LAB_DIR is not set', timeout: 60000 }, async () => {
