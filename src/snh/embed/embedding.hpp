@@ -22,15 +22,18 @@ struct Embedding {
   [[nodiscard]] Eigen::Matrix3Xd apply(const Eigen::VectorXd& x) const;
 };
 
-/// Trilinear weights of points in the lattice's cubes. Throws std::invalid_argument naming the first point
-/// that lies in no cube of the lattice.
+/// Trilinear weights of points in the lattice's cubes: the cube floor((p − origin) / spacing), else one whose
+/// face the point is on (within 1e-6 of the spacing), e.g. a neighbour kept where that cube is not. Throws
+/// std::invalid_argument naming the first point that lies in no cube of the lattice (or is not finite).
 ///   points  3 by #p
 [[nodiscard]] Embedding embed_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& points);
 
 /// Barycentric weights of points in a tet mesh: the tet containing each point (on a shared face, the one
 /// whose smallest barycentric coordinate is largest); a point outside every tet by more than 1e-6 of the
-/// mesh's size is an error (std::invalid_argument naming it), one just outside takes the nearest tet's
-/// weights clamped to the tet.
+/// mesh's size (its bounding box's diagonal) is an error (std::invalid_argument naming it); one just outside
+/// takes, of the tets it is that close to, the one whose smallest coordinate is largest, its coordinates
+/// clamped to ≥ 0 and renormalised. A point equal to a tet's vertex gets weight exactly 1 there. Tets are
+/// found through a uniform grid of their bounding boxes.
 [[nodiscard]] Embedding embed_in_tets(const VolumeMesh& tets, const Eigen::Matrix3Xd& points);
 
 }  // namespace snh
