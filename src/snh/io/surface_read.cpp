@@ -246,7 +246,7 @@ SurfaceMesh read_surface(const fs::path& path) {
   throw MeshError(fmt::format("{}: unknown surface format '{}' (known: .obj, .off, .ply, .stl)", path.string(), ext));
 }
 
-MeshFile tetrahedralize(const SurfaceMesh& surface, const fs::path& source) {
+MeshFile tetrahedralize(const SurfaceMesh& surface, const fs::path& source, double max_volume) {
   const fs::path tetgen = find_program("tetgen");
   if (tetgen.empty())
     throw MeshError(fmt::format("{}: a surface mesh is tetrahedralized by the tetgen program, which is not installed "
@@ -272,7 +272,7 @@ MeshFile tetrahedralize(const SurfaceMesh& surface, const fs::path& source) {
       off << fmt::format("3 {} {} {}\n", surface.triangles(0, t), surface.triangles(1, t), surface.triangles(2, t));
     if (!off) throw MeshError(fmt::format("{}: cannot write the temporary surface for tetgen", source.string()));
   }
-  const std::string program = tetgen.string(), switches = "-pq1.414Q", input = (dir / "surface.off").string(),
+  const std::string program = tetgen.string(), switches = max_volume > 0.0 ? fmt::format("-pq1.414a{:.6g}Q", max_volume) : "-pq1.414Q", input = (dir / "surface.off").string(),
                     log = (dir / "tetgen.log").string();
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);

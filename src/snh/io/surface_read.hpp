@@ -18,10 +18,12 @@ struct SurfaceMesh {
 /// Throws MeshError ("FILE:LINE: ...").
 [[nodiscard]] SurfaceMesh read_surface(const std::filesystem::path& path);
 
-/// Tetrahedralizes a closed surface with `tetgen -pq1.414` (quality tets, no added volume constraint):
-/// writes it to a temporary directory, runs the program, reads its .node/.ele. Throws MeshError naming
-/// `source` when the program is missing (with the Debian package to install) or fails.
-[[nodiscard]] MeshFile tetrahedralize(const SurfaceMesh& surface, const std::filesystem::path& source);
+/// Tetrahedralizes a closed surface with `tetgen -pq1.414` (quality tets; with `max_volume` > 0 also
+/// `-a max_volume`, no tet larger): writes it to a temporary directory, runs the program, reads its
+/// .node/.ele. The surface's vertices stay vertices of the tets. Throws MeshError naming `source` when the
+/// program is missing (with the Debian package to install) or fails.
+[[nodiscard]] MeshFile tetrahedralize(const SurfaceMesh& surface, const std::filesystem::path& source,
+                                      double max_volume = 0.0);
 
 /// True for the extensions read_surface reads.
 [[nodiscard]] bool is_surface_file(const std::filesystem::path& path);

@@ -76,4 +76,25 @@ Eigen::Matrix3Xi boundary_triangles(const VolumeMesh& mesh, std::vector<int>* ce
   return T;
 }
 
+EdgeCounts edge_counts(const Eigen::Matrix3Xi& F) {
+  std::vector<std::pair<int, int>> edges;
+  edges.reserve(3 * F.cols());
+  for (Eigen::Index f = 0; f < F.cols(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = F(k, f), b = F((k + 1) % 3, f);
+      edges.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  std::sort(edges.begin(), edges.end());
+  EdgeCounts c;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    ++c.edges;
+    if (j - i == 1) ++c.open;
+    else if (j - i > 2) ++c.non_manifold;
+    i = j;
+  }
+  return c;
+}
+
 }  // namespace snh

@@ -1,0 +1,26 @@
+#pragma once
+// USD ASCII stages (DESIGN.md io/): triangle meshes whose points are time-sampled per frame, written
+// following the .usda grammar (a `#usda 1.0` layer with stage metadata, `def Xform` and `def Mesh` prims,
+// `point3f[] points.timeSamples`), which usdview, Blender and Houdini open.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace snh {
+
+struct UsdMesh {
+  std::string name;                    ///< the prim's name: a letter or '_' then letters, digits, '_'
+  Eigen::Matrix3Xi triangles;          ///< 3 by #F, 0-based, counter-clockwise seen from outside
+  std::vector<Eigen::Matrix3Xd> frames;  ///< the points (3 by #V) at time codes 0, 1, 2, …
+};
+
+/// Writes the stage atomically: one Xform prim `root` (the default prim) holding each mesh, time codes 0 …
+/// frames − 1 played at `frames_per_second`, Y up, metres. Throws std::invalid_argument for a bad prim
+/// name, meshes without frames, frames of differing sizes or a non-finite point; WriteError when the file
+/// cannot be written.
+void write_usda(const std::filesystem::path& path, const std::string& root, const std::vector<UsdMesh>& meshes,
+                double frames_per_second);
+
+}  // namespace snh

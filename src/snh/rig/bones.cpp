@@ -1,0 +1,73 @@
+#include "snh/rig/bones.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace snh {
+
+std::vector<Bone> bones_of(const Skeleton& skeleton, const std::vector<Eigen::Affine3d>& rest_world) {
+  std::vector<Bone> bones;
+  const std::vector<std::vector<int>> children = skeleton.children();
+  for (int j = 0; j < skeleton.size(); ++j) {
+    const Eigen::Vector3d a = rest_world[j].translation();
+    if (children[j].empty()) {
+      bones.push_back({.name = skeleton.joints[j].name, .joint = j, .child = -1, .a = a, .b = a});
+      continue;
+    }
+    for (int c : children[j])
+      bones.push_back({.name = skeleton.joints[j].name + ">" + skeleton.joints[c].name, .joint = j, .child = c, .a = a,
+                       .b = rest_world[c].translation()});
+  }
+  return bones;
+}
+
+double segment_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d = b - a;
+  const double len2 = d.squaredNorm();
+  const double s = len2 > 0.0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+  return (a + s * d - p).norm();
+}
+
+std::vector<double> default_radii(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface) {
+  const int n = static_cast<int>(bones.size());
+  std::vector<double> sum(n, 0.0), nearest(n, std::numeric_limits<double>::infinity());
+  std::vector<int> count(n, 0);
+  for (Eigen::Index v = 0; v < surface.cols(); ++v) {
+    int best = -1;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (int b = 0; b < n; ++b) {
+      const double d = segment_distance(bones[b].a, bones[b].b, surface.col(v));
+      nearest[b] = std::min(nearest[b], d);
+      if (d < best_d) best_d = d, best = b;
+    }
+    if (best >= 0) sum[best] += best_d, ++count[best];
+  }
+  std::vector<double> radii(n);
+  for (int b = 0; b < n; ++b) radii[b] = 0.5 * (count[b] > 0 ? sum[b] / count[b] : nearest[b]);
+  return radii;
+}
+
+std::vector<int> Binding::count_per_bone(int bones) const {
+  std::vector<int> counts(bones, 0);
+  for (int b : bone) ++counts[b];
+  return counts;
+}
+
+Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X) {
+  Binding out;
+  for (Eigen::Index v = 0; v < X.cols(); ++v) {
+    int best = -1;
+    double depth = 0.0;  // radius − distance: > 0 inside; ties go to the first bone
+    for (int b = 0; b < static_cast<int>(bones.size()); ++b) {
+      const double d = bones[b].radius - segment_distance(bones[b].a, bones[b].b, X.col(v));
+      if (d >= 0.0 && (best < 0 || d > depth)) best = b, depth = d;
+    }
+    if (best >= 0) {
+      out.vertex.push_back(static_cast<int>(v));
+      out.bone.push_back(best);
+    }
+  }
+  return out;
+}
+
+}  // namespace snh

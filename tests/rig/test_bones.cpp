@@ -1,0 +1,79 @@
+// Bones: segments from a joint to each child (points for leaves), default capsule radii from the surface
+// around them, and the volume vertices each binds.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "snh/rig/bones.hpp"
+
+namespace snh {
+namespace {
+
+/// root (origin) → a (1, 0, 0) → b (2, 0, 0), and root → c (0, 1, 0): two children at the root.
+Skeleton fork() {
+  Skeleton s;
+  s.joints = {{"root", -1, {}}, {"a", 0, {}}, {"b", 1, {}}, {"c", 0, {}}};
+  s.joints[1].rest.translation = {1, 0, 0};
+  s.joints[2].rest.translation = {1, 0, 0};
+  s.joints[3].rest.translation = {0, 1, 0};
+  return s;
+}
+
+TEST(Bones, OneSegmentPerChildAndAPointPerLeaf) {
+  const Skeleton s = fork();
+  const std::vector<Bone> bones = bones_of(s, s.world(s.rest_pose()));
+  ASSERT_EQ(bones.size(), 5u);  // root>a, root>c, a>b, and the leaves b and c as points
+  EXPECT_EQ(bones[0].name, "root>a");
+  EXPECT_EQ(bones[1].name, "root>c");
+  EXPECT_EQ(bones[2].name, "a>b");
+  EXPECT_EQ(bones[3].name, "b");
+  EXPECT_EQ(bones[3].child, -1);
+  EXPECT_TRUE(bones[3].a.isApprox(Eigen::Vector3d(2, 0, 0)));
+  EXPECT_TRUE(bones[3].b.isApprox(bones[3].a));
+  EXPECT_EQ(bones[4].name, "c");
+  EXPECT_TRUE(bones[4].a.isApprox(Eigen::Vector3d(0, 1, 0)));
+}
+
+TEST(Bones, SegmentDistance) {
+  const Eigen::Vector3d a(0, 0, 0), b(2, 0, 0);
+  EXPECT_DOUBLE_EQ(segment_distance(a, b, {1, 3, 4}), 5.0);   // beside the segment
+  EXPECT_DOUBLE_EQ(segment_distance(a, b, {-3, 4, 0}), 5.0);  // beyond a
+  EXPECT_DOUBLE_EQ(segment_distance(a, b, {5, 0, 4}), 5.0);   // beyond b
+  EXPECT_DOUBLE_EQ(segment_distance(a, a, {0, 3, 4}), 5.0);   // a point
+}
+
+TEST(Bones, DefaultRadiusIsHalfTheMeanDistanceToTheSurfaceAround) {
+  // A tube of radius 0.4 around the segment (0,0,0)–(2,0,0): every surface vertex is 0.4 from it.
+  Bone bone{.name = "arm", .joint = 0, .child = 1, .a = {0, 0, 0}, .b = {2, 0, 0}};
+  Bone far{.name = "far", .joint = 1, .child = -1, .a = {10, 0, 0}, .b = {10, 0, 0}};
+  Eigen::Matrix3Xd surface(3, 40);
+  for (int i = 0; i < 40; ++i) {
+    const double angle = 2.0 * std::numbers::pi * (i % 8) / 8.0;
+    surface.col(i) = Eigen::Vector3d(0.2 + 1.6 * (i / 8) / 4.0, 0.4 * std::cos(angle), 0.4 * std::sin(angle));
+  }
+  const std::vector<double> r = default_radii({bone, far}, surface);
+  EXPECT_NEAR(r[0], 0.2, 1e-12);
+  // No surface vertex is nearest to "far": half the distance to the nearest one (at x = 1.8).
+  EXPECT_NEAR(r[1], 0.5 * std::hypot(10.0 - 1.8, 0.4), 1e-12);
+}
+
+TEST(Bones, BindingTakesTheDeepestCapsule) {
+  std::vector<Bone> bones{{.name = "x", .joint = 0, .child = 1, .a = {0, 0, 0}, .b = {1, 0, 0}, .radius = 0.3},
+                          {.name = "y", .joint = 0, .child = 2, .a = {0, 0, 0}, .b = {0, 1, 0}, .radius = 0.3}};
+  Eigen::Matrix3Xd X(3, 4);
+  X.col(0) = Eigen::Vector3d(0.5, 0.1, 0);   // inside x only
+  X.col(1) = Eigen::Vector3d(0.1, 0.2, 0);   // inside both: 0.2 from x, 0.1 from y, so deeper in y
+  X.col(2) = Eigen::Vector3d(0.05, 0.6, 0);  // inside y only
+  X.col(3) = Eigen::Vector3d(0.5, 0.5, 0);   // in neither
+  const Binding b = bind_to_bones(bones, X);
+  EXPECT_EQ(b.vertex, (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(b.bone, (std::vector<int>{0, 1, 1}));
+  EXPECT_EQ(b.count_per_bone(2), (std::vector<int>{1, 2}));
+  X.col(1) = Eigen::Vector3d(0.2, 0.05, 0);  // 0.05 from x, 0.2 from y
+  const Binding c = bind_to_bones(bones, X);
+  EXPECT_EQ(c.bone[1], 0);
+}
+
+}  // namespace
+}  // namespace snh
