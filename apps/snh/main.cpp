@@ -7,6 +7,7 @@
 
 #include "../common/command_line.hpp"
 #include "../common/omp_env.hpp"
+#include "flesh_command.hpp"
 #include "lab_command.hpp"
 #include "material_command.hpp"
 #include "mesh_commands.hpp"
@@ -28,6 +29,7 @@ int main(int argc, char** argv) {
   snh::cli::add_material_command(app, exit_code);
   snh::cli::add_stretch_command(app, exit_code);
   snh::cli::add_run_command(app, exit_code);
+  snh::cli::add_flesh_command(app, exit_code);
   snh::cli::add_lab_command(app, exit_code);
   snh::cli::add_mesh_commands(app, exit_code);
   snh::cli::add_report_commands(app, exit_code);

@@ -91,6 +91,7 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
   auto write_frame = [&](int index, const ElasticTerm::Deformation& d) {
     try {
       frames.write(index, index * plan.frame_duration, sim.x(), d);
+      if (plan.write_frame) plan.write_frame(index, index * plan.frame_duration, sim.x());
     } catch (const WriteError& e) {
       throw WriteError(fmt::format("{} {}: {} ({}stats.json and checkpoint.bin are kept: --resume continues once the "
                                    "output can be written)",

@@ -50,6 +50,9 @@ struct RunPlan {
   /// Fills the table's own fields of a record (energies) from the state reached; `report` is null for
   /// the initial state.
   std::function<void(StepRecord&, const StepReport* report)> fill;
+  /// Writes a frame's own files besides NNN.obj and NNN.vtu (a flesh run's render surfaces), from the state
+  /// reached; a WriteError is reported as the frame's.
+  std::function<void(int index, double time, const Eigen::VectorXd& x)> write_frame;
   /// The log line of a completed frame (without newline).
   std::function<std::string(const StepRecord&)> line;
   /// The live progress text at a Newton iteration.

@@ -67,13 +67,13 @@ bool holds_a_run_of_ours(const fs::path& dir) {
 }  // namespace
 
 int clear_previous_run(const fs::path& dir, const RunDirectoryLock& lock) {
-  static const std::regex ours(R"((?:\d{3,}\.(?:obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html))"
+  static const std::regex ours(R"((?:\d{3,}\.(?:obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html|flesh\.usda|bones\.json))"
                                R"((?:\.tmp\.\d+)?|\.snh-write-test\.\d+)");
   std::vector<fs::path> doomed;
   std::error_code ec;
   for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
     const std::string name = e.path().filename().string();
-    if (name == "report" && e.is_directory(ec)) doomed.push_back(e.path());
+    if ((name == "report" || name == "surface" || name == "lbs") && e.is_directory(ec)) doomed.push_back(e.path());
     else if (std::regex_match(name, ours) && !e.is_directory(ec)) doomed.push_back(e.path());
   }
   if (ec) throw WriteError(fmt::format("cannot list {}: {}", dir.string(), ec.message()));

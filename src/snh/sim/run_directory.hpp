@@ -27,7 +27,8 @@ class RunDirectoryLock {
 };
 
 /// Removes what a previous run of ours left in dir: NNN.obj and NNN.vtu frames, frames.pvd, stats.json,
-/// stats.csv, checkpoint.bin, index.html, the report/ directory and temporaries of interrupted writes.
+/// stats.csv, checkpoint.bin, index.html, the report/ directory, a flesh run's surface/ and lbs/ directories
+/// flesh.usda and bones.json, and temporaries of interrupted writes.
 /// Other files stay. Files with those names in a directory that shows no run of ours (no lock file found
 /// by `lock`, no checkpoint, no stats.json or lab.json naming snh's version) are someone else's: WriteError,
 /// naming one, and nothing is removed. Returns the number of entries removed. Throws WriteError if one

@@ -8,8 +8,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "snh/io/atomic_file.hpp"
 #include "snh/io/checksum.hpp"
 #include "snh/io/mesh_read.hpp"
+#include "snh/io/obj.hpp"
+#include "snh/io/surface_read.hpp"
+#include "snh/io/usda.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/sim/driver.hpp"
 #include "snh/sim/scene/sections.hpp"
@@ -27,9 +31,15 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
   Scene s;
   s.source = source;
   scene::Keys top(j, "", source.string());
+  s.flesh = scene::parse_flesh(top, source);
   s.mesh = scene::parse_mesh(top, source);
   s.material = scene::parse_material(top);
   s.time = scene::parse_time(top);
+  if (s.flesh) {  // the paper's defaults for flesh: quasi-static, nu = 0.488, density of water
+    if (!top.has("integrator")) s.time.integrator = Integrator::quasi_static;
+    if (!top.has("material")) s.material.params = lame_from_youngs(FleshSpec::youngs, FleshSpec::poisson);
+    if (!top.has("density")) s.material.density = FleshSpec::density;
+  }
   s.forces = scene::parse_forces(top);
   s.pins = scene::parse_pins(top, s.time.end_time);
   s.initial = scene::parse_initial(top);
@@ -38,8 +48,28 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
   top.finish();
   s.settings = j.dump();  // object keys sorted: the same text for the same scene
 
-  // The mesh, read once; the pins must select something on it and hold each coordinate once.
-  s.loaded = scene_mesh(s);
+  // The mesh, read once (a flesh scene's: its volume and bones; the animation's length is the run's when
+  // the scene gives none); the pins must select something on it and hold each coordinate once.
+  try {
+    s.loaded = scene_mesh(s);
+  } catch (const RigError& e) {
+    throw SceneError(e.what());
+  } catch (const MeshError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(e.what());
+  }
+  if (s.loaded->flesh) {
+    // Newton's stopping rule at the flesh's own scale (unless the scene sets one): a force of 1e-6 of what a
+    // unit strain puts on a cell's face (E h²), or a step under 1e-4 of a cell.
+    const double h = s.loaded->flesh->cell_size, E = youngs_modulus(s.material.params);
+    const json* solver = j.contains("solver") ? &j.at("solver") : nullptr;
+    if (!solver || !solver->contains("tolerance")) s.solver.newton.tolerance = 1e-6 * E * h * h;
+    if (!solver || !solver->contains("step_tolerance")) s.solver.newton.step_tolerance = 1e-4 * h;
+    const double duration = s.loaded->flesh->clip.duration();
+    if (!top.has("end_time") && duration > 0.0) s.time.end_time = duration;
+    if (!top.has("frames")) s.time.frames = std::max(1, static_cast<int>(std::lround(s.time.end_time * FleshSpec::fps)));
+  }
   const Eigen::VectorXd x0 = initial_positions(s, s.loaded->mesh);
   try {
     (void)kinematic_dof_flags(scene_kinematics(s, s.loaded->mesh, x0), s.loaded->mesh.vertex_count());
@@ -67,6 +97,13 @@ Scene load_scene(const std::filesystem::path& file) {
 std::shared_ptr<const SceneMesh> scene_mesh(const Scene& s) {
   if (s.loaded) return s.loaded;
   auto out = std::make_shared<SceneMesh>();
+  if (s.flesh) {
+    auto flesh = std::make_shared<Flesh>(build_flesh(*s.flesh, s.source.string()));
+    out->mesh = flesh->volume;
+    out->digest = file_digest(s.flesh->model);
+    out->flesh = std::move(flesh);
+    return out;
+  }
   const MeshSpec& m = s.mesh;
   if (!m.file.empty()) {
     MeshFile f = read_mesh(m.file);
@@ -144,8 +181,103 @@ std::vector<KinematicSet> scene_kinematics(const Scene& s, const VolumeMesh& mes
     set.provider = std::make_shared<ScriptedMotion>(X0(Eigen::all, set.vertices), s.pins[i].motions);
     sets.push_back(std::move(set));
   }
+  if (const std::shared_ptr<const Flesh> flesh = scene_mesh(s)->flesh) sets.push_back(bone_kinematics(flesh));
   return sets;
 }
+
+namespace {
+
+std::string frame_name(int index) { return fmt::format("{:03d}.obj", index); }
+
+/// A flesh run's own output: its settings and header lines, the render surface's volumes in the records,
+/// surface/NNN.obj and lbs/NNN.obj every frame, and flesh.usda at the end (from the frames on disk, so that
+/// a resumed run's stage holds them all).
+void add_flesh_output(const Flesh& flesh, const Scene& s, const Simulation& sim, RunPlan& plan) {
+  const FleshSpec& spec = *s.flesh;
+  const RiggedModel& m = flesh.model;
+  plan.table = &flesh_table();
+  json bones = json::array();
+  for (std::size_t b = 0; b < flesh.bones.size(); ++b)
+    bones.push_back({{"name", flesh.bones[b].name}, {"radius", flesh.bones[b].radius}, {"bound", flesh.bound_per_bone[b]}});
+  plan.settings["model"] = spec.model.string();
+  plan.settings["volume"] = spec.volume == FleshVolume::lattice ? "lattice" : "tets";
+  plan.settings["resolution"] = spec.resolution;
+  plan.settings["animation"] = flesh.clip.name;
+  plan.settings["model_vertices"] = m.vertices.cols();
+  plan.settings["model_triangles"] = m.triangles.cols();
+  plan.settings["joints"] = m.skeleton.size();
+  plan.settings["bound_vertices"] = flesh.binding.vertex.size();
+  plan.settings["volume_of_cells"] = flesh.volume_of_cells;
+  plan.settings["surface_volume"] = flesh.surface_volume;
+  plan.settings["bones"] = bones;
+  const double rest_surface = surface_volume(flesh, m.vertices);
+
+  const auto base_header = plan.header;
+  plan.header = [&flesh, &spec, base_header](std::ostream& o) {
+    const RiggedModel& m = flesh.model;
+    o << fmt::format("model {}: {} vertices ({} welded), {} triangles, {} joints (hierarchy from the {}), animation \"{}\" "
+                     "of {:g} s\n",
+                     m.source.string(), m.vertices.cols(), m.surface_vertices.cols(), m.triangles.cols(), m.skeleton.size(),
+                     m.hierarchy == "names" ? "joint names" : "file", flesh.clip.name, flesh.clip.duration());
+    o << fmt::format("volume: {} at resolution {} ({} {:.4g} wide): {} cells, {} vertices; volume {:.6g} against the surface's "
+                     "{:.6g} ({:.3f}x)\n",
+                     spec.volume == FleshVolume::lattice ? "hexahedral lattice" : "tets (TetGen)", spec.resolution,
+                     spec.volume == FleshVolume::lattice ? "cubes" : "tets no larger than a sixth of a cube",
+                     flesh.cell_size, flesh.volume.cell_count(), flesh.volume.vertex_count(), flesh.volume_of_cells,
+                     flesh.surface_volume, flesh.volume_of_cells / flesh.surface_volume);
+    std::string counts;
+    for (std::size_t b = 0; b < flesh.bones.size(); ++b)
+      counts += fmt::format("{}{} {}", b ? ", " : "", flesh.bones[b].name, flesh.bound_per_bone[b]);
+    o << fmt::format("bones: {} binding {} volume vertices ({})\n", flesh.bones.size(), flesh.binding.vertex.size(), counts);
+    for (std::size_t b = 0; b < flesh.bones.size(); ++b)
+      if (flesh.bound_per_bone[b] == 0)
+        o << fmt::format("warning: bone {} binds no volume vertex (capsule radius {:.4g}; cells {:.4g} wide)\n", flesh.bones[b].name,
+                         flesh.bones[b].radius, flesh.cell_size);
+    if (base_header) base_header(o);
+  };
+  const auto base_fill = plan.fill;
+  plan.fill = [&flesh, &sim, rest_surface, base_fill](StepRecord& r, const StepReport* rep) {
+    if (base_fill) base_fill(r, rep);
+    r.surface_volume_ratio = surface_volume(flesh, flesh_surface(flesh, sim.x())) / rest_surface;
+    r.lbs_volume_ratio = surface_volume(flesh, skinned_surface(flesh, r.time)) / rest_surface;
+  };
+  const std::filesystem::path out = plan.out;
+  plan.write_frame = [&flesh, out](int index, double time, const Eigen::VectorXd& x) {
+    ensure_writable_directory(out / "surface");
+    ensure_writable_directory(out / "lbs");
+    write_obj(out / "surface" / frame_name(index), flesh_surface(flesh, x), flesh.model.triangles);
+    write_obj(out / "lbs" / frame_name(index), skinned_surface(flesh, time), flesh.model.triangles);
+  };
+  const double fps = s.time.frames / s.time.end_time;
+  plan.finish = [&flesh, out, fps](json& stats) {
+    std::vector<UsdMesh> meshes{{.name = "flesh", .triangles = flesh.model.triangles, .frames = {}},
+                                {.name = "linear_blend_skinning", .triangles = flesh.model.triangles, .frames = {}}};
+    for (int i = 0; std::filesystem::exists(out / "surface" / frame_name(i)) && std::filesystem::exists(out / "lbs" / frame_name(i)); ++i) {
+      meshes[0].frames.push_back(read_surface(out / "surface" / frame_name(i)).vertices);
+      meshes[1].frames.push_back(read_surface(out / "lbs" / frame_name(i)).vertices);
+    }
+    if (meshes[0].frames.empty()) return;
+    write_usda(out / "flesh.usda", "character", meshes, fps);
+    stats["usd"] = "flesh.usda";
+    // The bones at every frame written, for the report: segment ends in world space.
+    json names = json::array(), frames = json::array();
+    for (const Bone& b : flesh.bones) names.push_back(b.name);
+    for (std::size_t i = 0; i < meshes[0].frames.size(); ++i) {
+      const double t = static_cast<double>(i) / fps;
+      const std::vector<Eigen::Affine3d> world = joint_world(flesh, t);
+      json segments = json::array();
+      for (const Bone& b : flesh.bones) {
+        const Eigen::Vector3d a = world[b.joint] * (flesh.rest_world[b.joint].inverse() * b.a);
+        const Eigen::Vector3d c = world[b.joint] * (flesh.rest_world[b.joint].inverse() * b.b);
+        segments.push_back({a[0], a[1], a[2], c[0], c[1], c[2]});
+      }
+      frames.push_back({{"time", t}, {"segments", segments}});
+    }
+    write_atomically(out / "bones.json", [&](std::ostream& o) { o << json{{"bones", names}, {"frames", frames}}.dump() << "\n"; });
+  };
+}
+
+}  // namespace
 
 SceneResult run_scene(const Scene& s, std::ostream& log) {
   if (s.output.dir.empty()) throw SceneError(fmt::format("{}: no output directory", s.source.string()));
@@ -257,6 +389,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
                        r.all_converged ? "finished" : "STOPPED: " + r.failure, r.total_seconds, r.peak_memory_mib,
                        s.output.dir.string());
   };
+
+  if (const std::shared_ptr<const Flesh> flesh = loaded->flesh) add_flesh_output(*flesh, s, sim, plan);
 
   RunResult run = run_simulation(sim, plan, log);
   result.frames = std::move(run.records);

@@ -3,8 +3,9 @@
 // scripted motion and an initial deformation, run by `snh run SCENE.json`. The format is in the README
 // ("Scene files"); every key is checked, and an unknown key or a bad value is an error that names it.
 // A Scene is made of sections, each with its own parser (sim/scene/*.cpp) and its defaults in its struct,
-// so a Scene built in code and one read from JSON mean the same; a section for contact (issue 16) and one
-// for a rig (issue 12) go beside them.
+// so a Scene built in code and one read from JSON mean the same; a section for contact (issue 16) goes
+// beside them. A scene with a "flesh" section (flesh.hpp) takes its volume from a rigged model and its
+// bones as a kinematic set, and writes the render surface (flesh and skinned) per frame and a USD stage.
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "snh/material/lame.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/volume_mesh.hpp"
+#include "snh/sim/flesh.hpp"
 #include "snh/sim/kinematics.hpp"
 #include "snh/sim/run_directory.hpp"
 #include "snh/sim/simulation.hpp"
@@ -138,12 +140,14 @@ struct SceneMesh {
   VolumeMesh mesh;
   int reoriented = 0;      ///< inverted cells of the file turned round
   std::string digest;      ///< the file's contents (checksum.hpp); empty for a box
+  std::shared_ptr<const Flesh> flesh;  ///< a flesh scene's model, volume, embedding and bones
 };
 
 struct Scene {
   std::filesystem::path source;  ///< the file, for messages and stats
   std::string settings;          ///< the parsed file, canonical (checkpoint fingerprint); empty if built in code
   MeshSpec mesh;
+  std::optional<FleshSpec> flesh;  ///< "flesh": the volume of a rigged model, its bones driving it (instead of "mesh")
   MaterialSpec material;
   TimeSpec time;
   ForceSpec forces;
@@ -170,7 +174,7 @@ struct Scene {
 [[nodiscard]] std::vector<int> select_vertices(const Selection& s, const Eigen::Matrix3Xd& X, const std::string& where);
 /// The initial positions: the rest positions with scene.initial applied (3 #V).
 [[nodiscard]] Eigen::VectorXd initial_positions(const Scene& scene, const VolumeMesh& mesh);
-/// The pins as kinematic sets on this mesh, their motions starting from `x0` (3 #V).
+/// The pins as kinematic sets on this mesh, their motions starting from `x0` (3 #V), and a flesh scene's bones.
 [[nodiscard]] std::vector<KinematicSet> scene_kinematics(const Scene& scene, const VolumeMesh& mesh, const Eigen::VectorXd& x0);
 
 using FrameStats = StepRecord;

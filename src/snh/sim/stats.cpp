@@ -91,6 +91,18 @@ const RecordTable& scene_table() {
   return table;
 }
 
+const RecordTable& flesh_table() {
+  static const RecordTable table = [] {
+    RecordTable t = scene_table();
+    t.fields.insert(t.fields.end() - 1, {{"surface_volume_ratio", &R::surface_volume_ratio, "{:.9g}", "flesh", "render_volume"},
+                                         {"lbs_volume_ratio", &R::lbs_volume_ratio, "{:.9g}", "linear blend skinning",
+                                          "render_volume"}});
+    t.plots.push_back({"render_volume", "Volume inside the render surface (posed / rest)", "ratio"});
+    return t;
+  }();
+  return table;
+}
+
 const RecordTable* table_for(std::string_view records) {
   for (const RecordTable* t : {&stretch_table(), &scene_table()})
     if (records == t->records) return t;

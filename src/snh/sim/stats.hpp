@@ -28,6 +28,8 @@ struct StepRecord {
   double min_J = 1.0;           ///< smallest det F over all quadrature points
   int inverted = 0;             ///< elements with det F ≤ 0 somewhere
   double volume_ratio = 1.0;    ///< deformed / rest volume
+  double surface_volume_ratio = 1.0;  ///< flesh: the volume inside the embedded render surface / at rest
+  double lbs_volume_ratio = 1.0;      ///< flesh: the same for the surface posed by linear blend skinning
   std::vector<double> residuals;  ///< ‖g‖ at each Newton iteration of every substep
   std::string failure;
 };
@@ -66,6 +68,9 @@ struct RecordTable {
 [[nodiscard]] const RecordTable& stretch_table();
 /// A scene's frames (snh run).
 [[nodiscard]] const RecordTable& scene_table();
+/// A flesh scene's frames (snh flesh, snh run with "flesh"): a scene's, with the render surface's volume
+/// for the simulated flesh and for linear blend skinning.
+[[nodiscard]] const RecordTable& flesh_table();
 /// The table whose `records` array is `name`; nullptr if none.
 [[nodiscard]] const RecordTable* table_for(std::string_view records);
 

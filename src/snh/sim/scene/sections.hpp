@@ -2,6 +2,7 @@
 // The scene's section parsers (internal to sim/), one file each: every one reads its keys from the
 // top-level object (or its own sub-object) and starts from its struct's defaults.
 #include <filesystem>
+#include <optional>
 #include <vector>
 
 #include "snh/sim/scene.hpp"
@@ -11,6 +12,8 @@ namespace snh::scene {
 
 /// "mesh": {"box": {...}} or {"file": "..."} (relative to the scene file's directory).
 [[nodiscard]] MeshSpec parse_mesh(Keys& top, const std::filesystem::path& source);
+/// "flesh": a rigged model (relative to the scene file's directory), its volume, animation and bone radii.
+[[nodiscard]] std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& source);
 /// "material" and "density".
 [[nodiscard]] MaterialSpec parse_material(Keys& top);
 /// "integrator", "dt", "end_time", "frames".

@@ -1,0 +1,109 @@
+#include "flesh_command.hpp"
+
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <omp.h>
+#include <unistd.h>
+
+#include "../common/command_line.hpp"
+#include "../common/run_report.hpp"
+#include "parameter_options.hpp"
+#include "snh/sim/interrupt.hpp"
+#include "snh/sim/scene.hpp"
+
+namespace snh::cli {
+
+void add_flesh_command(CLI::App& app, int& exit_code) {
+  struct Options {
+    std::string model, animation, volume = "lattice", material = "stable_neo_hookean", out, solver = "cholmod";
+    int resolution = FleshSpec{}.resolution;
+    ParameterOptions params;
+    bool quasi_static = false, dynamic = false, resume = false, no_report = false;
+    double fps = FleshSpec::fps;
+    int threads = 0;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "flesh",
+      "Skeleton-driven flesh (the paper's Figure 1 workflow): fills a rigged glTF model's closed surface with a hexahedral "
+      "lattice or tets, binds the volume vertices inside each bone's capsule to the bone, plays the model's animation "
+      "clip and solves the rest of the flesh (quasi-static by default, stable_neo_hookean, nu = 0.488). Writes the render "
+      "surface per frame (surface/NNN.obj) beside the same surface posed by linear blend skinning (lbs/NNN.obj), the "
+      "volume (NNN.vtu, frames.pvd), flesh.usda, stats.json and the report. A model without a clip runs from a scene "
+      "file instead (snh run, with keyframes: see scenes/hand_fist.json). Exit code 0 when every frame converged, 1 "
+      "when the run stopped early, 2 for bad input.");
+  cmd->add_option("model", o->model, "Rigged model (.glb, or .gltf with external or embedded buffers)")->required();
+  cmd->add_option("--animation", o->animation, "The clip to play, by name or 0-based index (default: the first)");
+  cmd->add_option("--volume", o->volume, "lattice (default: hexahedra, as the paper's Figure 1) or tets (TetGen)")
+      ->check(CLI::IsMember({"lattice", "tets"}));
+  cmd->add_option("--resolution", o->resolution, "Cubes along the model's longest side (tets: of that size; default 16)")
+      ->check(CLI::Range(1, 1000));
+  cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
+  add_parameter_options(cmd, o->params);
+  auto* qs = cmd->add_flag("--quasi-static", o->quasi_static, "Quasi-static frames (the default, as the paper)");
+  cmd->add_flag("--dynamic", o->dynamic, "Backward Euler with gravity -9.81 y instead (density 1000)")->excludes(qs);
+  cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(CLI::PositiveNumber);
+  cmd->add_option("--out", o->out, "Output directory (default output/<model name>)");
+  cmd->add_option("--solver", o->solver, "Linear solver (default cholmod; see snh stretch --help)");
+  cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
+  cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
+  cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
+  cmd->callback([o, cmd, &exit_code]() {
+    // The options become a scene, checked by the same parser as a scene file.
+    nlohmann::json j;
+    j["flesh"] = {{"model", o->model}, {"volume", o->volume}, {"resolution", o->resolution}};
+    if (!o->animation.empty()) j["flesh"]["animation"] = o->animation;
+    nlohmann::json material = {{"name", o->material}};
+    if (cmd->count("--youngs") || cmd->count("--poisson")) {
+      const Lame p = o->params.lame();  // checks that they go together
+      (void)p;
+      material["youngs"] = o->params.youngs;
+      material["poisson"] = o->params.poisson;
+    } else if (cmd->count("--mu") || cmd->count("--lambda")) {
+      if (!cmd->count("--mu") || !cmd->count("--lambda")) throw ParameterError("--mu and --lambda go together for snh flesh");
+      material["mu"] = o->params.mu;
+      material["lambda"] = o->params.lambda;
+    } else {
+      const Lame p = lame_from_youngs(FleshSpec::youngs, FleshSpec::poisson);
+      material["mu"] = p.mu;
+      material["lambda"] = p.lambda;
+    }
+    material["reparametrize"] = o->params.reparametrize;
+    j["material"] = material;
+    if (o->dynamic) {
+      j["integrator"] = "backward_euler";
+      j["gravity"] = {0.0, -9.81, 0.0};
+      j["dt"] = 1.0 / o->fps;
+    } else {
+      j["integrator"] = "quasi_static";
+    }
+    j["solver"] = {{"linear", o->solver}};
+    j["output"] = {{"dir", o->out.empty() ? "output/" + std::filesystem::path(o->model).stem().string() : o->out}};
+    // The clip's length decides the frames: parse once to read it, then again with the frame count.
+    Scene scene = parse_scene(j, "snh flesh");
+    const double duration = scene.loaded->flesh->clip.duration();
+    if (!(duration > 0.0))
+      throw SceneError(fmt::format("{}: animation \"{}\" has no length (a single key): nothing to play", o->model,
+                                   scene.loaded->flesh->clip.name));
+    scene.time.end_time = duration;
+    scene.time.frames = std::max(1, static_cast<int>(std::lround(duration * o->fps)));
+    j["end_time"] = scene.time.end_time;
+    j["frames"] = scene.time.frames;
+    scene.settings = j.dump();
+    scene.source = o->model;
+    scene.run.resume = o->resume;
+    scene.run.command_line = invocation();
+    scene.run.live_progress = ::isatty(STDOUT_FILENO) != 0;
+    if (o->threads > 0) omp_set_num_threads(o->threads);
+    install_stop_handlers();
+    scene.run.lock = std::make_shared<RunDirectoryLock>(scene.output.dir);
+    const SceneResult r = run_scene(scene, std::cout);
+    if (!o->no_report) (void)write_run_report(scene.output.dir, "snh");
+    exit_code = r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;
+  });
+}
+
+}  // namespace snh::cli

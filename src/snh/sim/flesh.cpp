@@ -1,0 +1,167 @@
+#include "snh/sim/flesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "snh/embed/lattice.hpp"
+#include "snh/embed/winding_number.hpp"
+#include "snh/io/surface_read.hpp"
+#include "snh/mesh/surface.hpp"
+#include "snh/rig/skinning.hpp"
+
+namespace snh {
+namespace {
+
+/// The joint of this name, or RigError naming the model and a few of its joints.
+int joint_named(const RiggedModel& model, const std::string& name, const std::string& where) {
+  const int j = model.skeleton.find(name);
+  if (j >= 0) return j;
+  std::string known;
+  for (int k = 0; k < model.skeleton.size() && k < 6; ++k) known += (k ? ", " : "") + model.skeleton.joints[k].name;
+  if (model.skeleton.size() > 6) known += ", ...";
+  throw RigError(fmt::format("{}: the model {} has no joint \"{}\" (its joints: {})", where, model.source.string(), name, known));
+}
+
+Clip choose_clip(const FleshSpec& spec, const RiggedModel& model, const std::string& where) {
+  if (!spec.animation.empty() && !spec.keyframes.empty())
+    throw std::invalid_argument(fmt::format("{}: give an animation clip or keyframes, not both", where));
+  if (!spec.animation.empty()) return find_clip(model, spec.animation);
+  if (!spec.keyframes.empty()) {
+    std::vector<JointKeys> keys;
+    for (const KeyframeSpec& k : spec.keyframes)
+      for (const std::string& name : k.joints)
+        keys.push_back({.joint = joint_named(model, name, where), .times = k.times, .rotations = k.rotations});
+    for (std::size_t a = 0; a < keys.size(); ++a)
+      for (std::size_t b = a + 1; b < keys.size(); ++b)
+        if (keys[a].joint == keys[b].joint)
+          throw std::invalid_argument(fmt::format("{}: joint \"{}\" is keyframed twice", where,
+                                                  model.skeleton.joints[keys[a].joint].name));
+    return clip_from_keys("keyframes", model.skeleton, keys);
+  }
+  if (!model.clips.empty()) return model.clips.front();
+  throw RigError(fmt::format("{}: the model {} has no animation clip: give keyframes (a scene's flesh.keyframes)", where,
+                             model.source.string()));
+}
+
+/// Σ of the tets' volumes (det/6).
+double tet_volume(const VolumeMesh& m) {
+  double sum = 0.0;
+  for (Eigen::Index c = 0; c < m.cell_count(); ++c) {
+    const Eigen::Vector3d x0 = m.vertices.col(m.cells(0, c));
+    Eigen::Matrix3d D;
+    for (int k = 0; k < 3; ++k) D.col(k) = m.vertices.col(m.cells(k + 1, c)) - x0;
+    sum += D.determinant() / 6.0;
+  }
+  return sum;
+}
+
+/// The bound vertices' positions in their joints' rest frames; targets are the joints' current frames of them.
+class BoneMotion final : public KinematicProvider {
+ public:
+  explicit BoneMotion(std::shared_ptr<const Flesh> flesh) : flesh_(std::move(flesh)) {
+    const Binding& b = flesh_->binding;
+    joint_.resize(b.vertex.size());
+    local_.resize(3, static_cast<Eigen::Index>(b.vertex.size()));
+    for (std::size_t i = 0; i < b.vertex.size(); ++i) {
+      const int j = flesh_->bones[b.bone[i]].joint;
+      joint_[i] = j;
+      local_.col(static_cast<Eigen::Index>(i)) = flesh_->rest_world[j].inverse() * flesh_->volume.vertices.col(b.vertex[i]);
+    }
+  }
+  void targets(double t, Eigen::Matrix3Xd& out) const override {
+    const std::vector<Eigen::Affine3d> world = joint_world(*flesh_, t);
+    out.resize(3, local_.cols());
+    for (Eigen::Index i = 0; i < local_.cols(); ++i) out.col(i) = world[joint_[i]] * local_.col(i);
+  }
+
+ private:
+  std::shared_ptr<const Flesh> flesh_;
+  std::vector<int> joint_;
+  Eigen::Matrix3Xd local_;
+};
+
+}  // namespace
+
+Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
+  Flesh f;
+  f.model = read_gltf(spec.model);
+  const RiggedModel& m = f.model;
+  const EdgeCounts edges = edge_counts(m.surface_triangles);
+  if (edges.open > 0 || edges.non_manifold > 0)
+    throw RigError(fmt::format("{}: the surface (welded by position) is not closed: {} open and {} non-manifold edges of {}; "
+                               "a volume needs a closed surface",
+                               m.source.string(), edges.open, edges.non_manifold, edges.edges));
+  if (spec.resolution < 1) throw std::invalid_argument(fmt::format("{}: resolution {} must be at least 1", where, spec.resolution));
+  f.clip = choose_clip(spec, m, where);
+  f.rest_world = m.skeleton.world(m.skeleton.rest_pose());
+  f.surface_volume = enclosed_volume(m.surface_vertices, m.surface_triangles);
+  if (!(f.surface_volume > 0.0))
+    throw RigError(fmt::format("{}: the surface encloses no volume ({:g}): are its triangles turned inside out?",
+                               m.source.string(), f.surface_volume));
+
+  if (spec.volume == FleshVolume::lattice) {
+    const Lattice lattice = lattice_for_surface(m.surface_vertices, m.surface_triangles, spec.resolution);
+    f.volume = lattice.mesh;
+    f.cell_size = lattice.spacing;
+    f.volume_of_cells = static_cast<double>(f.volume.cell_count()) * std::pow(lattice.spacing, 3);
+    f.embedding = embed_in_lattice(lattice, m.vertices);
+  } else {
+    const Eigen::Vector3d extent = m.surface_vertices.rowwise().maxCoeff() - m.surface_vertices.rowwise().minCoeff();
+    f.cell_size = extent.maxCoeff() / spec.resolution;
+    // No tet larger than a sixth of a cube of the lattice's size (the five or six tets a cube splits into).
+    MeshFile tets = tetrahedralize(SurfaceMesh{m.surface_vertices, m.surface_triangles}, spec.model,
+                                   std::pow(f.cell_size, 3) / 6.0);
+    f.volume = std::move(tets.mesh);
+    f.volume_of_cells = tet_volume(f.volume);
+    f.embedding = embed_in_tets(f.volume, m.vertices);
+  }
+
+  f.bones = bones_of(m.skeleton, f.rest_world);
+  const std::vector<double> radii = default_radii(f.bones, m.surface_vertices);
+  f.radius_given.assign(f.bones.size(), false);
+  for (std::size_t b = 0; b < f.bones.size(); ++b) f.bones[b].radius = radii[b];
+  for (const BoneRadius& r : spec.radii) {
+    const int j = joint_named(m, r.joint, where);
+    if (!(r.radius > 0.0) || !std::isfinite(r.radius))
+      throw std::invalid_argument(fmt::format("{}: bone radius of \"{}\" must be a positive number, got {:g}", where, r.joint, r.radius));
+    for (std::size_t b = 0; b < f.bones.size(); ++b)
+      if (f.bones[b].joint == j) f.bones[b].radius = r.radius, f.radius_given[b] = true;
+  }
+  f.binding = bind_to_bones(f.bones, f.volume.vertices);
+  f.bound_per_bone = f.binding.count_per_bone(static_cast<int>(f.bones.size()));
+  for (std::size_t b = 0; b < f.bones.size(); ++b)
+    if (f.radius_given[b] && f.bound_per_bone[b] == 0)
+      throw std::invalid_argument(fmt::format("{}: bone {} binds no volume vertex with the radius {:g} given for it (cells are "
+                                              "{:.3g} wide: raise the radius or the resolution)",
+                                              where, f.bones[b].name, f.bones[b].radius, f.cell_size));
+  if (f.binding.vertex.empty())
+    throw std::invalid_argument(fmt::format("{}: no volume vertex lies inside a bone's capsule (cells are {:.3g} wide): raise the "
+                                            "resolution or set bone radii",
+                                            where, f.cell_size));
+  return f;
+}
+
+KinematicSet bone_kinematics(std::shared_ptr<const Flesh> flesh) {
+  KinematicSet set;
+  set.name = "bones";
+  set.vertices = flesh->binding.vertex;
+  set.provider = std::make_shared<BoneMotion>(std::move(flesh));
+  return set;
+}
+
+std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t) {
+  return flesh.model.skeleton.world(sample(flesh.clip, flesh.model.skeleton, t));
+}
+
+Eigen::Matrix3Xd flesh_surface(const Flesh& flesh, const Eigen::VectorXd& x) { return flesh.embedding.apply(x); }
+
+Eigen::Matrix3Xd skinned_surface(const Flesh& flesh, double t) { return skin_vertices(flesh.model, joint_world(flesh, t)); }
+
+double surface_volume(const Flesh& flesh, const Eigen::Matrix3Xd& positions) {
+  return enclosed_volume(positions, flesh.model.triangles);
+}
+
+}  // namespace snh

@@ -1,0 +1,87 @@
+#pragma once
+// Skeleton-driven flesh (DESIGN.md sim/; the paper's Figure 1 workflow): a rigged model's closed render
+// surface is filled with a volume (a hexahedral lattice or TetGen's tets), the volume vertices inside the
+// bones' capsules follow their bones exactly (a kinematic set whose targets come from the animation), the
+// rest of the flesh is solved, and the render surface, embedded in the volume, follows it. Linear blend
+// skinning of the same surface with the model's own weights is the comparison.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "snh/embed/embedding.hpp"
+#include "snh/mesh/volume_mesh.hpp"
+#include "snh/rig/animation.hpp"
+#include "snh/rig/bones.hpp"
+#include "snh/rig/gltf.hpp"
+#include "snh/sim/kinematics.hpp"
+
+namespace snh {
+
+enum class FleshVolume { lattice, tets };
+
+/// Keyframed rotations shared by one or more joints: at each time a rotation relative to the joint's rest
+/// rotation, about the joint's own axes (animation.hpp JointKeys), slerped between keys.
+struct KeyframeSpec {
+  std::vector<std::string> joints;
+  std::vector<double> times;                  ///< strictly increasing
+  std::vector<Eigen::Quaterniond> rotations;  ///< one per time
+};
+
+/// A capsule radius set by the user for every bone of a joint.
+struct BoneRadius {
+  std::string joint;
+  double radius = 0.0;
+};
+
+/// "flesh" in a scene file, or `snh flesh`'s options.
+struct FleshSpec {
+  std::filesystem::path model;               ///< .glb or .gltf (a scene's relative path resolved against it)
+  std::string animation;                     ///< the model's clip, by name or index; empty: `keyframes`, else clip 0
+  std::vector<KeyframeSpec> keyframes;
+  FleshVolume volume = FleshVolume::lattice;
+  int resolution = 16;                       ///< lattice cubes (tets: cube-sized tets) along the longest side
+  std::vector<BoneRadius> radii;
+  // Defaults of a flesh run (the paper's: nu = 0.488) where the scene or command gives none:
+  static constexpr double youngs = 1e5, poisson = 0.488;  ///< Pa; with quasi-static bones only nu matters
+  static constexpr double density = 1000.0;               ///< kg/m³ (dynamics)
+  static constexpr double fps = 24.0;                     ///< frames per second of animation
+};
+
+/// The flesh of a rigged model, ready to simulate.
+struct Flesh {
+  RiggedModel model;
+  Clip clip;                                 ///< the animation that drives the bones
+  std::vector<Eigen::Affine3d> rest_world;   ///< joints at rest
+  VolumeMesh volume;
+  double cell_size = 0.0;                    ///< the lattice's cube edge (tets: the edge of the cube whose volume bounds a tet)
+  double volume_of_cells = 0.0;              ///< the volume mesh's rest volume
+  double surface_volume = 0.0;               ///< enclosed by the render surface at rest
+  Embedding embedding;                       ///< the model's vertices (its order) in the volume
+  std::vector<Bone> bones;                   ///< with their capsule radii
+  std::vector<bool> radius_given;            ///< per bone: the user set its radius
+  Binding binding;                           ///< volume vertices that follow bones
+  std::vector<int> bound_per_bone;
+};
+
+/// Reads the model and builds its flesh. Throws RigError (bad model, a surface that is not closed: the open
+/// and non-manifold edge counts; a joint of the spec that the model lacks), MeshError (tetgen failed) or
+/// std::invalid_argument (a bone whose user-set radius binds nothing, nothing bound at all), one line each
+/// naming `where` (the scene file or the command).
+[[nodiscard]] Flesh build_flesh(const FleshSpec& spec, const std::string& where);
+
+/// The bones' kinematic set: the bound vertices, moved rigidly with their bones' joints by the clip.
+[[nodiscard]] KinematicSet bone_kinematics(std::shared_ptr<const Flesh> flesh);
+
+/// The joints' world transforms at time t of the clip.
+[[nodiscard]] std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t);
+/// The render surface (model order, 3 by #v) embedded in the volume at positions x (3 #V).
+[[nodiscard]] Eigen::Matrix3Xd flesh_surface(const Flesh& flesh, const Eigen::VectorXd& x);
+/// The render surface posed by linear blend skinning at time t (model order, 3 by #v).
+[[nodiscard]] Eigen::Matrix3Xd skinned_surface(const Flesh& flesh, double t);
+/// The volume enclosed by the render surface at these positions (model order).
+[[nodiscard]] double surface_volume(const Flesh& flesh, const Eigen::Matrix3Xd& positions);
+
+}  // namespace snh

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# snh flesh end to end on the procedural limb (tests/data/flesh/limb.gltf: a cylinder whose elbow bends 90°
+# in its clip): the render surface per frame for flesh and skinning, the USD stage parsed by the .usda
+# grammar, stats and report; and bad models refused in one line with exit code 2, nothing written.
+# Usage: test_flesh.sh SNH DATA_DIR (tests/data) MODELS_DIR (data)
+set -u
+SNH="$1" DATA="$2" MODELS="$3"
+HERE="$(cd "$(dirname "$0")" && pwd)"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+pass=0 fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+limb="$DATA/flesh/limb.gltf"
+
+# The clip is 1 s: 24 frames at the default 24 fps, frame 0 the rest pose.
+if "$SNH" flesh "$limb" --resolution 12 --out "$work/limb" > "$work/limb.log" 2>&1; then ok; else bad "limb: $(tail -3 "$work/limb.log")"; fi
+grep -q '^model .*limb.gltf: .* 3 joints' "$work/limb.log" && ok || bad "limb: header names the model"
+grep -q '^bones: 3 binding' "$work/limb.log" && ok || bad "limb: bound vertices per bone printed"
+[ -f "$work/limb/surface/024.obj" ] && [ -f "$work/limb/lbs/024.obj" ] && [ ! -f "$work/limb/surface/025.obj" ] && [ -f "$work/limb/024.vtu" ] \
+  && ok || bad "limb: surface/, lbs/ and .vtu frames 0-24"
+[ "$(grep -c '^v ' "$work/limb/surface/012.obj")" -eq "$(grep -c '^v ' "$work/limb/lbs/012.obj")" ] && ok || bad "limb: flesh and LBS surfaces alike"
+python3 "$HERE/check_usda.py" "$work/limb/flesh.usda" 2 25 > "$work/usda.log" 2>&1 && ok || bad "limb: flesh.usda: $(cat "$work/usda.log")"
+grep -q '"surface_volume_ratio"' "$work/limb/stats.json" && grep -q '"lbs_volume_ratio"' "$work/limb/stats.json" \
+  && grep -q '"all_converged": true' "$work/limb/stats.json" && ok || bad "limb: stats.json"
+[ -f "$work/limb/index.html" ] && [ -f "$work/limb/bones.json" ] && ok || bad "limb: report and bones.json"
+# The grammar check is a real one: a broken stage fails it.
+sed 's/point3f\[\] points.timeSamples = {/point3f[] points.timeSamples = /' "$work/limb/flesh.usda" > "$work/broken.usda"
+python3 "$HERE/check_usda.py" "$work/broken.usda" > /dev/null 2>&1 && bad "check_usda accepts a broken stage" || ok
+# Tets, and a second run into the same directory replacing the first.
+"$SNH" flesh "$limb" --volume tets --resolution 10 --out "$work/limb" --no-report > "$work/tets.log" 2>&1 && grep -q 'tets (TetGen)' "$work/tets.log" \
+  && [ ! -f "$work/limb/index.html" ] && [ -f "$work/limb/surface/024.obj" ] && ok || bad "limb tets: $(tail -2 "$work/tets.log")"
+
+# Bad input: one line, exit code 2, no output directory.
+expect_error() {  # NAME PATTERN ARGS...
+  local name="$1" pattern="$2"
+  shift 2
+  out="$("$SNH" flesh "$@" --out "$work/bad_$name" 2>&1)"; code=$?
+  [ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -q -- "$pattern" && [ ! -e "$work/bad_$name" ] \
+    && ok || bad "$name (exit $code): $out"
+}
+mkdir -p "$work/dir.glb"
+head -c 30000 "$MODELS/hand/left.glb" > "$work/cut.glb"
+printf 'solid nothing\n' > "$work/text.gltf"
+expect_error directory "dir.glb" "$work/dir.glb"
+expect_error truncated "cut.glb" "$work/cut.glb"
+expect_error not_gltf "text.gltf" "$work/text.gltf"
+expect_error missing "missing.glb" "$work/missing.glb"
+expect_error no_clip "no animation clip" "$MODELS/hand/left.glb"
+expect_error clip_name 'no animation clip "wave"' "$limb" --animation wave
+expect_error lame "go together" "$limb" --mu 1
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]

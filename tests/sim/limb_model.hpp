@@ -1,0 +1,112 @@
+#pragma once
+// A procedural rigged limb for the flesh tests: a closed cylinder along x (from 0 to 2, radius r) with three
+// joints in a chain, shoulder (x = 0) → elbow (x = 1) → tip (x = 2), skinned with weights that blend from
+// the shoulder to the elbow over [1 − blend, 1 + blend], and a clip that bends the elbow by `degrees` about z
+// over one second. Written as a .gltf with its buffer embedded (a base64 data: URI).
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "snh/io/base64.hpp"
+
+namespace snh::test {
+
+struct LimbOptions {
+  double radius = 0.3;
+  int around = 16, along = 24;  ///< vertices per ring, rings
+  double blend = 0.2;           ///< half-width of the skinning blend at the elbow
+  double degrees = 90.0;
+  bool caps = true;             ///< false: the cylinder's ends stay open (not a solid)
+};
+
+inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions& o = {}) {
+  std::vector<float> pos, weights;
+  std::vector<std::uint16_t> joints;
+  std::vector<std::uint32_t> idx;
+  auto vertex = [&](double x, double y, double z) {
+    pos.insert(pos.end(), {float(x), float(y), float(z)});
+    const double s = std::clamp((x - (1.0 - o.blend)) / (2.0 * o.blend), 0.0, 1.0);  // elbow's share
+    joints.insert(joints.end(), {0, 1, 0, 0});
+    weights.insert(weights.end(), {float(1.0 - s), float(s), 0.0f, 0.0f});
+    return static_cast<std::uint32_t>(pos.size() / 3 - 1);
+  };
+  for (int i = 0; i < o.along; ++i) {
+    const double x = 2.0 * i / (o.along - 1);
+    for (int k = 0; k < o.around; ++k) {
+      const double a = 2.0 * std::numbers::pi * k / o.around;
+      vertex(x, o.radius * std::cos(a), o.radius * std::sin(a));
+    }
+  }
+  const std::uint32_t c0 = vertex(0, 0, 0), c1 = vertex(2, 0, 0);
+  auto ring = [&](int i, int k) { return static_cast<std::uint32_t>(i * o.around + (k % o.around)); };
+  for (int i = 0; i + 1 < o.along; ++i)
+    for (int k = 0; k < o.around; ++k)  // outward: counter-clockwise seen from outside
+      idx.insert(idx.end(), {ring(i, k), ring(i, k + 1), ring(i + 1, k + 1), ring(i, k), ring(i + 1, k + 1), ring(i + 1, k)});
+  for (int k = 0; k < o.around && o.caps; ++k) {
+    idx.insert(idx.end(), {c0, ring(0, k + 1), ring(0, k)});
+    idx.insert(idx.end(), {c1, ring(o.along - 1, k), ring(o.along - 1, k + 1)});
+  }
+  // Inverse bind matrices (column-major): translations by −x of each joint.
+  std::vector<float> ibm;
+  for (double x : {0.0, 1.0, 2.0}) {
+    const float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, float(-x), 0, 0, 1};
+    ibm.insert(ibm.end(), m, m + 16);
+  }
+  const double half = 0.5 * o.degrees * std::numbers::pi / 180.0;
+  const std::vector<float> times{0.0f, 1.0f}, rotations{0, 0, 0, 1, 0, 0, float(std::sin(half)), float(std::cos(half))};
+
+  std::string bin;
+  nlohmann::json views = nlohmann::json::array(), accessors = nlohmann::json::array();
+  auto add = [&](const void* data, std::size_t bytes, int component, std::size_t count, const char* type, int target) {
+    while (bin.size() % 4) bin.push_back('\0');
+    nlohmann::json view = {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}};
+    if (target) view["target"] = target;
+    bin.append(static_cast<const char*>(data), bytes);
+    views.push_back(view);
+    accessors.push_back({{"bufferView", views.size() - 1}, {"componentType", component}, {"count", count}, {"type", type}});
+    return static_cast<int>(accessors.size() - 1);
+  };
+  const int a_pos = add(pos.data(), pos.size() * 4, 5126, pos.size() / 3, "VEC3", 34962);
+  accessors[a_pos]["min"] = {0.0, -o.radius, -o.radius};
+  accessors[a_pos]["max"] = {2.0, o.radius, o.radius};
+  const int a_joints = add(joints.data(), joints.size() * 2, 5123, joints.size() / 4, "VEC4", 34962);
+  const int a_weights = add(weights.data(), weights.size() * 4, 5126, weights.size() / 4, "VEC4", 34962);
+  const int a_idx = add(idx.data(), idx.size() * 4, 5125, idx.size(), "SCALAR", 34963);
+  const int a_ibm = add(ibm.data(), ibm.size() * 4, 5126, 3, "MAT4", 0);
+  const int a_t = add(times.data(), times.size() * 4, 5126, 2, "SCALAR", 0);
+  accessors[a_t]["min"] = {0.0};
+  accessors[a_t]["max"] = {1.0};
+  const int a_r = add(rotations.data(), rotations.size() * 4, 5126, 2, "VEC4", 0);
+
+  nlohmann::json g;
+  g["asset"] = {{"version", "2.0"}};
+  g["scene"] = 0;
+  g["scenes"] = nlohmann::json::array({nlohmann::json{{"nodes", {0, 1}}}});
+  g["nodes"] = nlohmann::json::array({nlohmann::json{{"name", "limb"}, {"mesh", 0}, {"skin", 0}},
+                                      nlohmann::json{{"name", "shoulder"}, {"children", {2}}},
+                                      nlohmann::json{{"name", "elbow"}, {"translation", {1.0, 0.0, 0.0}}, {"children", {3}}},
+                                      nlohmann::json{{"name", "tip"}, {"translation", {1.0, 0.0, 0.0}}}});
+  nlohmann::json primitive = {{"attributes", {{"POSITION", a_pos}, {"JOINTS_0", a_joints}, {"WEIGHTS_0", a_weights}}},
+                               {"indices", a_idx}};
+  g["meshes"] = nlohmann::json::array({nlohmann::json{{"primitives", nlohmann::json::array({primitive})}}});
+  g["skins"] = nlohmann::json::array({nlohmann::json{{"joints", {1, 2, 3}}, {"inverseBindMatrices", a_ibm}}});
+  nlohmann::json channel = {{"sampler", 0}, {"target", {{"node", 2}, {"path", "rotation"}}}};
+  nlohmann::json sampler = {{"input", a_t}, {"output", a_r}, {"interpolation", "LINEAR"}};
+  g["animations"] = nlohmann::json::array({nlohmann::json{{"name", "bend"},
+                                                          {"channels", nlohmann::json::array({channel})},
+                                                          {"samplers", nlohmann::json::array({sampler})}}});
+  g["bufferViews"] = views;
+  g["accessors"] = accessors;
+  g["buffers"] = nlohmann::json::array(
+      {nlohmann::json{{"byteLength", bin.size()},
+                      {"uri", "data:application/octet-stream;base64," + base64_encode(bin.data(), bin.size())}}});
+  std::ofstream(path) << g.dump();
+}
+
+}  // namespace snh::test
