@@ -1,5 +1,5 @@
 # Thin wrapper over the CMake presets. The two commands the README names first:
-#   make demo   installs what is missing, builds, and runs the main job (the thesis' tetcli example) and the bunny scene,
+#   make demo   installs what is missing, builds, and runs the main job (the thesis' tetcli example), the bunny scene and the hand fist,
 #               each with its browser report (index.html)
 #   make test   installs what is missing, builds, and runs every test
 PRESET ?= release
@@ -22,10 +22,13 @@ build: configure
 demo: build
 	$(BUILD)/apps/tetcli 10 stable_neo_hookean 1.0 10.0 output
 	$(BUILD)/apps/snh run scenes/bunny_squash.json --out output/bunny_squash
+	$(BUILD)/apps/snh run scenes/hand_fist.json --out output/hand_fist
 	@echo "demo output: $(CURDIR)/output (the stretch test: frames 000.obj ... 025.obj, 000.vtu ... 025.vtu + frames.pvd for ParaView, stats.json, stats.csv)"
 	@echo "             $(CURDIR)/output/bunny_squash (the bunny squashed and released: the same files)"
+	@echo "             $(CURDIR)/output/hand_fist (the hand's flesh closing into a fist: surface/ and lbs/ OBJ frames, flesh.usda)"
 	@echo "open in a browser: $(CURDIR)/output/index.html"
 	@echo "                   $(CURDIR)/output/bunny_squash/index.html"
+	@echo "                   $(CURDIR)/output/hand_fist/index.html"
 
 test: build
 	ctest --preset $(PRESET)

@@ -30,7 +30,7 @@ void add_report_commands(CLI::App& app, int& exit_code) {
   });
 
   struct RenderArgs {
-    std::string dir, out, field, browser;
+    std::string dir, out, field, browser, show;
     int frame = -1, width = 1200, height = 900;
     bool wireframe = false;
   };
@@ -46,12 +46,17 @@ void add_report_commands(CLI::App& app, int& exit_code) {
   render->add_option("--width", r->width, "Picture width in pixels (default 1200)");
   render->add_option("--height", r->height, "Picture height in pixels (default 900)");
   render->add_flag("--wireframe", r->wireframe, "Draw the triangle edges");
+  render->add_option("--show", r->show,
+                     "A flesh run: the render surface simulated as flesh (default), posed by linear blend skinning "
+                     "(lbs), or the volume with its colours")
+      ->check(CLI::IsMember({"flesh", "lbs", "volume"}));
   render->add_option("--browser", r->browser, "Chromium or Chrome binary (default: $SNH_CHROMIUM, else chromium on PATH)");
   render->callback([r, &exit_code]() {
     RenderOptions o;
     o.frame = r->frame;
     o.field = r->field;
     o.wireframe = r->wireframe;
+    o.show = r->show;
     o.width = r->width;
     o.height = r->height;
     o.out = r->out;

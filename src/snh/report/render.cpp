@@ -183,8 +183,12 @@ void render_png(const fs::path& dir, const RenderOptions& o) {
     throw ReportError(fmt::format("{}: the directory does not exist", out.parent_path().string()));
 
   TempDir tmp;
-  const std::string url = fmt::format("{}#render&frame={}&field={}{}", file_url(fs::absolute(dir / "index.html")), frame,
-                                      field, o.wireframe ? "&wireframe=1" : "");
+  if (!o.show.empty() && (o.show != "flesh" && o.show != "lbs" && o.show != "volume"))
+    throw ReportError(fmt::format("--show {}: expected flesh, lbs or volume", o.show));
+  if (!o.show.empty() && (!data.contains("render") || data.at("render").is_null()))
+    throw ReportError(fmt::format("--show {}: {} is not a flesh run (it has no render surface)", o.show, dir.string()));
+  const std::string url = fmt::format("{}#render&frame={}&field={}{}{}", file_url(fs::absolute(dir / "index.html")), frame,
+                                      field, o.wireframe ? "&wireframe=1" : "", o.show.empty() ? "" : "&show=" + o.show);
   const std::vector<std::string> common = {
       "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--disable-quic", "--no-first-run",
       "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-extensions",

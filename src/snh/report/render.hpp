@@ -13,6 +13,7 @@ struct RenderOptions {
   int frame = -1;            ///< the frame (−1: the last)
   std::string field;         ///< the field colouring the surface ("": the report's default, J)
   bool wireframe = false;    ///< draw the triangle edges
+  std::string show;          ///< a flesh run: "flesh", "lbs" or "volume" ("": the report's default, flesh)
   int width = 1200, height = 900;  ///< picture size in pixels
   std::filesystem::path out;       ///< the PNG to write
   std::string browser;       ///< Chromium's path ("": $SNH_CHROMIUM, else chromium or google-chrome on PATH)
