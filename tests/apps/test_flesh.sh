@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # snh flesh end to end on the procedural limb (tests/data/flesh/limb.gltf: a cylinder whose elbow bends 90°
 # in its clip): the render surface per frame for flesh and skinning, the USD stage parsed by the .usda
-# grammar, stats and report; and bad models refused in one line with exit code 2, nothing written.
+# grammar, stats and report; the hand fist's volumes; and bad models refused in one line with exit code 2,
+# nothing written.
 # Usage: test_flesh.sh SNH DATA_DIR (tests/data) MODELS_DIR (data)
 set -u
 SNH="$1" DATA="$2" MODELS="$3"
@@ -30,6 +31,19 @@ python3 "$HERE/check_usda.py" "$work/broken.usda" > /dev/null 2>&1 && bad "check
 # Tets, and a second run into the same directory replacing the first.
 "$SNH" flesh "$limb" --volume tets --resolution 10 --out "$work/limb" --no-report > "$work/tets.log" 2>&1 && grep -q 'tets (TetGen)' "$work/tets.log" \
   && [ ! -f "$work/limb/index.html" ] && [ -f "$work/limb/surface/024.obj" ] && ok || bad "limb tets: $(tail -2 "$work/tets.log")"
+
+# The hand closing into a fist (scenes/hand_fist.json): every frame converges and the flesh keeps the volume
+# inside its render surface within 3 % at every frame, while skinning loses more.
+if "$SNH" run "$HERE/../../scenes/hand_fist.json" --out "$work/fist" --no-report > "$work/fist.log" 2>&1; then ok; else bad "hand_fist: $(tail -2 "$work/fist.log")"; fi
+python3 - "$work/fist/stats.json" <<'PY' && ok || bad "hand_fist: volumes"
+import json, sys
+s = json.load(open(sys.argv[1]))
+flesh = min(f["surface_volume_ratio"] for f in s["frames"])
+lbs = min(f["lbs_volume_ratio"] for f in s["frames"])
+ok = s["all_converged"] and len(s["frames"]) == 37 and flesh > 0.97 and lbs < flesh
+print(f"hand_fist: smallest volume flesh {flesh:.4f}, skinning {lbs:.4f}")
+sys.exit(0 if ok else 1)
+PY
 
 # Bad input: one line, exit code 2, no output directory.
 expect_error() {  # NAME PATTERN ARGS...
