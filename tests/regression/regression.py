@@ -43,7 +43,7 @@ for _scene in SCENES:
 
 # Fields of stats.json / lab.json that differ between identical runs, or name paths.
 VARYING = {"wall_seconds", "assembly_seconds", "solve_seconds", "total_seconds", "peak_memory_mib", "command_line",
-           "scene", "mesh_file"}
+           "scene", "mesh_file", "model"}
 CSV_VARYING = {"wall_seconds", "assembly_seconds", "solve_seconds"}
 # Compared only on a machine like the recording one: counts that a last-bit difference may change.
 COUNTS = {"newton_iterations", "line_search_steps", "linear_iterations", "factorizations", "true_hessian_steps",
