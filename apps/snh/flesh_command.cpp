@@ -1,17 +1,15 @@
 #include "flesh_command.hpp"
 
-#include <iostream>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
 #include <memory>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <omp.h>
-#include <unistd.h>
 
-#include "../common/command_line.hpp"
-#include "../common/run_report.hpp"
 #include "parameter_options.hpp"
-#include "snh/sim/interrupt.hpp"
+#include "run_command.hpp"
 #include "snh/sim/scene.hpp"
 
 namespace snh::cli {
@@ -58,8 +56,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     if (!o->animation.empty()) j["flesh"]["animation"] = o->animation;
     nlohmann::json material = {{"name", o->material}};
     if (cmd->count("--youngs") || cmd->count("--poisson")) {
-      const Lame p = o->params.lame();  // checks that they go together
-      (void)p;
+      (void)o->params.lame();  // checks that they go together
       material["youngs"] = o->params.youngs;
       material["poisson"] = o->params.poisson;
     } else if (cmd->count("--mu") || cmd->count("--lambda")) {
@@ -82,7 +79,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     }
     j["solver"] = {{"linear", o->solver}};
     j["output"] = {{"dir", o->out.empty() ? "output/" + std::filesystem::path(o->model).stem().string() : o->out}};
-    // The clip's length decides the frames: parse once to read it, then again with the frame count.
+    // The clip's length (known once the model is read) and --fps decide the frames.
     Scene scene = parse_scene(j, "snh flesh");
     const double duration = scene.loaded->flesh->clip.duration();
     if (!(duration > 0.0))
@@ -95,14 +92,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     scene.settings = j.dump();
     scene.source = o->model;
     scene.run.resume = o->resume;
-    scene.run.command_line = invocation();
-    scene.run.live_progress = ::isatty(STDOUT_FILENO) != 0;
-    if (o->threads > 0) omp_set_num_threads(o->threads);
-    install_stop_handlers();
-    scene.run.lock = std::make_shared<RunDirectoryLock>(scene.output.dir);
-    const SceneResult r = run_scene(scene, std::cout);
-    if (!o->no_report) (void)write_run_report(scene.output.dir, "snh");
-    exit_code = r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;
+    exit_code = run_scene_command(scene, o->threads, o->no_report);
   });
 }
 

@@ -35,16 +35,20 @@ void add_run_command(CLI::App& app, int& exit_code) {
     Scene scene = load_scene(o->scene);
     if (!o->out.empty()) scene.output.dir = o->out;
     scene.run.resume = o->resume;
-    scene.run.command_line = invocation();
-    scene.run.live_progress = ::isatty(STDOUT_FILENO) != 0;
-    if (o->threads > 0) omp_set_num_threads(o->threads);
-    install_stop_handlers();
-    // The directory stays locked until the report is written: no other run can start there meanwhile.
-    scene.run.lock = std::make_shared<RunDirectoryLock>(scene.output.dir);
-    const SceneResult r = run_scene(scene, std::cout);
-    if (!o->no_report) (void)write_run_report(scene.output.dir, "snh");
-    exit_code = r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;
+    exit_code = run_scene_command(scene, o->threads, o->no_report);
   });
+}
+
+int run_scene_command(Scene& scene, int threads, bool no_report) {
+  scene.run.command_line = invocation();
+  scene.run.live_progress = ::isatty(STDOUT_FILENO) != 0;
+  if (threads > 0) omp_set_num_threads(threads);
+  install_stop_handlers();
+  // The directory stays locked until the report is written: no other run can start there meanwhile.
+  scene.run.lock = std::make_shared<RunDirectoryLock>(scene.output.dir);
+  const SceneResult r = run_scene(scene, std::cout);
+  if (!no_report) (void)write_run_report(scene.output.dir, "snh");
+  return r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;
 }
 
 }  // namespace snh::cli

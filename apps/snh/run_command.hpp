@@ -2,8 +2,15 @@
 // `snh run SCENE.json`: runs a scene file (dynamics or quasi-static, pins, initial deformation).
 #include <CLI/CLI.hpp>
 
+#include "snh/sim/scene.hpp"
+
 namespace snh::cli {
 
 void add_run_command(CLI::App& app, int& exit_code);
+
+/// Runs a scene from the command line (snh run, snh flesh): its command line and live progress set, the
+/// threads, Ctrl-C handled, the output directory locked until the report (unless `no_report`) is written.
+/// Returns the exit code: 0 when every frame converged, 1 when the run stopped early, 128 + the signal.
+[[nodiscard]] int run_scene_command(Scene& scene, int threads, bool no_report);
 
 }  // namespace snh::cli

@@ -7,25 +7,6 @@
 #include <fmt/format.h>
 
 namespace snh {
-namespace {
-
-/// The signed rest volume of cell `c`: a tet's exactly; a hex's from the trilinear map's Jacobian at
-/// its centre (lattice corner order), exact for parallelepipeds.
-double cell_volume(const VolumeMesh& m, Eigen::Index c) {
-  const auto X = [&](int a) -> Eigen::Vector3d { return m.vertices.col(m.cells(a, c)); };
-  if (m.type == CellType::tet4) {
-    Eigen::Matrix3d D;
-    D << X(1) - X(0), X(2) - X(0), X(3) - X(0);
-    return D.determinant() / 6.0;
-  }
-  Eigen::Matrix3d J;  // the Jacobian at the centre times 8
-  J.col(0) = 0.25 * (X(1) - X(0) + X(3) - X(2) + X(5) - X(4) + X(7) - X(6));
-  J.col(1) = 0.25 * (X(2) - X(0) + X(3) - X(1) + X(6) - X(4) + X(7) - X(5));
-  J.col(2) = 0.25 * (X(4) - X(0) + X(5) - X(1) + X(6) - X(2) + X(7) - X(3));
-  return J.determinant();
-}
-
-}  // namespace
 
 void check_mesh(MeshFile& m, const std::filesystem::path& file) {
   VolumeMesh& mesh = m.mesh;

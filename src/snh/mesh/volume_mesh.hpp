@@ -23,4 +23,10 @@ struct VolumeMesh {
   [[nodiscard]] Eigen::Index cell_count() const { return cells.cols(); }
 };
 
+/// The signed rest volume of cell `c`: a tet's exactly; a hex's from the trilinear map's Jacobian at its
+/// centre (corner order above), exact for parallelepipeds.
+[[nodiscard]] double cell_volume(const VolumeMesh& m, Eigen::Index c);
+/// Σ cell_volume over the cells, in cell order.
+[[nodiscard]] double mesh_volume(const VolumeMesh& m);
+
 }  // namespace snh

@@ -46,18 +46,6 @@ Clip choose_clip(const FleshSpec& spec, const RiggedModel& model, const std::str
                              model.source.string()));
 }
 
-/// Σ of the tets' volumes (det/6).
-double tet_volume(const VolumeMesh& m) {
-  double sum = 0.0;
-  for (Eigen::Index c = 0; c < m.cell_count(); ++c) {
-    const Eigen::Vector3d x0 = m.vertices.col(m.cells(0, c));
-    Eigen::Matrix3d D;
-    for (int k = 0; k < 3; ++k) D.col(k) = m.vertices.col(m.cells(k + 1, c)) - x0;
-    sum += D.determinant() / 6.0;
-  }
-  return sum;
-}
-
 /// The bound vertices' positions in their joints' rest frames; targets are the joints' current frames of them.
 class BoneMotion final : public KinematicProvider {
  public:
@@ -115,25 +103,25 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     MeshFile tets = tetrahedralize(SurfaceMesh{m.surface_vertices, m.surface_triangles}, spec.model,
                                    std::pow(f.cell_size, 3) / 6.0);
     f.volume = std::move(tets.mesh);
-    f.volume_of_cells = tet_volume(f.volume);
+    f.volume_of_cells = mesh_volume(f.volume);
     f.embedding = embed_in_tets(f.volume, m.vertices);
   }
 
   f.bones = bones_of(m.skeleton, f.rest_world);
   const std::vector<double> radii = default_radii(f.bones, m.surface_vertices);
-  f.radius_given.assign(f.bones.size(), false);
+  std::vector<bool> radius_given(f.bones.size(), false);
   for (std::size_t b = 0; b < f.bones.size(); ++b) f.bones[b].radius = radii[b];
   for (const BoneRadius& r : spec.radii) {
     const int j = joint_named(m, r.joint, where);
     if (!(r.radius > 0.0) || !std::isfinite(r.radius))
       throw std::invalid_argument(fmt::format("{}: bone radius of \"{}\" must be a positive number, got {:g}", where, r.joint, r.radius));
     for (std::size_t b = 0; b < f.bones.size(); ++b)
-      if (f.bones[b].joint == j) f.bones[b].radius = r.radius, f.radius_given[b] = true;
+      if (f.bones[b].joint == j) f.bones[b].radius = r.radius, radius_given[b] = true;
   }
   f.binding = bind_to_bones(f.bones, f.volume.vertices);
   f.bound_per_bone = f.binding.count_per_bone(static_cast<int>(f.bones.size()));
   for (std::size_t b = 0; b < f.bones.size(); ++b)
-    if (f.radius_given[b] && f.bound_per_bone[b] == 0)
+    if (radius_given[b] && f.bound_per_bone[b] == 0)
       throw std::invalid_argument(fmt::format("{}: bone {} binds no volume vertex with the radius {:g} given for it (cells are "
                                               "{:.3g} wide: raise the radius or the resolution)",
                                               where, f.bones[b].name, f.bones[b].radius, f.cell_size));

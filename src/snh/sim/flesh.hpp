@@ -61,7 +61,6 @@ struct Flesh {
   double surface_volume = 0.0;               ///< enclosed by the render surface at rest
   Embedding embedding;                       ///< the model's vertices (its order) in the volume
   std::vector<Bone> bones;                   ///< with their capsule radii
-  std::vector<bool> radius_given;            ///< per bone: the user set its radius
   Binding binding;                           ///< volume vertices that follow bones
   std::vector<int> bound_per_bone;
 };

@@ -25,6 +25,18 @@ using json = nlohmann::json;
 
 Eigen::Vector3d centre_of(const Eigen::Matrix3Xd& X) { return 0.5 * (X.rowwise().minCoeff() + X.rowwise().maxCoeff()); }
 
+/// f(), with a bad-input error from below (a rig, a kinematic set) turned into a SceneError of the same line.
+template <class F>
+auto as_scene_error(F&& f) {
+  try {
+    return f();
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(e.what());
+  }
+}
+
 }  // namespace
 
 Scene parse_scene(const json& j, const std::filesystem::path& source) {
@@ -50,15 +62,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
 
   // The mesh, read once (a flesh scene's: its volume and bones; the animation's length is the run's when
   // the scene gives none); the pins must select something on it and hold each coordinate once.
-  try {
-    s.loaded = scene_mesh(s);
-  } catch (const RigError& e) {
-    throw SceneError(e.what());
-  } catch (const MeshError&) {
-    throw;
-  } catch (const std::invalid_argument& e) {
-    throw SceneError(e.what());
-  }
+  s.loaded = as_scene_error([&] { return scene_mesh(s); });
   if (s.loaded->flesh) {
     // Newton's stopping rule at the flesh's own scale (unless the scene sets one): a force of 1e-6 of what a
     // unit strain puts on a cell's face (E h²), or a step under 1e-4 of a cell.
@@ -71,13 +75,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
     if (!top.has("frames")) s.time.frames = std::max(1, static_cast<int>(std::lround(s.time.end_time * FleshSpec::fps)));
   }
   const Eigen::VectorXd x0 = initial_positions(s, s.loaded->mesh);
-  try {
-    (void)kinematic_dof_flags(scene_kinematics(s, s.loaded->mesh, x0), s.loaded->mesh.vertex_count());
-  } catch (const SceneError&) {
-    throw;
-  } catch (const std::invalid_argument& e) {
-    throw SceneError(e.what());
-  }
+  (void)as_scene_error([&] { return kinematic_dof_flags(scene_kinematics(s, s.loaded->mesh, x0), s.loaded->mesh.vertex_count()); });
   return s;
 }
 
