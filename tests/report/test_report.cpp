@@ -273,7 +273,8 @@ TEST(RunReport, RewritingForFewerFramesRemovesStaleFrameFiles) {
   fs::remove_all(run.dir);
 }
 
-TEST(RunReport, SceneReportUsesTimeAndItsPins) {
+/// A 2x2x2 hex bar hanging from its top face under gravity, 4 frames to t = 0.2, into fresh_dir(name).
+Scene hanging_scene(const std::string& name, const std::string& command_line) {
   Scene s;
   s.mesh.element = CellType::hex8;
   s.mesh.resolution = 2;
@@ -283,8 +284,13 @@ TEST(RunReport, SceneReportUsesTimeAndItsPins) {
   PinSpec pin;
   pin.select.region = Eigen::AlignedBox3d(Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d(1, 1, 1));  // the top face
   s.pins.push_back(pin);
-  s.output.dir = fresh_dir("scene");
-  s.run.command_line = "snh run hanging.json";
+  s.output.dir = fresh_dir(name);
+  s.run.command_line = command_line;
+  return s;
+}
+
+TEST(RunReport, SceneReportUsesTimeAndItsPins) {
+  const Scene s = hanging_scene("scene", "snh run hanging.json");
   std::ostringstream log;
   const SceneResult r = run_scene(s, log);
   ASSERT_TRUE(r.all_converged);
@@ -317,17 +323,8 @@ struct FleshRun {
 
 FleshRun flesh_run(const std::string& name) {
   FleshRun f;
-  Scene s;
-  s.mesh.element = CellType::hex8;
-  s.mesh.resolution = 2;
-  s.time.end_time = 0.2;
-  s.time.frames = 4;
-  s.forces.gravity = Eigen::Vector3d(0, -9.8, 0);
-  PinSpec pin;
-  pin.select.region = Eigen::AlignedBox3d(Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d(1, 1, 1));
-  s.pins.push_back(pin);
-  s.output.dir = f.dir = fresh_dir(name);
-  s.run.command_line = "snh flesh arm.glb";
+  const Scene s = hanging_scene(name, "snh flesh arm.glb");
+  f.dir = s.output.dir;
   std::ostringstream log;
   const SceneResult r = run_scene(s, log);
   EXPECT_TRUE(r.all_converged);
