@@ -156,6 +156,72 @@ TEST(Dynamics, DampingDissipatesFaster) {
   EXPECT_NEAR(b.frames.back().volume_ratio, 1.0, 1e-3);
 }
 
+/// A bar pinned at one end, falling under gravity (the hanging bar of scenes/, coarser).
+Scene falling_bar(double density, double youngs, double dt, int frames) {
+  Scene s;
+  s.source = "falling_bar";
+  s.mesh.element = CellType::hex8;
+  s.mesh.resolution = 3;
+  s.mesh.min = Eigen::Vector3d(0, -0.25, -0.25);
+  s.mesh.max = Eigen::Vector3d(2, 0.25, 0.25);
+  s.material.params = lame_from_youngs(youngs, 0.45);
+  s.material.density = density;
+  s.forces.gravity = Eigen::Vector3d(0, -9.81, 0);
+  PinSpec end;
+  end.select.region = Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, -1), Eigen::Vector3d(0, 1, 1));
+  s.pins.push_back(end);
+  s.time.dt = dt;
+  s.time.end_time = frames * 5 * dt;
+  s.time.frames = frames;
+  s.output.vtu = false;
+  return s;
+}
+
+int fewest_newton_iterations(const SceneResult& r) {
+  int fewest = 1 << 30;
+  for (std::size_t f = 1; f < r.frames.size(); ++f) fewest = std::min(fewest, r.frames[f].newton_iterations);
+  return fewest;
+}
+
+TEST(Dynamics, NewtonStopsAtTheSameStateInAnyUnits) {
+  // Density and Young's modulus scaled together leave the motion unchanged (E/rho is what counts): the
+  // scale-aware stopping rule must find the same positions. An absolute |g| < 1e-6 (the paper programs'
+  // rule, which scenes used) took the scaled-down bar for converged at rest: it never fell.
+  const SceneResult unit = run_quietly(falling_bar(1.0, 1000.0, 0.01, 4), "units_1");
+  ASSERT_TRUE(unit.all_converged) << unit.failure;
+  const double fall = (unit.final_positions - flatten(scene_mesh(falling_bar(1, 1000, 0.01, 4))->mesh.vertices)).cwiseAbs().maxCoeff();
+  EXPECT_GT(fall, 0.01);
+  for (double scale : {1e-6, 1e6}) {
+    const SceneResult r = run_quietly(falling_bar(scale, 1000.0 * scale, 0.01, 4), "units_scaled");
+    ASSERT_TRUE(r.all_converged) << scale << ": " << r.failure;
+    EXPECT_GE(fewest_newton_iterations(r), 1) << scale;
+    EXPECT_LT((r.final_positions - unit.final_positions).cwiseAbs().maxCoeff(), 1e-9 * fall) << scale;
+  }
+  Scene absolute = falling_bar(1e-6, 1e-3, 0.01, 4);
+  absolute.solver.newton.tolerance = 1e-6;
+  absolute.solver.newton.relative_step_tolerance = 0.0;
+  const SceneResult stuck = run_quietly(absolute, "units_absolute");
+  EXPECT_EQ(fewest_newton_iterations(stuck), 0) << "the absolute rule, asked for, is the user's";
+  EXPECT_GT((stuck.final_positions - unit.final_positions).cwiseAbs().maxCoeff(), 0.5 * fall);
+}
+
+TEST(Dynamics, TinyTimeStepsConvergeWhereRoundingBoundsTheResidual) {
+  // Water-dense soft flesh at dt = 1e-5: the inertia term's rounding keeps |g| near 1e-6, so an absolute
+  // |g| < 1e-6 failed after 50 Newton iterations. The relative step rule stops there, and a step rule on
+  // a fixed length would stop before the first step and lose gravity's h² g (1e-10 at dt = 1e-5): the
+  // bar must fall as backward Euler says, n(n+1)/2 h² g after n steps, while no wave has reached its end.
+  for (double dt : {1e-4, 1e-5, 1e-6, 1e-7}) {
+    const SceneResult r = run_quietly(falling_bar(1000.0, 1e5, dt, 3), "tiny_dt");
+    ASSERT_TRUE(r.all_converged) << dt << ": " << r.failure;
+    for (std::size_t f = 1; f < r.frames.size(); ++f) EXPECT_LE(r.frames[f].newton_iterations, 5 * 10) << dt;
+    const double n = 3 * 5, fall = 0.5 * n * (n + 1) * dt * dt * 9.81;
+    const Eigen::VectorXd X = flatten(scene_mesh(falling_bar(1000, 1e5, dt, 3))->mesh.vertices);
+    double drop = 0.0;  // the largest drop in y
+    for (Eigen::Index i = 1; i < X.size(); i += 3) drop = std::max(drop, X(i) - r.final_positions(i));
+    EXPECT_NEAR(drop, fall, 1e-3 * fall) << dt;
+  }
+}
+
 TEST(Dynamics, PinnedBarUnderGravitySettlesAtTheQuasiStaticSolution) {
   Scene s;
   s.source = "bar";

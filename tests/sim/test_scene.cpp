@@ -39,7 +39,12 @@ TEST(SceneFile, DefaultsAndAFullScene) {
   // The defaults live in the sections' structs: a scene built in code means what an empty file means.
   const Scene code;
   EXPECT_EQ(code.solver.newton.tolerance, d.solver.newton.tolerance);
-  EXPECT_EQ(code.solver.newton.tolerance, 1e-6);
+  EXPECT_EQ(code.solver.newton.tolerance, 0.0) << "scale-aware: no absolute rule unless given";
+  EXPECT_EQ(code.solver.force_fraction, d.solver.force_fraction);
+  EXPECT_EQ(code.solver.newton.relative_step_tolerance, d.solver.newton.relative_step_tolerance);
+  EXPECT_GT(d.solver.newton.relative_step_tolerance, 0.0);
+  // On the cube [-1, 1]³ of 64 hexes (l = 1/2) with E = 1e5: |g| < force_fraction E l².
+  EXPECT_DOUBLE_EQ(newton_options(d.solver, box_hexes(4), 1e5).tolerance, d.solver.force_fraction * 1e5 / 4);
   EXPECT_EQ(code.time.dt, d.time.dt);
   EXPECT_EQ(code.time.frames, d.time.frames);
   EXPECT_EQ(code.material.name, d.material.name);

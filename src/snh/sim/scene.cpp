@@ -37,7 +37,26 @@ auto as_scene_error(F&& f) {
   }
 }
 
+/// Newton's stopping rule in words, for the header line.
+std::string stopping_rule(const NewtonOptions& o) {
+  std::string rule;
+  if (o.tolerance > 0.0) rule = fmt::format("|g| < {:.3g}", o.tolerance);
+  if (o.step_tolerance > 0.0) rule += fmt::format("{}a step < {:.3g}", rule.empty() ? "" : " or ", o.step_tolerance);
+  if (o.relative_step_tolerance > 0.0)
+    rule += fmt::format("{}a step < {:.3g} of its motion", rule.empty() ? "" : " or ", o.relative_step_tolerance);
+  return "Newton stops at " + rule;
+}
+
 }  // namespace
+
+NewtonOptions newton_options(const SolverSpec& solver, const VolumeMesh& rest, double youngs) {
+  NewtonOptions o = solver.newton;
+  if (o.tolerance == 0.0 && solver.force_fraction > 0.0 && rest.cell_count() > 0) {
+    const double cell = std::cbrt(std::abs(mesh_volume(rest)) / static_cast<double>(rest.cell_count()));
+    o.tolerance = solver.force_fraction * youngs * cell * cell;
+  }
+  return o;
+}
 
 Scene parse_scene(const json& j, const std::filesystem::path& source) {
   Scene s;
@@ -300,7 +319,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   setup.initial = x0;
   setup.linear.name = s.solver.linear;
   setup.linear.reuse_factor = !s.solver.refactorize;
-  setup.newton = s.solver.newton;
+  setup.newton = newton_options(s.solver, mesh, youngs_modulus(s.material.params));
   Simulation sim(std::move(setup));
 
   SceneResult result;
@@ -328,7 +347,9 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   settings["mass_damping"] = s.forces.mass_damping;
   settings["stiffness_damping"] = s.forces.stiffness_damping;
   settings["solver"] = s.solver.linear;
-  settings["tolerance"] = s.solver.newton.tolerance;
+  settings["tolerance"] = sim.setup().newton.tolerance;
+  settings["step_tolerance"] = sim.setup().newton.step_tolerance;
+  settings["relative_step_tolerance"] = sim.setup().newton.relative_step_tolerance;
   settings["vertices"] = result.vertices;
   settings["cells"] = result.cells;
 
@@ -354,10 +375,11 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     o << fmt::format("snh run {}: {} {} ({} vertices), material {}, mu {:g}, lambda {:g}{}, density {:g}\n", s.source.string(),
                      mesh.cell_count(), cells, mesh.vertex_count(), s.material.name, s.material.params.mu,
                      s.material.params.lambda, s.material.reparametrize ? " (linear, reparametrized)" : "", s.material.density);
-    o << fmt::format("{}, {} frames to t = {:g}{}, gravity ({:g}, {:g}, {:g}), solver {}, output {}\n",
+    o << fmt::format("{}, {} frames to t = {:g}{}, gravity ({:g}, {:g}, {:g}), solver {} ({}), output {}\n",
                      dynamic ? "backward Euler" : "quasi-static", s.time.frames, s.time.end_time,
                      dynamic ? fmt::format(" ({} substeps of {:g} per frame)", substeps, h) : "", s.forces.gravity[0],
-                     s.forces.gravity[1], s.forces.gravity[2], s.solver.linear, s.output.dir.string());
+                     s.forces.gravity[1], s.forces.gravity[2], s.solver.linear, stopping_rule(sim.setup().newton),
+                     s.output.dir.string());
   };
   plan.fill = [&](StepRecord& f, const StepReport*) {
     const Eigen::VectorXd& x = sim.x();

@@ -111,14 +111,25 @@ using InitialOp = std::variant<ScaleOp, ReflectOp, CollapseOp, PerturbOp, MoveOp
 struct SolverSpec {
   std::string linear = "cholmod";  ///< a linear_solvers() name
   bool refactorize = false;
-  /// Dynamics resolves small forces (a perturbed, crushed mesh starts with forces near 1e-6): a stricter
-  /// tolerance than the stretch test's 1e-3.
+  /// Newton's stopping rule for scenes, scale-aware (the same for any units, density, stiffness or time
+  /// step): converged when ‖g‖ < force_fraction · E ℓ² (E ℓ²: the force a unit strain puts on a cell of
+  /// size ℓ, the cube root of the mean cell volume), or when the Newton step's largest entry is below
+  /// newton.relative_step_tolerance of how far the step's solve has moved the vertices, or below their
+  /// coordinates' rounding (IPC's and PolyFEM's rule on the step, relative: it stops where rounding keeps
+  /// ‖g‖ from falling, as with a tiny time step). A positive `newton.tolerance` (on ‖g‖, absolute: the
+  /// paper programs' rule) replaces the force fraction; `newton.step_tolerance` (a length) adds a step rule.
   NewtonOptions newton = [] {
     NewtonOptions o;
-    o.tolerance = 1e-6;
+    o.tolerance = 0.0;
+    o.relative_step_tolerance = 1e-8;
     return o;
   }();
+  double force_fraction = 1e-6;
 };
+
+/// The Newton options a scene's solver section means on its mesh and material (Young's modulus E): the
+/// force fraction turned into a force.
+[[nodiscard]] NewtonOptions newton_options(const SolverSpec& solver, const VolumeMesh& rest, double youngs);
 
 /// "output".
 struct OutputSpec {

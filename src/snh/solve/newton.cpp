@@ -3,6 +3,7 @@
 #include <chrono>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -12,9 +13,20 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+/// The step rules: d (free DOFs) below step_tolerance, or below relative_step_tolerance of how far x has
+/// moved from x0, or below the rounding of x's coordinates.
+bool step_is_small(const Eigen::VectorXd& d, const Eigen::VectorXd& x, const Eigen::VectorXd& x0, const NewtonOptions& o) {
+  const double step = d.lpNorm<Eigen::Infinity>();
+  if (o.step_tolerance > 0.0 && step < o.step_tolerance) return true;
+  if (!(o.relative_step_tolerance > 0.0)) return false;
+  const double rounding = 64.0 * std::numeric_limits<double>::epsilon() * x.lpNorm<Eigen::Infinity>();
+  return step <= std::max(o.relative_step_tolerance * (x - x0).lpNorm<Eigen::Infinity>(), rounding);
+}
+
 NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolver& solver,
                                const NewtonOptions& options) {
   NewtonReport report;
+  const Eigen::VectorXd x0 = options.relative_step_tolerance > 0.0 ? x : Eigen::VectorXd();
   Eigen::VectorXd g;
   HessianMatrix H;
   const bool try_true = options.try_true_hessian;
@@ -35,7 +47,7 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     report.residual = r;
     if (options.on_iteration) options.on_iteration(report.iterations, r);
     report.energy = E;
-    if (r * r < options.tolerance * options.tolerance) {
+    if (r * r < options.tolerance * options.tolerance || r == 0.0) {
       report.converged = true;
       return report;
     }
@@ -80,7 +92,7 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
       d = -g;
       slope = -g.squaredNorm();
     }
-    if (options.step_tolerance > 0.0 && d.lpNorm<Eigen::Infinity>() < options.step_tolerance) {
+    if (step_is_small(d, x, x0, options)) {
       report.converged = report.converged_by_step = true;
       return report;
     }

@@ -14,7 +14,9 @@
 // its rounding error, a full step that reduces ‖g‖ is accepted. Iterative linear solves may stop once
 // ‖Hd + g‖ is below a tenth of the tolerance, which cannot decide convergence. Optionally (step_tolerance
 // > 0) Newton also stops when the Newton step's largest entry is below step_tolerance (the criterion of
-// IPC and PolyFEM: scale-aware where an absolute ‖g‖ is not).
+// IPC and PolyFEM: scale-aware where an absolute ‖g‖ is not), or (relative_step_tolerance > 0) below
+// that fraction of how far the solve has moved x, or below the coordinates' rounding. A step rule stops
+// before taking that last step.
 #include <functional>
 #include <string>
 #include <vector>
@@ -30,6 +32,10 @@ struct NewtonOptions {
   int max_iterations = 50;        ///< the paper programs' limit
   double tolerance = 1e-3;        ///< on ‖g‖ (free DOFs)
   double step_tolerance = 0.0;    ///< > 0: also converged when ‖d‖∞ of the Newton step d is below this
+  /// > 0: also converged when ‖d‖∞ ≤ this · ‖x − x₀‖∞ (x₀ the starting iterate: relative to what Newton has
+  /// moved), or when d is below the rounding of the coordinates (64 ε ‖x‖∞): a step rule in units of the
+  /// solve's own motion, for any length or time scale.
+  double relative_step_tolerance = 0.0;
   PsdProjection projection = PsdProjection::clamp;
   bool try_true_hessian = true;   ///< first try the unprojected Hessian
   int max_halvings = 60;
