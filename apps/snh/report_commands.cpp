@@ -5,11 +5,35 @@
 
 #include <fmt/format.h>
 
+#include "snh/io/atomic_file.hpp"
 #include "snh/report/render.hpp"
 #include "snh/report/report.hpp"
 #include "snh/sim/interrupt.hpp"
 
 namespace snh::cli {
+namespace {
+
+/// Runs `work`, turning the failures that are not bad arguments into a line and an exit code: a stop
+/// signal 128 + the signal, the browser failing 1 (a failure at run time, as a step that does not
+/// converge), a file that cannot be written 3 (output). Bad arguments (ReportError) go on to main: 2.
+template <class Work>
+int exit_code_of(Work work) {
+  try {
+    work();
+    return 0;
+  } catch (const BrowserInterrupted& e) {
+    std::cerr << "snh: " << e.what() << "\n";
+    return 128 + e.signal;
+  } catch (const BrowserError& e) {
+    std::cerr << "snh: error: " << e.what() << "\n";
+    return 1;
+  } catch (const WriteError& e) {
+    std::cerr << "snh: error: " << e.what() << "\n";
+    return 3;
+  }
+}
+
+}  // namespace
 
 void add_report_commands(CLI::App& app, int& exit_code) {
   auto dir = std::make_shared<std::string>();
@@ -21,12 +45,13 @@ void add_report_commands(CLI::App& app, int& exit_code) {
       "--no-report.");
   report->add_option("dir", *dir, "The run's output directory")->required();
   report->callback([dir, &exit_code]() {
-    const ReportSummary s = write_report(*dir);
-    std::cout << fmt::format("{} report{}: {}\n", s.kind,
-                             s.kind == "lab" ? fmt::format(" (and {} simulations' reports)", s.runs)
-                                             : fmt::format(" ({} frames)", s.frames),
-                             std::filesystem::absolute(s.index).lexically_normal().string());
-    exit_code = 0;
+    exit_code = exit_code_of([&] {
+      const ReportSummary s = write_report(*dir);
+      std::cout << fmt::format("{} report{}: {}\n", s.kind,
+                               s.kind == "lab" ? fmt::format(" (and {} simulations' reports)", s.runs)
+                                               : fmt::format(" ({} frames)", s.frames),
+                               std::filesystem::absolute(s.index).lexically_normal().string());
+    });
   });
 
   struct RenderArgs {
@@ -62,15 +87,10 @@ void add_report_commands(CLI::App& app, int& exit_code) {
     o.out = r->out;
     o.browser = r->browser;
     install_stop_handlers();  // Ctrl-C stops the browser and removes what it left
-    try {
+    exit_code = exit_code_of([&] {
       render_png(r->dir, o);
-    } catch (const RenderInterrupted& e) {
-      std::cerr << "snh: " << e.what() << "\n";
-      exit_code = 128 + e.signal;
-      return;
-    }
-    std::cout << fmt::format("{} ({}x{})\n", r->out, o.width, o.height);
-    exit_code = 0;
+      std::cout << fmt::format("{} ({}x{})\n", r->out, o.width, o.height);
+    });
   });
 }
 

@@ -45,7 +45,11 @@ rm -rf "$work/quiet/report"
 out="$("$SNH" report "$work/quiet" 2>&1)"; code=$?
 [ "$code" -eq 0 ] && [ "$out" = "stretch report (3 frames): $work/quiet/index.html" ] && ok || bad "snh report (exit $code): $out"
 out="$("$SNH" report "$work/none" 2>&1)"; code=$?
-[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/none: no such directory" ] && ok || bad "report of a missing dir (exit $code): $out"
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/none: does not exist" ] && ok || bad "report of a missing dir (exit $code): $out"
+echo "not a run" > "$work/afile"
+out="$("$SNH" report "$work/afile" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/afile: is not a directory (the output directory of a run is expected)" ] \
+  && ok || bad "report of a file (exit $code): $out"
 mkdir -p "$work/empty"
 out="$("$SNH" report "$work/empty" 2>&1)"; code=$?
 [ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -q "no stats.json or lab.json here" \
@@ -55,14 +59,44 @@ out="$("$SNH" report "$work/broken" 2>&1)"; code=$?
 [ "$code" -eq 2 ] && [ "$out" = "snh: error: frame 1: $work/broken/001.vtu: cannot open the mesh file" ] \
   && ok || bad "report with a missing frame (exit $code): $out"
 
-# snh render: arguments checked before any browser starts; a clear error without a browser.
+# snh render: arguments checked before any browser starts (exit 2); a clear error without a browser.
 out="$("$SNH" render "$work/run" --frame 9 --out "$work/x.png" 2>&1)"; code=$?
 [ "$code" -eq 2 ] && [ "$out" = "snh: error: frame 9 does not exist: $work/run has frames 0 to 6" ] && ok || bad "render bad frame: $out"
 out="$("$SNH" render "$work/run" --field sigma --out "$work/x.png" 2>&1)"; code=$?
 [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "unknown field 'sigma' (this run has: J, psi, displacement)" && ok || bad "render bad field: $out"
+out="$("$SNH" render "$work/afile" --out "$work/x.png" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/afile: is not a directory (the output directory of a run is expected)" ] \
+  && ok || bad "render of a file (exit $code): $out"
+# --out must be a regular file (or a new one) in an existing directory: a directory, a FIFO or a device
+# there is refused, and left as it was.
+mkdir -p "$work/outdir"
+out="$("$SNH" render "$work/run" --out "$work/outdir" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/outdir: is a directory (--out takes the PNG file to write)" ] && [ -d "$work/outdir" ] \
+  && ok || bad "render --out a directory (exit $code): $out"
+mkfifo "$work/fifo"
+out="$("$SNH" render "$work/run" --out "$work/fifo" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/fifo: is not a regular file (a device, FIFO or socket): snh render only replaces regular files" ] \
+  && [ -p "$work/fifo" ] && ok || bad "render --out a FIFO (exit $code): $out"
+ln -s fifo "$work/fifo-link"
+out="$("$SNH" render "$work/run" --out "$work/fifo-link" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "fifo-link: is not a regular file" && [ -L "$work/fifo-link" ] \
+  && ok || bad "render --out a link to a FIFO (exit $code): $out"
+if mknod "$work/null" c 1 3 2> /dev/null; then
+  out="$("$SNH" render "$work/run" --out "$work/null" 2>&1)"; code=$?
+  [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "null: is not a regular file" && [ -c "$work/null" ] \
+    && ok || bad "render --out a device (exit $code): $out"
+fi
+out="$("$SNH" render "$work/run" --out "$work/nodir/x.png" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/nodir: the directory does not exist" ] && ok || bad "render --out in a missing dir (exit $code): $out"
+# A browser that is missing or fails is a failure at run time (exit 1), not a bad argument.
 out="$(PATH=/nonexistent SNH_CHROMIUM= "$SNH" render "$work/run" --out "$work/x.png" 2>&1)"; code=$?
-[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "snh render needs Chromium, and none was found on PATH: install the Debian package chromium" \
+[ "$code" -eq 1 ] && printf '%s' "$out" | grep -q "snh render needs Chromium, and none was found on PATH: install the Debian package chromium" \
   && [ ! -e "$work/x.png" ] && ok || bad "render without a browser (exit $code): $out"
+printf '#!/bin/sh\necho "no display here" >&2\nexit 5\n' > "$work/failing-browser"
+chmod +x "$work/failing-browser"
+out="$("$SNH" render "$work/run" --browser "$work/failing-browser" --out "$work/x.png" 2>&1)"; code=$?
+[ "$code" -eq 1 ] && [ "$out" = "snh: error: the browser $work/failing-browser ended (exit status 5) during Target.createTarget: no display here" ] \
+  && [ ! -e "$work/x.png" ] && ok || bad "render with a failing browser (exit $code): $out"
 
 # In the browser (Debian's chromium, Playwright from viewer/node_modules).
 if ! command -v chromium > /dev/null; then

@@ -7,7 +7,9 @@
 
 #include <unistd.h>
 
+#include <csignal>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -25,6 +27,7 @@
 #include "snh/mesh/box.hpp"
 #include "snh/report/render.hpp"
 #include "snh/report/report.hpp"
+#include "snh/sim/interrupt.hpp"
 #include "snh/sim/lab.hpp"
 #include "snh/sim/scene.hpp"
 #include "snh/sim/stretch.hpp"
@@ -547,7 +550,10 @@ TEST(RunReport, OneLineErrors) {
     }
     return std::string("no error");
   };
-  EXPECT_EQ(message(dir / "missing"), (dir / "missing").string() + ": no such directory");
+  EXPECT_EQ(message(dir / "missing"), (dir / "missing").string() + ": does not exist");
+  std::ofstream(dir / "a_file") << "x";
+  EXPECT_EQ(message(dir / "a_file"), (dir / "a_file").string() + ": is not a directory (the output directory of a run is expected)");
+  fs::remove(dir / "a_file");
   EXPECT_EQ(message(dir), dir.string() + ": no stats.json or lab.json here: not the output directory of an snh run");
   std::ofstream(dir / "stats.json") << "{\"steps\": [";
   EXPECT_NE(message(dir).find((dir / "stats.json").string() + ": not valid JSON"), std::string::npos);
@@ -629,6 +635,52 @@ TEST(Render, ChecksFrameFieldAndBrowserBeforeStartingIt) {
   EXPECT_EQ(message({.browser = "/nonexistent/chromium"}),
             "the browser /nonexistent/chromium cannot be run (from SNH_CHROMIUM or --browser)");
   EXPECT_FALSE(fs::exists(run.dir / "x.png"));
+  fs::remove_all(run.dir);
+}
+
+TEST(Render, ABrowserThatNeverAnswersIsKilledAtTheTimeoutAndLeavesNothing) {
+  StretchRun run = stretch_run(CellType::hex8, "render_hang");
+  const fs::path tmp = run.dir / "tmp", browser = run.dir / "silent-browser", pid_file = run.dir / "browser.pid";
+  fs::create_directories(tmp);
+  std::ofstream(browser) << "#!/bin/sh\necho $$ > " << pid_file.string() << "\nexec sleep 60\n";
+  fs::permissions(browser, fs::perms::owner_all);
+  const char* tmpdir = std::getenv("TMPDIR");
+  const std::string saved = tmpdir ? tmpdir : "";
+  ::setenv("TMPDIR", tmp.c_str(), 1);  // the render's temporary directory goes here
+  RenderOptions o;
+  o.out = run.dir / "x.png";
+  o.browser = browser.string();
+  o.timeout_seconds = 1;
+  std::string message = "no error";
+  try {
+    render_png(run.dir, o);
+  } catch (const BrowserError& e) {
+    message = e.what();
+  }
+  tmpdir ? ::setenv("TMPDIR", saved.c_str(), 1) : ::unsetenv("TMPDIR");
+  EXPECT_EQ(message, fmt::format("the browser {} did not finish within 1 s (waiting for Target.createTarget)", browser.string()));
+  const pid_t pid = std::stoi(slurp(pid_file));
+  EXPECT_NE(::kill(pid, 0), 0) << "the browser (process " << pid << ") is still running";
+  EXPECT_TRUE(fs::is_empty(tmp)) << "the render's temporary directory was left";
+  EXPECT_FALSE(fs::exists(o.out));
+  fs::remove_all(run.dir);
+}
+
+TEST(Render, AStopRequestedBeforeTheBrowserStartsEndsTheRender) {
+  StretchRun run = stretch_run(CellType::tet4, "render_stop");
+  RenderOptions o;
+  o.out = run.dir / "x.png";
+  o.browser = "/bin/true";
+  request_stop(SIGTERM);
+  int signal = 0;
+  try {
+    render_png(run.dir, o);
+  } catch (const BrowserInterrupted& e) {
+    signal = e.signal;
+  }
+  request_stop(0);
+  EXPECT_EQ(signal, SIGTERM);
+  EXPECT_FALSE(fs::exists(o.out));
   fs::remove_all(run.dir);
 }
 

@@ -2,40 +2,29 @@
 
 #include <cctype>
 #include <cerrno>
-#include <chrono>
-#include <cstring>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
-#include <thread>
+#include <string_view>
 #include <vector>
 
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "snh/io/atomic_file.hpp"
+#include "snh/io/base64.hpp"
+#include "snh/report/browser.hpp"
 #include "snh/report/report.hpp"
 #include "snh/sim/interrupt.hpp"
-
-extern char** environ;
 
 namespace snh {
 namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// `name` found on PATH ("" if not there); a name with a slash is returned as it is.
 std::string on_path(const std::string& name) {
@@ -70,90 +59,127 @@ std::string file_url(const fs::path& absolute) {
   return out;
 }
 
-/// A temporary directory, removed when this goes out of scope.
+/// A temporary directory for the browser's profile and log, removed (whatever is in it) when this goes out
+/// of scope.
 struct TempDir {
   fs::path path;
   TempDir() {
-    std::string templ = (fs::temp_directory_path() / "snh-render-XXXXXX").string();
-    if (!::mkdtemp(templ.data())) throw ReportError("cannot create a temporary directory for the browser");
+    std::error_code ec;
+    const fs::path base = fs::temp_directory_path(ec);
+    if (ec) throw WriteError(fmt::format("no temporary directory for the browser: {}", ec.message()));
+    std::string templ = (base / "snh-render-XXXXXX").string();
+    if (!::mkdtemp(templ.data()))
+      throw WriteError(fmt::format("cannot create a temporary directory in {}: {}", base.string(), std::strerror(errno)));
     path = templ;
   }
   ~TempDir() {
     std::error_code ec;
     fs::remove_all(path, ec);
   }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
 };
 
-/// Runs the browser with `args` (its output to `log`); returns its exit status. Kills it (and what it
-/// started) after `timeout` seconds, or when a stop is requested (SIGINT, SIGTERM: RenderInterrupted).
-int run_browser(const std::string& browser, const std::vector<std::string>& args, const fs::path& log, double timeout) {
-  std::vector<char*> argv;
-  std::vector<std::string> all = {browser};
-  all.insert(all.end(), args.begin(), args.end());
-  for (std::string& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  posix_spawnattr_t attr;
-  posix_spawnattr_init(&attr);
-  posix_spawnattr_setpgroup(&attr, 0);  // its own process group, so a timeout can stop all of it
-  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
-  pid_t pid = 0;
-  const int err = posix_spawn(&pid, browser.c_str(), &actions, &attr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  posix_spawnattr_destroy(&attr);
-  if (err != 0) throw ReportError(fmt::format("cannot start the browser {}: {}", browser, std::strerror(err)));
-  const auto start = std::chrono::steady_clock::now();
-  int status = 0;
-  for (;;) {
-    const pid_t r = ::waitpid(pid, &status, WNOHANG);
-    if (r == pid) break;
-    if (r < 0 && errno != EINTR) throw ReportError(fmt::format("waiting for the browser: {}", std::strerror(errno)));
-    if (stop_requested()) {
-      ::kill(-pid, SIGKILL);
-      ::waitpid(pid, &status, 0);
-      throw RenderInterrupted(stop_signal());
-    }
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > timeout) {
-      ::kill(-pid, SIGKILL);
-      ::waitpid(pid, &status, 0);
-      throw ReportError(fmt::format("the browser {} did not finish within {:g} s", browser, timeout));
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  ::kill(-pid, SIGKILL);  // helpers it may have left behind
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+/// Refuses an output path that is a directory or another file that is not a regular one (a device, a FIFO,
+/// a socket: the rename that writes the picture would replace it), and one in a missing directory.
+void check_output_path(const fs::path& out) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(out, ec);  // through a symbolic link
+  if (fs::is_directory(st))
+    throw ReportError(fmt::format("{}: is a directory (--out takes the PNG file to write)", out.string()));
+  if (fs::exists(st) && !fs::is_regular_file(st))
+    throw ReportError(fmt::format("{}: is not a regular file (a device, FIFO or socket): snh render only replaces "
+                                  "regular files",
+                                  out.string()));
+  if (out.has_parent_path() && !fs::is_directory(out.parent_path(), ec))
+    throw ReportError(fmt::format("{}: the directory does not exist", out.parent_path().string()));
 }
 
-/// The last non-empty line of a log that is not one of Chromium's routine complaints (D-Bus) or a
-/// complaint of the shell script that starts it (Debian's /usr/bin/chromium: "NAME: LINE: ...").
-std::string last_log_line(const fs::path& log, const std::string& browser) {
-  std::istringstream in(read_text(log));
-  std::string last;
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line.find("dbus") == std::string::npos && line.rfind(browser + ":", 0) != 0) last = line;
-  return last.empty() ? "(no output)" : last;
+/// The page's title once it drew the frame, and the start of its title when it could not (then followed
+/// by why): set by viewer/src/main.js in render mode.
+constexpr std::string_view kReady = "snh-render-ready", kFailed = "snh-render-error: ";
+
+/// Waits, in real time, until the report page's title is kReady or starts with kFailed, and gives it.
+constexpr const char* kAwaitTitle = R"(new Promise((resolve) => {
+  const look = () => {
+    const t = document.title;
+    if (t === 'snh-render-ready' || t.startsWith('snh-render-error: ')) resolve(t);
+    else setTimeout(look, 20);
+  };
+  look();
+}))";
+
+/// Opens `url` in a fresh headless browser (its profile, log and temporary files in `work`) with a
+/// width by height view, waits until the page has drawn the frame (or reported why not) and returns the
+/// PNG of the view. The browser is stopped when this returns or throws.
+std::string screenshot(const std::string& browser, const std::string& url, const RenderOptions& o, const fs::path& work) {
+  const std::vector<std::string> flags = {
+      "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--disable-quic", "--no-first-run", "--no-startup-window",
+      "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-extensions",
+      "--mute-audio", "--user-data-dir=" + (work / "profile").string(),
+      fmt::format("--window-size={},{}", o.width, o.height)};
+  const fs::path temp = work / "tmp";
+  std::error_code ec;
+  if (!fs::create_directory(temp, ec))
+    throw WriteError(fmt::format("cannot create {}: {}", temp.string(), ec ? ec.message() : "it exists"));
+  HeadlessBrowser chromium(browser, flags, work / "browser.log", temp, o.timeout_seconds);
+  const json target = chromium.call("Target.createTarget", {{"url", "about:blank"}});
+  const std::string page =
+      chromium.call("Target.attachToTarget", {{"targetId", target.at("targetId")}, {"flatten", true}}).at("sessionId");
+  chromium.call("Emulation.setDeviceMetricsOverride",
+                {{"width", o.width}, {"height", o.height}, {"deviceScaleFactor", 1}, {"mobile", false}}, page);
+  chromium.call("Inspector.enable", json::object(), page);  // reports a crash of the page
+  chromium.call("Page.enable", json::object(), page);
+  chromium.call("Page.setLifecycleEventsEnabled", {{"enabled", true}}, page);
+  const json navigation = chromium.call("Page.navigate", {{"url", url}}, page);
+  if (navigation.contains("errorText"))
+    throw BrowserError(fmt::format("the browser could not open {}: {}", url, navigation["errorText"].get<std::string>()));
+  // The report's own load event (not one of the blank page it replaces): its scripts have run, and the
+  // page now loads the frame and draws it.
+  const json loader = navigation.value("loaderId", json());
+  chromium.wait_for_event("Page.lifecycleEvent", page, [&](const json& p) {
+    return p.value("name", std::string()) == "load" && p.value("loaderId", json()) == loader;
+  });
+  const json title =
+      chromium.call("Runtime.evaluate", {{"expression", kAwaitTitle}, {"awaitPromise", true}, {"returnByValue", true}}, page);
+  const json said = title.contains("exceptionDetails") ? json() : title.at("result").value("value", json());
+  if (!said.is_string()) throw BrowserError("the report page could not be watched: " + title.dump());
+  const std::string text = said.get<std::string>();
+  if (text != kReady) throw BrowserError("the report page: " + text.substr(kFailed.size()));
+  const json shot = chromium.call("Page.captureScreenshot", {{"format", "png"}}, page);
+  std::string png;
+  if (!base64_decode(shot.value("data", std::string()), png))
+    throw BrowserError("the browser's picture is not valid base64");
+  return png;
 }
 
-}  // namespace
-
-std::pair<int, int> png_size(const fs::path& png) {
-  const std::string head = read_text(png).substr(0, 24);
+/// Width and height of PNG bytes from their header; {0, 0} if they are not a PNG.
+std::pair<int, int> png_header_size(std::string_view head) {
   if (head.size() < 24 || head.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0 || head.compare(12, 4, "IHDR") != 0) return {0, 0};
-  auto be32 = [&](int at) {
+  auto be32 = [&](std::size_t at) {
     return (static_cast<unsigned char>(head[at]) << 24) | (static_cast<unsigned char>(head[at + 1]) << 16) |
            (static_cast<unsigned char>(head[at + 2]) << 8) | static_cast<unsigned char>(head[at + 3]);
   };
   return {be32(16), be32(20)};
 }
 
+}  // namespace
+
+std::pair<int, int> png_size(const fs::path& png) {
+  std::ifstream in(png, std::ios::binary);
+  char head[24] = {};
+  in.read(head, sizeof head);
+  return png_header_size(std::string_view(head, static_cast<std::size_t>(in.gcount())));
+}
+
 void render_png(const fs::path& dir, const RenderOptions& o) {
   if (o.width < 16 || o.height < 16 || o.width > 8192 || o.height > 8192)
     throw ReportError(fmt::format("the picture size must be from 16 to 8192 pixels each way, got {}x{}", o.width, o.height));
   if (o.out.empty()) throw ReportError("no output file given");
+  const fs::path out = fs::absolute(o.out);
+  check_output_path(out);
+  if (!o.show.empty() && (o.show != "flesh" && o.show != "lbs" && o.show != "volume"))
+    throw ReportError(fmt::format("--show {}: expected flesh, lbs or volume", o.show));
   if (!fs::exists(dir / "index.html") || !fs::exists(dir / "report" / "data.js")) (void)write_report(dir);
   // The frame and field are checked here, so that the page is only asked for what it has.
   const json data = read_report_data(dir);
@@ -172,73 +198,34 @@ void render_png(const fs::path& dir, const RenderOptions& o) {
     found = found || f.value("name", std::string()) == field;
   }
   if (!found) throw ReportError(fmt::format("unknown field '{}' (this run has: {})", field, known));
-
-  const std::string browser = find_browser(o.browser);
-  if (browser.empty() || ::access(browser.c_str(), X_OK) != 0)
-    throw ReportError(browser.empty() ? "snh render needs Chromium, and none was found on PATH: install the Debian package "
-                                        "chromium (apt-get install chromium), or set SNH_CHROMIUM to a Chromium or Chrome binary"
-                                      : fmt::format("the browser {} cannot be run (from SNH_CHROMIUM or --browser)", browser));
-  const fs::path out = fs::absolute(o.out);
-  if (out.has_parent_path() && !fs::is_directory(out.parent_path()))
-    throw ReportError(fmt::format("{}: the directory does not exist", out.parent_path().string()));
-
-  TempDir tmp;
-  if (!o.show.empty() && (o.show != "flesh" && o.show != "lbs" && o.show != "volume"))
-    throw ReportError(fmt::format("--show {}: expected flesh, lbs or volume", o.show));
   if (!o.show.empty() && (!data.contains("render") || data.at("render").is_null()))
     throw ReportError(fmt::format("--show {}: {} is not a flesh run (it has no render surface)", o.show, dir.string()));
+
+  const std::string browser = find_browser(o.browser);
+  if (browser.empty())
+    throw BrowserError("snh render needs Chromium, and none was found on PATH: install the Debian package chromium "
+                       "(apt-get install chromium), or set SNH_CHROMIUM to a Chromium or Chrome binary");
+  if (::access(browser.c_str(), X_OK) != 0)
+    throw ReportError(fmt::format("the browser {} cannot be run (from SNH_CHROMIUM or --browser)", browser));
   const std::string url = fmt::format("{}#render&frame={}&field={}{}{}", file_url(fs::absolute(dir / "index.html")), frame,
                                       field, o.wireframe ? "&wireframe=1" : "", o.show.empty() ? "" : "&show=" + o.show);
-  const std::vector<std::string> common = {
-      "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--disable-quic", "--no-first-run",
-      "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-extensions",
-      "--mute-audio", "--user-data-dir=" + (tmp.path / "profile").string(),
-      fmt::format("--window-size={},{}", o.width, o.height), "--virtual-time-budget=20000"};
-  // One browser run loads the page, lets it draw the frame, dumps the DOM (whose title says whether the
-  // page drew it) and then takes the picture, to a temporary name beside the output. The page's work runs
-  // in virtual time while the GPU process draws in real time, so on a busy machine the budget can run out
-  // before the page is done (its title is then still the report's): that run is repeated, up to 4 times.
-  const fs::path partial = out.string() + fmt::format(".partial.{}.png", ::getpid());
-  const fs::path log = tmp.path / "browser.log";
-  std::vector<std::string> args = common;
-  args.push_back("--dump-dom");
-  args.push_back("--screenshot=" + partial.string());
-  args.push_back(url);
-  auto discard = [&] {
-    std::error_code ec;
-    fs::remove(partial, ec);
-  };
-  int status = 0;
-  for (int attempt = 1;; ++attempt) {
-    try {
-      status = run_browser(browser, args, log, o.timeout_seconds);
-    } catch (...) {
-      discard();
-      throw;
-    }
-    const std::string dom = read_text(log);
-    if (dom.find("<title>snh-render-ready</title>") != std::string::npos) break;
-    discard();
-    const std::size_t at = dom.find("<title>snh-render-error: ");
-    if (at != std::string::npos)
-      throw ReportError("the report page: " + dom.substr(at + 25, dom.find("</title>", at) - at - 25));
-    if (attempt == 4)
-      throw ReportError(fmt::format("the browser did not draw the frame in {} tries (exit status {}): {}", attempt, status,
-                                    last_log_line(log, browser)));
+  // The browser is driven over its DevTools pipe, in real time: the picture is taken once the page says
+  // it drew the frame, however long that takes (within the timeout). Every wait in here is interrupted by
+  // a stop signal, after which the browser is killed and its directory removed before this returns, so a
+  // second signal waits for that instead of ending the process at once.
+  std::string png;
+  {
+    PromptStopScope prompt;
+    if (stop_requested()) throw BrowserInterrupted(stop_signal());
+    TempDir work;
+    png = screenshot(browser, url, o, work.path);
   }
-  const auto [w, h] = fs::exists(partial) ? png_size(partial) : std::pair<int, int>{0, 0};
-  if (w != o.width || h != o.height) {
-    std::error_code ec;
-    fs::remove(partial, ec);
-    throw ReportError(w == 0 ? fmt::format("the browser wrote no picture (exit status {}): {}", status, last_log_line(log, browser))
-                             : fmt::format("the browser's picture is {}x{}, not {}x{}", w, h, o.width, o.height));
-  }
-  std::error_code ec;
-  fs::rename(partial, out, ec);
-  if (ec) {
-    fs::remove(partial, ec);
-    throw ReportError(fmt::format("{}: cannot be written: {}", out.string(), ec.message()));
-  }
+  if (stop_requested()) throw BrowserInterrupted(stop_signal());
+  const auto [w, h] = png_header_size(png);
+  if (w != o.width || h != o.height)
+    throw BrowserError(w == 0 ? std::string("the browser's picture is not a PNG")
+                              : fmt::format("the browser's picture is {}x{}, not {}x{}", w, h, o.width, o.height));
+  write_atomically(out, [&](std::ostream& file) { file.write(png.data(), static_cast<std::streamsize>(png.size())); });
 }
 
 }  // namespace snh

@@ -5,6 +5,7 @@
 #include <string>
 #include <utility>
 
+#include "snh/report/browser.hpp"  // BrowserError, BrowserInterrupted
 #include "snh/report/report.hpp"
 
 namespace snh {
@@ -20,19 +21,16 @@ struct RenderOptions {
   double timeout_seconds = 120.0;  ///< per browser run
 };
 
-/// SIGINT or SIGTERM arrived (snh::install_stop_handlers) while the browser ran: it was stopped, and
-/// nothing was written.
-class RenderInterrupted : public ReportError {
- public:
-  explicit RenderInterrupted(int signal)
-      : ReportError("interrupted by signal " + std::to_string(signal) + ": the browser was stopped, nothing was written"),
-        signal(signal) {}
-  int signal;
-};
-
 /// Renders a frame of the run in `dir` (writing its report first if it has none) to options.out,
-/// atomically. Throws ReportError with a one-line message: a bad frame or field, no browser, the browser
-/// failing or timing out, or the page reporting a problem.
+/// atomically, by a headless browser that takes the picture once the page says it drew the frame.
+/// Throws, each with a one-line message:
+///   ReportError         a bad argument or run: picture size, --out a directory, a device or in a missing
+///                       directory, frame, field, --show, a browser given that cannot be run;
+///   BrowserError        the browser failed: none found, it did not start, ended, crashed or timed out,
+///                       or the page reported a problem;
+///   BrowserInterrupted  SIGINT or SIGTERM arrived (snh::install_stop_handlers): the browser was killed;
+///   WriteError          the picture could not be written.
+/// The browser's temporary profile is removed however it ends.
 void render_png(const std::filesystem::path& dir, const RenderOptions& options);
 
 /// Width and height of a PNG file from its header; {0, 0} if it is not a PNG.

@@ -622,6 +622,17 @@ json lab_data(const fs::path& dir, const json& lab, const std::string& bundle_sr
   return d;
 }
 
+/// Refuses a path that is not a directory, saying what it is instead: missing, unreadable, or a file.
+void check_run_directory(const fs::path& dir) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(dir, ec);
+  if (!fs::exists(st)) {
+    if (ec && ec != std::errc::no_such_file_or_directory) throw ReportError(fmt::format("{}: {}", dir.string(), ec.message()));
+    throw ReportError(fmt::format("{}: does not exist", dir.string()));
+  }
+  if (!fs::is_directory(st)) throw ReportError(fmt::format("{}: is not a directory (the output directory of a run is expected)", dir.string()));
+}
+
 }  // namespace
 
 json read_report_data(const fs::path& dir) {
@@ -640,7 +651,7 @@ json read_report_data(const fs::path& dir) {
 }
 
 ReportSummary write_report(const fs::path& dir, const ReportOptions& options) {
-  if (!fs::is_directory(dir)) throw ReportError(fmt::format("{}: no such directory", dir.string()));
+  check_run_directory(dir);
   ReportSummary summary;
   json data;
   const bool lab = fs::exists(dir / "lab.json");
@@ -667,8 +678,8 @@ ReportSummary write_report(const fs::path& dir, const ReportOptions& options) {
       write_atomically(dir / "report" / "snh-report.js",
                        [&](std::ostream& o) { o.write(bundle.data(), static_cast<std::streamsize>(bundle.size())); });
     }
-  } catch (const fs::filesystem_error& e) {
-    throw ReportError(fmt::format("{}: {}", dir.string(), e.what()));
+  } catch (const fs::filesystem_error& e) {  // the report/ directory cannot be made
+    throw WriteError(fmt::format("{}: {}", dir.string(), e.what()));
   }
   summary.index = dir / "index.html";
   const std::string title = html_escape(data["title"].get<std::string>());

@@ -41,7 +41,9 @@ struct ReportSummary {
 };
 
 /// Writes the report of the run or lab in `dir` (a lab when dir/lab.json exists, else dir/stats.json).
-/// A lab's report also writes one for every simulation under it. Throws ReportError.
+/// A lab's report also writes one for every simulation under it. Throws ReportError for a directory the
+/// report cannot be made for (missing, not a directory, not a run, damaged files), WriteError when a
+/// file of the report cannot be written.
 ReportSummary write_report(const std::filesystem::path& dir, const ReportOptions& options = {});
 
 /// The data of the report in `dir` (DIR/report/data.js) read back. Throws ReportError.
