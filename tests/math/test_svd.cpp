@@ -108,6 +108,33 @@ TEST(Svd, TinyAndHugeScales) {
   expect_valid_svd(F, rotation_variant_svd(F), 1e-3);
 }
 
+TEST(Svd, ExtremeScalesAndRatiosKeepTheSignOfDet) {
+  // Issue 13: diag(1e150, 1, 1) came back as sigma = (1e150, 1, -1): the completion of U treated the
+  // scaled sigma_1 = 5e-151 as zero. One stretched axis (ratio up to 1e150), a uniform scale
+  // (1e-150..1e150), with and without a reflection, on the diagonal and under random rotations.
+  std::mt19937_64 rng(13);
+  for (int e = -150; e <= 150; e += 10) {
+    const double s = std::pow(10.0, e);
+    for (const Vec3& sigma : {Vec3(s, 1, 1), Vec3(s, 1, -1), Vec3(-s, 1, 1), Vec3(1, s, 1), Vec3(1, 1, -s),
+                              Vec3(s, s, s), Vec3(s, -s, s), Vec3(-s, -s, -s), Vec3(s, 2 * s, -3 * s)}) {
+      const bool negative = (sigma.array() < 0.0).count() % 2 == 1;  // the product would underflow
+      const Svd3 d = rotation_variant_svd(Mat3(sigma.asDiagonal()));
+      EXPECT_EQ(d.sigma[2] < 0.0, negative) << "diag " << sigma.transpose() << " -> " << d.sigma.transpose();
+      expect_sigma(d, sigma, 1e-15);
+      expect_valid_svd(Mat3(sigma.asDiagonal()), d);
+      for (int rep = 0; rep < 5; ++rep) {
+        const Mat3 F = random_matrix_with_sigma(rng, sigma);
+        const Svd3 r = rotation_variant_svd(F);
+        expect_valid_svd(F, r);
+        // Rotated, the entries of F keep the small singular values only while the ratio stays well
+        // under 1/eps; past that even the sign of det F is rounding, so it is checked up to 1e6.
+        const double ratio = sigma.cwiseAbs().maxCoeff() / sigma.cwiseAbs().minCoeff();
+        if (ratio <= 1e6) EXPECT_EQ(r.sigma[2] < 0.0, negative) << sigma.transpose() << " -> " << r.sigma.transpose();
+      }
+    }
+  }
+}
+
 TEST(Svd, NonFiniteInputGivesNaNSigmaNotGarbage) {
   for (double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
     Mat3 F = Mat3::Identity();

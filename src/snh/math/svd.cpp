@@ -128,14 +128,20 @@ Svd3 rotation_variant_svd(const Mat3& F) {
   if (norm2[0] < norm2[1]) swap_columns(B, V, norm2, 0, 1);
 
   // Complete U as a rotation; the sign of det F lands on σ2.
-  constexpr double kTiny = 1e-150;  // B is scaled to ‖B‖ ~ 1
+  // B is scaled so its largest entry is in [1/2, 1): b0, the longest column, has n0 > 1/4. The other
+  // columns may be as small as the ratio σ1/σ0 makes them, down to subnormal: u1 is normalised after
+  // dividing by its largest entry, so that σ1 down to ~1e-300 σ0 keeps its direction and the sign of
+  // det F (an absolute "tiny" cut-off of 1e-150 here turned diag(1e150, 1, 1) into σ = (1e150, 1, −1)).
   const double n0 = std::sqrt(norm2[0]);
-  Vec3 u0 = n0 > kTiny ? Vec3(B.col(0) / n0) : Vec3::UnitX();
+  Vec3 u0 = n0 > 0.0 ? Vec3(B.col(0) / n0) : Vec3::UnitX();
   Vec3 u1 = B.col(1) - u0.dot(B.col(1)) * u0;
-  double s1 = u1.norm();  // ≤ ‖b1‖ ≤ ‖b0‖ = σ0 up to rounding
-  if (s1 > kTiny) {
-    u1 /= s1;
-    s1 = std::min(s1, n0);
+  const double m1 = u1.cwiseAbs().maxCoeff();
+  double s1 = 0.0;  // ≤ ‖b1‖ ≤ ‖b0‖ = σ0 up to rounding
+  if (m1 > 0.0 && std::isfinite(1.0 / m1)) {
+    u1 /= m1;
+    const double n1 = u1.norm();
+    u1 /= n1;
+    s1 = std::min(m1 * n1, n0);
   } else {
     u1 = any_orthogonal(u0);
     s1 = std::abs(u1.dot(B.col(1)));
