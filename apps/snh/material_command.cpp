@@ -56,6 +56,21 @@ Mat3 parse_F(const std::string& text) {
   return F;
 }
 
+/// The supported magnitudes of the entries of F: 0 or |f| in [1e-20, 1e20]. Within them every energy's
+/// psi, P and dP/dF stay finite for mu, |lambda| <= 1e12 (J <= 6e60); beyond them they overflow to
+/// inf/nan, so such an F is refused before any work, naming the entry.
+constexpr double kMinEntry = 1e-20, kMaxEntry = 1e20;
+
+void check_F_range(const Mat3& F, bool from_stretch) {
+  for (int k = 0; k < 9; ++k) {
+    const double f = F.data()[k];
+    if (f == 0.0 || (std::abs(f) >= kMinEntry && std::abs(f) <= kMaxEntry)) continue;
+    const std::string which = from_stretch ? fmt::format("--stretch value {}", k / 4) : fmt::format("--F entry {}", k);
+    throw std::invalid_argument(fmt::format("{} = {:g} is outside the supported range (0 or |f| in [{:g}, {:g}])",
+                                            which, f, kMinEntry, kMaxEntry));
+  }
+}
+
 json matrix_json(const Mat3& A) {
   json rows = json::array();
   for (int i = 0; i < 3; ++i) rows.push_back({A(i, 0), A(i, 1), A(i, 2)});
@@ -84,6 +99,7 @@ int run_inspect(const Options& o) {
         throw std::invalid_argument(fmt::format("--stretch value {} is not a finite number", i));
     F = Vec3(o.stretch[0], o.stretch[1], o.stretch[2]).asDiagonal();
   }
+  check_F_range(F, o.F_text.empty());
   const Lame given = o.params.lame();
   const AnyMaterial material = make_material(o.name, given, o.params.reparametrize);
 

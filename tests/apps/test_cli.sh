@@ -50,6 +50,16 @@ check "no F" nonzero "give exactly one of --F" -- material stable_neo_hookean
 check "bad projection" nonzero "--projection must be none, clamp or abs" -- material stable_neo_hookean --stretch 1 1 1 --projection foo
 check "stretch inf" nonzero "--stretch value 2 is not a finite number" -- material stable_neo_hookean --stretch 1 1 inf
 check "no reparam psi_d" nonzero "psi_d cannot be reparametrized" -- material psi_d --reparametrize --stretch 1 1 1
+# Issue 13: outside the supported ranges, refused before any work, naming the value (no nan printed).
+check "mu 1e300" 2 "^snh: error: mu = 1e\+300 is outside the supported range \[1e-12, 1e\+12\]$" -- material stable_neo_hookean --mu 1e300 --stretch 1 1 1
+check "stability mu 1e300" 2 "mu = 1e\+300 is outside the supported range" -- material --stability --mu 1e300
+check "lambda 1e-300" 2 "lambda = 1e-300 is outside the supported range" -- material stvk --lambda 1e-300 --stretch 1 1 1
+check "F 1e300 I" 2 "^snh: error: --F entry 0 = 1e\+300 is outside the supported range \(0 or \|f\| in \[1e-20, 1e\+20\]\)$" -- material stable_neo_hookean --F "1e300 0 0 0 1e300 0 0 0 1e300"
+check "stretch 1e150" 2 "--stretch value 0 = 1e\+150 is outside the supported range" -- material stable_neo_hookean --stretch 1e150 1 1
+check "stretch 1e-30" 2 "--stretch value 2 = 1e-30 is outside" -- material stable_neo_hookean --stretch 1 1 1e-30
+check "F edge 1e20 finite" 0 "psi = [0-9.]+e\+" -- material stable_neo_hookean --mu 1e12 --lambda 1e12 --F "1e20 0 0 0 1e20 0 0 0 1e20"
+check "stretch mu 1e300" 2 "mu = 1e\+300 is outside the supported range" -- stretch --mu 1e300 --out /tmp/snh-never-written
+
 check "no subcommand" 2 "subcommand" --
 check "bad option value: one line, exit 2" 2 "^snh: error: --tet-split: bogus not in \{paper,mirrored\} \(see snh --help\)$" -- stretch --tet-split bogus
 check "missing option value" 2 "^snh: error: --res: 1 required INT missing" -- stretch --res

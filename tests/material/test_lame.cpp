@@ -48,6 +48,29 @@ TEST(Lame, InvalidParametersNameTheProblem) {
   EXPECT_EQ(message_of([] { validate({1.0, 10.0}); }), "");
 }
 
+TEST(Lame, OutsideTheSupportedRangeIsRefusedNamingTheValue) {
+  // Issue 13: mu = 1e300 printed psi = nan (alpha = 1 + mu/lambda, mu^2/lambda overflow).
+  EXPECT_NE(message_of([] { validate({1e300, 10.0}); }).find("mu = 1e+300 is outside the supported range"),
+            std::string::npos);
+  EXPECT_NE(message_of([] { validate({1e-13, 10.0}); }).find("mu = 1e-13"), std::string::npos);
+  EXPECT_NE(message_of([] { validate({1.0, 1e13}); }).find("lambda = 1e+13"), std::string::npos);
+  EXPECT_NE(message_of([] { validate({1.0, 1e-300}); }).find("lambda = 1e-300"), std::string::npos);
+  EXPECT_NE(message_of([] { (void)lame_from_youngs(1e300, 0.3); }).find("outside the supported range"),
+            std::string::npos);
+  EXPECT_EQ(message_of([] { validate({1e12, 1e12}); }), "");
+  EXPECT_EQ(message_of([] { validate({1e-12, -1e-13 + 1e-13}); }), "");  // lambda = 0
+  EXPECT_EQ(message_of([] { validate({1e-12, 1e-12}); }), "");
+  // At the edges every energy's psi, P and eigenvalues stay finite at F within the supported entries.
+  for (const Lame p : {Lame{1e12, 1e12}, Lame{1e-12, 1e-12}, Lame{1e12, 1e-12}}) {
+    const StableNeoHookean m(p);
+    for (double f : {1e-20, 1.0, 1e20}) {
+      const Mat3 F = Vec3(f, 1.0, f).asDiagonal();
+      EXPECT_TRUE(std::isfinite(m.psi(F))) << f;
+      EXPECT_TRUE(m.pk1(F).allFinite()) << f;
+    }
+  }
+}
+
 TEST(Lame, Reparametrizations) {
   const Lame lin{3.0, 12.0};
   const Lame prod = StableNeoHookean::from_linear(lin);

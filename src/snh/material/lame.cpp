@@ -11,6 +11,12 @@ void validate(const Lame& p) {
     throw ParameterError(fmt::format("mu must be a finite number > 0, got {}", p.mu));
   if (!std::isfinite(p.lambda))
     throw ParameterError(fmt::format("lambda must be a finite number, got {}", p.lambda));
+  if (p.mu < kMinModulus || p.mu > kMaxModulus)
+    throw ParameterError(fmt::format("mu = {:g} is outside the supported range [{:g}, {:g}]", p.mu, kMinModulus,
+                                     kMaxModulus));
+  if (p.lambda != 0.0 && (std::abs(p.lambda) < kMinModulus || std::abs(p.lambda) > kMaxModulus))
+    throw ParameterError(fmt::format("lambda = {:g} is outside the supported range (0 or |lambda| in [{:g}, {:g}])",
+                                     p.lambda, kMinModulus, kMaxModulus));
   if (p.lambda + 2.0 * p.mu / 3.0 <= 0.0)
     throw ParameterError(fmt::format(
         "lambda = {} with mu = {} gives a non-positive bulk modulus (need lambda > -2mu/3, i.e. nu > -1)",

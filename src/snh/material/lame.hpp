@@ -17,8 +17,14 @@ struct Lame {
   double lambda = 10.0;
 };
 
-/// Throws ParameterError unless μ > 0, λ finite and the bulk modulus λ + 2μ/3 is positive
-/// (equivalently −1 < ν < 0.5).
+/// The supported magnitudes of the Lamé parameters: μ in [kMinModulus, kMaxModulus], λ = 0 or |λ| in
+/// the same interval. Beyond them the energies overflow (μ²/λ, α = 1 + μ/λ) or cancel to noise and
+/// would print nan or inf; they are refused before any work instead.
+inline constexpr double kMinModulus = 1e-12;
+inline constexpr double kMaxModulus = 1e12;
+
+/// Throws ParameterError unless μ > 0, λ finite, both within the supported magnitudes above, and the
+/// bulk modulus λ + 2μ/3 is positive (equivalently −1 < ν < 0.5).
 void validate(const Lame& p);
 
 /// Lamé parameters from Young's modulus E > 0 and Poisson's ratio −1 < ν < 0.5 (thesis Eq. 2.5):

@@ -38,7 +38,11 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
   if (!std::isfinite(E)) {
     report.energy = E;
     report.residual = std::numeric_limits<double>::infinity();
-    report.failure = "the starting state is outside the energy's domain (an element has J <= 0)";
+    // +inf: an element with J <= 0 under an energy undefined there; NaN: an overflow, which the supported
+    // ranges of parameters and coordinates (README) keep out; saying J <= 0 for it misled.
+    report.failure = std::isnan(E) ? "the energy is not a number at the starting state (an overflow: parameters or "
+                                     "coordinates beyond the supported range)"
+                                   : "the starting state is outside the energy's domain (an element has J <= 0)";
     return report;
   }
   for (;;) {
