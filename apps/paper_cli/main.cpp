@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
   config.material = argv[2];
   config.params = {parse_double(program, "mu", argv[3]), parse_double(program, "lambda", argv[4])};
   config.out = argc == 6 ? argv[5] : "output";
+  if (config.out.empty()) fail(program, "output_directory is empty: give a directory (or leave it out for output)");
   try {
     config.live_progress = ::isatty(STDOUT_FILENO) != 0;
     snh::validate(config);

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "../common/out_option.hpp"
 #include "parameter_options.hpp"
 #include "run_command.hpp"
 #include "snh/sim/scene.hpp"
@@ -44,7 +45,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   auto* qs = cmd->add_flag("--quasi-static", o->quasi_static, "Quasi-static frames (the default, as the paper)");
   cmd->add_flag("--dynamic", o->dynamic, "Backward Euler with gravity -9.81 y instead (density 1000)")->excludes(qs);
   cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(CLI::PositiveNumber);
-  cmd->add_option("--out", o->out, "Output directory (default output/<model name>)");
+  cmd->add_option("--out", o->out, "Output directory (default output/<model name>)")->check(non_empty_path());
   cmd->add_option("--solver", o->solver, "Linear solver (default cholmod; see snh stretch --help)");
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");

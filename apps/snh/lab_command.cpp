@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "../common/command_line.hpp"
+#include "../common/out_option.hpp"
 #include "../common/run_report.hpp"
 #include "parameter_options.hpp"
 #include "snh/material/registry.hpp"
@@ -27,7 +28,7 @@ void add_lab_command(CLI::App& app, int& exit_code) {
       "writes lab.json and every run's frames and stats under --out.");
   cmd->add_flag("--quick", o->quick, "Smaller meshes and shorter times (about 4x faster)");
   cmd->add_flag("--json", o->json, "Print lab.json to stdout instead of the tables");
-  cmd->add_option("--out", o->out, "Output directory (default output/lab)");
+  cmd->add_option("--out", o->out, "Output directory (default output/lab)")->check(non_empty_path());
   cmd->add_flag("--no-report", o->no_report,
                 "Do not write the browser reports (OUT/index.html and one per simulation; snh report OUT writes them later)");
   cmd->add_option("--energy", o->energies, "Only these energies (repeatable; default all): " + material_name_list())

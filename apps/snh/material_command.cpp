@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "parameter_options.hpp"
+#include "snh/material/printable.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/material/stability.hpp"
 #include "snh/math/svd.hpp"
@@ -89,7 +90,7 @@ int run_inspect(const Options& o) {
   if (o.F_text.empty() == o.stretch.empty())
     throw std::invalid_argument("give exactly one of --F \"f0 ... f8\" or --stretch sx sy sz");
   const auto projection = parse_projection(o.projection);
-  if (!projection) throw std::invalid_argument(fmt::format("--projection must be none, clamp or abs, got '{}'", o.projection));
+  if (!projection) throw std::invalid_argument(fmt::format("--projection must be none, clamp or abs, got '{}'", printable(o.projection)));
   Mat3 F;
   if (!o.F_text.empty()) {
     F = parse_F(o.F_text);
@@ -244,9 +245,11 @@ void add_material_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--projection", opts->projection, "PSD projection of dP/dF: none, clamp (default) or abs");
   cmd->add_flag("--json", opts->json, "Machine-readable JSON output");
   cmd->add_flag("--list", opts->list, "List the energies and their formulas");
-  cmd->add_flag("--stability", opts->stability,
+  auto* stability = cmd->add_flag("--stability", opts->stability,
                 "Measure, for every energy, the paper's four stability properties (inversion, reflection, rest, "
                 "collapse along F = sI)");
+  // --stability measures every energy on its own sampled F: a given energy or F was silently ignored.
+  stability->excludes(Fopt)->excludes(st);
   cmd->add_option("--samples", opts->samples, "Number of sampled F with J <= 0 for --stability (default 200)")
       ->check(CLI::Range(1, 1000000));
   cmd->add_option("--seed", opts->seed, "Seed of the samples for --stability (default 1)");
@@ -262,6 +265,9 @@ void add_material_command(CLI::App& app, int& exit_code) {
       exit_code = 0;
       return;
     }
+    if (o.stability && !o.name.empty())
+      throw std::invalid_argument(fmt::format("--stability measures every energy: drop the energy name '{}'",
+                                              printable(o.name)));
     exit_code = o.stability ? run_stability(o) : run_inspect(o);
   });
 }

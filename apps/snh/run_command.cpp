@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "../common/command_line.hpp"
+#include "../common/out_option.hpp"
 #include "../common/run_report.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/scene.hpp"
@@ -27,7 +28,7 @@ void add_run_command(CLI::App& app, int& exit_code) {
       "scripted motion, gravity and an initial deformation. Writes NNN.obj and NNN.vtu frames, frames.pvd, stats.json "
       "and stats.csv. Exit code 0 when every step converged, 1 when the run stopped early, 2 for bad input.");
   cmd->add_option("scene", o->scene, "Scene file (.json)")->required();
-  cmd->add_option("--out", o->out, "Output directory (default: the scene's output.dir, else output/<scene name>)");
+  cmd->add_option("--out", o->out, "Output directory (default: the scene's output.dir, else output/<scene name>)")->check(non_empty_path());
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));

@@ -9,6 +9,7 @@
 #include <omp.h>
 
 #include "../common/command_line.hpp"
+#include "../common/out_option.hpp"
 #include "parameter_options.hpp"
 #include "../common/run_report.hpp"
 #include "snh/material/registry.hpp"
@@ -59,22 +60,24 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
       "The paper's stretch test (tetcli/hexcli) with named options: a [-1,1]^3 box of tets or hexes whose y = -1 and "
       "y = +1 layers are pulled apart in quasi-static steps; writes NNN.obj and NNN.vtu frames, frames.pvd, stats.json "
       "and stats.csv.");
-  cmd->add_option("--element", o->element, "tet (6 tets per lattice cell, as tetcli) or hex (trilinear, as hexcli)")
+  auto* element = cmd->add_option("--element", o->element, "tet (6 tets per lattice cell, as tetcli) or hex (trilinear, as hexcli)")
       ->check(CLI::IsMember({"tet", "hex"}));
-  cmd->add_option("--res", o->res, "Cells per side (default 10)");
-  cmd->add_option("--mesh", o->mesh,
+  auto* res = cmd->add_option("--res", o->res, "Cells per side (default 10)");
+  auto* mesh = cmd->add_option("--mesh", o->mesh,
                   "A mesh file (.node/.ele, .mesh, .msh, .vtu) instead of the box: its extreme vertex layers along --axis "
                   "are pulled apart");
   cmd->add_option("--axis", o->axis, "Stretch axis: x, y (default) or z")->check(CLI::IsMember({"x", "y", "z"}));
-  cmd->add_option("--tet-split", o->tet_split,
+  auto* split = cmd->add_option("--tet-split", o->tet_split,
                   "paper (default: every cell cut around its c0-c7 diagonal, as tetcli) or mirrored (the cut mirrored "
                   "in the upper half of each axis, so that for even res the mesh is mirror symmetric)")
       ->check(CLI::IsMember({"paper", "mirrored"}));
+  // They shape the generated box, which --mesh replaces: given together they were silently ignored.
+  mesh->excludes(element)->excludes(res)->excludes(split);
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params);
   cmd->add_option("--steps", o->steps, "Quasi-static steps (default 25)");
   cmd->add_option("--stretch", o->stretch, "Final length / rest length along y (default 3.5)");
-  cmd->add_option("--out", o->out, "Output directory (default output)");
+  cmd->add_option("--out", o->out, "Output directory (default output)")->check(non_empty_path());
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
   cmd->add_option("--solver", o->solver, linear_solver_help())->check(CLI::IsMember(linear_solver_names()));
   cmd->add_flag("--refactorize", o->refactorize,

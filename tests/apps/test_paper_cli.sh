@@ -91,5 +91,33 @@ rmdir "$work/blocked/003.obj"
 "$SNH" stretch --element tet --res 2 --steps 5 --stretch 1.5 --out "$work/blocked" --resume > /dev/null 2>&1 && [ -f "$work/blocked/005.obj" ] \
   && ok || bad "resume after the unwritable frame"
 
+# Issue 13: option mixes that were silently ignored, and an empty --out, are refused naming both options
+# (exit 2, before any work).
+expect_exit2() {  # expect_exit2 NAME PATTERN -- COMMAND...
+  local name="$1" pattern="$2"
+  shift 3
+  local out code
+  out="$("$@" 2>&1)"
+  code=$?
+  if [ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -Eq -- "$pattern"; then ok
+  else bad "$name (exit $code): $out"; fi
+}
+"$SNH" mesh box --res 1 "$work/cube.mesh" > /dev/null 2>&1 || true
+for opt in "--element hex" "--res 4" "--tet-split mirrored"; do
+  # shellcheck disable=SC2086
+  expect_exit2 "stretch --mesh with $opt" "(--mesh excludes ${opt%% *}|${opt%% *} excludes --mesh)" -- "$SNH" stretch --mesh "$work/cube.mesh" $opt --out "$work/mix"
+done
+expect_exit2 "stability with F" "(--stability excludes --F|--F excludes --stability)" -- "$SNH" material --stability --F "1 0 0 0 1 0 0 0 1"
+expect_exit2 "stability with stretch" "(--stability excludes --stretch|--stretch excludes --stability)" -- "$SNH" material --stability --stretch 1 1 1
+expect_exit2 "stability with a name" "--stability measures every energy: drop the energy name 'stvk'" -- "$SNH" material --stability stvk
+[ ! -e "$work/mix" ] && ok || bad "a refused mix wrote $work/mix"
+for cmd in "stretch" "lab --quick" "run $work/none.json" "flesh $work/none.obj"; do
+  # shellcheck disable=SC2086
+  expect_exit2 "$cmd --out ''" "--out: is empty: give an output directory" -- "$SNH" $cmd --out ""
+done
+for prog in "$TETCLI" "$HEXCLI"; do
+  expect_exit2 "$(basename "$prog") empty output_directory" "output_directory is empty" -- "$prog" 2 stable_neo_hookean 1 10 ""
+done
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -8,6 +8,7 @@
 
 #include <random>
 
+#include "snh/material/printable.hpp"
 #include "snh/material/registry.hpp"
 
 namespace snh {
@@ -150,6 +151,16 @@ TEST(Registry, NamesAndErrors) {
     EXPECT_NE(std::string(e.what()).find("unknown material 'stable_neohookean'"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("stable_neo_hookean_log"), std::string::npos);
   }
+  // Issue 13: a NUL byte in the name cut the message there (what() is a C string); control bytes are escaped.
+  try {
+    (void)make_material(std::string("stable\0neo\x1b[2J", 14), {1.0, 10.0});
+    FAIL() << "no exception";
+  } catch (const UnknownMaterial& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown material 'stable\\x00neo\\x1b[2J' (known: stable_neo_hookean"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(printable(std::string("a\0b\\c\n\xff", 7)), "a\\x00b\\\\c\\x0a\\xff");
   EXPECT_THROW((void)make_material("stable_neo_hookean", {0.0, 10.0}), ParameterError);
   EXPECT_THROW((void)make_material("stable_neo_hookean", {1.0, std::nan("")}), ParameterError);
   EXPECT_THROW((void)make_material("stable_neo_hookean", {1.0, -0.1}), ParameterError);  // alpha needs lambda > 0

@@ -99,6 +99,9 @@ TEST(SceneFile, ErrorsNameTheKey) {
             "s.json: integrator: expected one of backward_euler, quasi_static, got \"rk4\"");
   EXPECT_NE(error_of(json::parse(R"({"material": {"name": "stable_neohookean"}})")).find("s.json: material: unknown material"),
             std::string::npos);
+  EXPECT_NE(error_of(json::parse(R"({"material": {"name": "snh\u0000x"}})"))
+                .find("unknown material 'snh\\x00x' (known: stable_neo_hookean"),
+            std::string::npos);
   EXPECT_EQ(error_of(json::parse(R"({"material": {"mu": 1, "youngs": 3, "poisson": 0.2}})")),
             "s.json: material: give mu and lambda, or youngs and poisson, not both");
   EXPECT_NE(error_of(json::parse(R"({"material": {"youngs": 3, "poisson": 0.5}})")).find("Poisson's ratio must satisfy"),

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "snh/material/printable.hpp"
+
 namespace snh {
 namespace {
 
@@ -15,7 +17,7 @@ AnyMaterial make_at(std::string_view name, const Lame& p, bool reparametrize) {
   if constexpr (I == std::variant_size_v<AnyMaterial>) {
     std::string list;
     for (auto n : material_names()) list += (list.empty() ? "" : ", ") + std::string(n);
-    throw UnknownMaterial(fmt::format("unknown material '{}' (known: {})", name, list));
+    throw UnknownMaterial(fmt::format("unknown material '{}' (known: {})", printable(name), list));
   } else {
     using M = std::variant_alternative_t<I, AnyMaterial>;
     if (name == M::name) {

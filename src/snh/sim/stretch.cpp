@@ -5,6 +5,8 @@
 #include <string>
 
 #include <fmt/format.h>
+
+#include "snh/material/printable.hpp"
 #include <nlohmann/json.hpp>
 
 #include "snh/fem/quality.hpp"
@@ -47,7 +49,7 @@ void validate(const StretchConfig& c) {
     throw std::invalid_argument(fmt::format("stretch must be a finite number > 0, got {}", c.stretch));
   if (!(c.newton.tolerance > 0.0)) throw std::invalid_argument("tolerance must be > 0");
   if (!is_linear_solver(c.solver))
-    throw std::invalid_argument(fmt::format("unknown linear solver '{}'", c.solver));
+    throw std::invalid_argument(fmt::format("unknown linear solver '{}'", printable(c.solver)));
   (void)make_material(c.material, c.params, c.reparametrize);  // unknown name or bad parameters
   ensure_writable_directory(c.out);
 }

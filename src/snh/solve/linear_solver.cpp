@@ -3,6 +3,8 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "snh/material/printable.hpp"
 #include <fmt/ranges.h>
 
 #include "snh/solve/direct_solver.hpp"
@@ -48,7 +50,7 @@ std::unique_ptr<LinearSolver> make_linear_solver(const LinearSolverOptions& o, c
   if (o.reuse_iterations < 1) throw std::invalid_argument("reuse_iterations must be >= 1");
   for (const auto& s : linear_solvers())
     if (s.name == o.name) return s.make(o, geometry);
-  throw std::invalid_argument(fmt::format("unknown linear solver '{}' (known: {})", o.name,
+  throw std::invalid_argument(fmt::format("unknown linear solver '{}' (known: {})", printable(o.name),
                                           fmt::join(linear_solver_names(), ", ")));
 }
 
