@@ -135,9 +135,12 @@ Svd3 rotation_variant_svd(const Mat3& F) {
   const double n0 = std::sqrt(norm2[0]);
   Vec3 u0 = n0 > 0.0 ? Vec3(B.col(0) / n0) : Vec3::UnitX();
   Vec3 u1 = B.col(1) - u0.dot(B.col(1)) * u0;
+  double s1 = u1.norm();  // ≤ ‖b1‖ ≤ ‖b0‖ = σ0 up to rounding
   const double m1 = u1.cwiseAbs().maxCoeff();
-  double s1 = 0.0;  // ≤ ‖b1‖ ≤ ‖b0‖ = σ0 up to rounding
-  if (m1 > 0.0 && std::isfinite(1.0 / m1)) {
+  if (s1 > 1e-150) {  // the common case, arithmetic unchanged (whole runs stay bit-identical)
+    u1 /= s1;
+    s1 = std::min(s1, n0);
+  } else if (m1 > 0.0 && std::isfinite(1.0 / m1)) {  // tiny: its square would underflow
     u1 /= m1;
     const double n1 = u1.norm();
     u1 /= n1;
