@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <csignal>
 
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "snh/io/mesh_write.hpp"
 #include "snh/mesh/box.hpp"
@@ -132,6 +134,36 @@ TEST_P(Stretch, ConvergesEveryStepThinsInTheMiddleAndIsSymmetric) {
     std::cout << "tet mirror mismatch " << m.mirror_x << ", inversion " << m.inversion << ", x-z swap " << m.swap_xz << "\n";
   }
   fs::remove_all(out);
+}
+
+TEST(StretchMeshFile, NoMiddleCrossSectionIsReportedAsNotApplicable) {
+  // Issue 13: a mesh whose layer nearest the middle is one vertex (a single tet) or the pinned end layer
+  // (the res-1 box) reported "width 0 (rest 0)" or the pinned layer's width; now NaN, null and "n/a".
+  const fs::path dir = fresh_dir("no_middle");
+  fs::create_directories(dir);
+  VolumeMesh tet;
+  tet.type = CellType::tet4;
+  tet.vertices.resize(3, 4);
+  tet.vertices << 0, 1, 0, 0.3, 0, 0, 1, 0.4, 0, 0, 0, 1;
+  tet.cells.resize(4, 1);
+  tet.cells << 0, 1, 2, 3;
+  write_msh(dir / "tet.msh", tet);
+  for (const bool single_tet : {true, false}) {
+    StretchConfig c;
+    c.resolution = 1;
+    c.steps = 1;
+    c.stretch = 1.1;
+    c.out = dir / (single_tet ? "tet" : "box");
+    if (single_tet) c.mesh_file = dir / "tet.msh";
+    std::ostringstream log;
+    const StretchResult r = run_stretch(c, log);
+    EXPECT_TRUE(std::isnan(r.middle_width)) << r.middle_width;
+    EXPECT_NE(log.str().find("middle cross-section n/a"), std::string::npos) << log.str();
+    std::ifstream in(c.out / "stats.json");
+    const nlohmann::json stats = nlohmann::json::parse(in);
+    EXPECT_TRUE(stats.at("middle_width").is_null());
+  }
+  fs::remove_all(dir);
 }
 
 TEST(StretchMeshFile, AMeshFileOfTheBoxGivesTheBoxResultAndAnyAxisWorks) {

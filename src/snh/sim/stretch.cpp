@@ -166,29 +166,38 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
       if (mesh.vertices(a, v) <= centre + eps) layer = std::max(layer, mesh.vertices(a, v));
     const int across = a == 0 ? 1 : 0;
     const Eigen::VectorXd& x = sim.x();
-    double lo = 1e300, hi = -1e300, rest_lo = 1e300, rest_hi = -1e300;
-    for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
+    double lo = 1e300, hi = -1e300, rest_lo = 1e300, rest_hi = -1e300, bottom = 1e300;
+    for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) {
+      bottom = std::min(bottom, mesh.vertices(a, v));
       if (std::abs(mesh.vertices(a, v) - layer) <= eps) {
         lo = std::min(lo, x[3 * v + across]);
         hi = std::max(hi, x[3 * v + across]);
         rest_lo = std::min(rest_lo, mesh.vertices(across, v));
         rest_hi = std::max(rest_hi, mesh.vertices(across, v));
       }
-    result.middle_width = hi - lo;
-    result.middle_rest_width = rest_hi - rest_lo;
-    stats["middle_width"] = result.middle_width;
+    }
+    // A mesh whose layer nearest the middle is a single vertex (a width of 0 "of rest 0", as on an
+    // unstructured mesh) or is the pinned end layer has no middle cross-section: NaN, "n/a", null.
+    const bool meaningful = rest_hi - rest_lo > eps && layer > bottom + eps;
+    result.middle_width = meaningful ? hi - lo : std::numeric_limits<double>::quiet_NaN();
+    result.middle_rest_width = meaningful ? rest_hi - rest_lo : std::numeric_limits<double>::quiet_NaN();
+    stats["middle_width"] = meaningful ? nlohmann::json(result.middle_width) : nlohmann::json(nullptr);
   };
   plan.summary = [&](const RunResult& r) {
     std::string out;
     if (r.interrupted_by)
       out = fmt::format("INTERRUPTED by signal {} after step {}: frames 000 to {:03d} and the stats are kept\n",
                         r.interrupted_by, r.records.size(), r.records.size());
-    return out + fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); middle cross-section width {:.4f} (rest {:.4g}); frames ("
+    const std::string middle = std::isnan(result.middle_width)
+                                   ? std::string("middle cross-section n/a (no vertex layer across the middle)")
+                                   : fmt::format("middle cross-section width {:.4f} (rest {:.4g})", result.middle_width,
+                                                 result.middle_rest_width);
+    return out + fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); {}; frames ("
                              "NNN.obj{}), stats.json and stats.csv in {}",
                              r.all_converged    ? "converged every step"
                              : r.interrupted_by ? "STOPPED: interrupted"
                                                 : "STOPPED: a step did not converge",
-                             r.total_seconds, r.peak_memory_mib, result.middle_width, result.middle_rest_width,
+                             r.total_seconds, r.peak_memory_mib, middle,
                              c.write_vtu ? ", NNN.vtu, frames.pvd" : "", c.out.string());
   };
 

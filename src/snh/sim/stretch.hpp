@@ -71,7 +71,8 @@ struct StretchResult {
   int interrupted_by = 0;     ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
   double total_seconds = 0.0;
   /// At the last step, the extent along the first other axis (x, or y when stretching along x) of the
-  /// vertex layer nearest the middle (the largest rest coordinate along the axis not above the centre).
+  /// vertex layer nearest the middle (the largest rest coordinate along the axis not above the centre);
+  /// NaN (stats.json null, "n/a") when that layer is one vertex wide or is the pinned end layer.
   double middle_width = 0.0;
   double peak_memory_mib = 0.0;  ///< peak resident memory of the process (VmHWM)
   double middle_rest_width = 0.0;  ///< the same extent at rest
