@@ -13,6 +13,7 @@
 #include "../common/command_line.hpp"
 #include "../common/omp_env.hpp"
 #include "../common/run_report.hpp"
+#include "snh/io/atomic_file.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/run_directory.hpp"
 #include "snh/sim/stretch.hpp"
@@ -85,6 +86,9 @@ int main(int argc, char** argv) {
     (void)snh::cli::write_run_report(config.out, program);  // the browser report; a failure keeps the results
     if (result.interrupted_by) return 128 + result.interrupted_by;
     return result.all_converged ? 0 : 1;
+  } catch (const snh::WriteError& e) {  // a file that could not be written (disk full, no permission): 3
+    std::cerr << program << ": error: " << e.what() << "\n";
+    return 3;
   } catch (const std::exception& e) {
     fail(program, e.what());
   }

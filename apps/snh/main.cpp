@@ -14,6 +14,7 @@
 #include "report_commands.hpp"
 #include "run_command.hpp"
 #include "stretch_command.hpp"
+#include "snh/io/atomic_file.hpp"
 
 int main(int argc, char** argv) {
   snh::cli::ensure_passive_omp_wait(argv);
@@ -37,6 +38,9 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // --help and --version succeed
+  } catch (const snh::WriteError& e) {  // a file that could not be written (disk full, no permission): 3
+    std::cerr << "snh: error: " << e.what() << "\n";
+    return 3;
   } catch (const std::exception& e) {
     std::cerr << "snh: error: " << e.what() << "\n";
     return 2;

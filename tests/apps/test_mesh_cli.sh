@@ -30,6 +30,25 @@ out="$("$SNH" info "$work/t.ele" 2>&1)"; code=$?
   && ok || bad "truncated (exit $code): $out"
 out="$("$SNH" convert "$work/t.msh" "$work/t.stl" 2>&1)"; code=$?
 [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "cannot write '.stl' meshes" && ok || bad "bad output format (exit $code): $out"
+# Writers replace only regular files: a FIFO, a device or a directory at the output path is refused
+# (exit 2) and left as it was; a write that fails (here a file size limit: EFBIG, as a full disk) exits 3
+# and leaves neither the file nor its temporary.
+mkfifo "$work/fifo.msh"
+out="$(timeout 20 "$SNH" convert "$work/t.msh" "$work/fifo.msh" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/fifo.msh: is a FIFO, not a regular file: refusing to replace it" ] && [ -p "$work/fifo.msh" ] \
+  && ok || bad "convert to a FIFO (exit $code): $out"
+mkdir "$work/dir.vtu"
+out="$(timeout 20 "$SNH" convert "$work/t.msh" "$work/dir.vtu" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/dir.vtu: is a directory, not a regular file: refusing to replace it" ] && [ -d "$work/dir.vtu" ] \
+  && ok || bad "convert to a directory (exit $code): $out"
+if mknod "$work/null.mesh" c 1 3 2> /dev/null; then
+  out="$(timeout 20 "$SNH" convert "$work/t.msh" "$work/null.mesh" 2>&1)"; code=$?
+  [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "null.mesh: is a character device, not a regular file: refusing to replace it" \
+    && [ -c "$work/null.mesh" ] && ok || bad "convert to a device (exit $code): $out"
+fi
+out="$( (trap '' XFSZ; ulimit -f 0; timeout 20 "$SNH" convert "$work/t.msh" "$work/full.vtu") 2>&1)"; code=$?
+[ "$code" -eq 3 ] && [ "$out" = "snh: error: cannot write $work/full.vtu: File too large" ] && [ -z "$(ls "$work" | grep full)" ] \
+  && ok || bad "convert onto a full disk (exit $code): $out"
 # snh stretch --mesh: a small hex mesh file, pulled along z.
 printf '$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n12\n' > "$work/b.msh"
 n=1; for k in 0 1 2; do for j in 0 1; do for i in 0 1; do printf '%d %d %d %d\n' $n $i $j $k >> "$work/b.msh"; n=$((n + 1)); done; done; done

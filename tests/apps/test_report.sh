@@ -75,15 +75,15 @@ out="$("$SNH" render "$work/run" --out "$work/outdir" 2>&1)"; code=$?
   && ok || bad "render --out a directory (exit $code): $out"
 mkfifo "$work/fifo"
 out="$("$SNH" render "$work/run" --out "$work/fifo" 2>&1)"; code=$?
-[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/fifo: is not a regular file (a device, FIFO or socket): snh render only replaces regular files" ] \
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/fifo: is a FIFO, not a regular file: refusing to replace it" ] \
   && [ -p "$work/fifo" ] && ok || bad "render --out a FIFO (exit $code): $out"
 ln -s fifo "$work/fifo-link"
 out="$("$SNH" render "$work/run" --out "$work/fifo-link" 2>&1)"; code=$?
-[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "fifo-link: is not a regular file" && [ -L "$work/fifo-link" ] \
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "fifo-link: is a FIFO, not a regular file: refusing to replace it" && [ -L "$work/fifo-link" ] \
   && ok || bad "render --out a link to a FIFO (exit $code): $out"
 if mknod "$work/null" c 1 3 2> /dev/null; then
   out="$("$SNH" render "$work/run" --out "$work/null" 2>&1)"; code=$?
-  [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "null: is not a regular file" && [ -c "$work/null" ] \
+  [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "null: is a character device, not a regular file: refusing to replace it" && [ -c "$work/null" ] \
     && ok || bad "render --out a device (exit $code): $out"
 fi
 out="$("$SNH" render "$work/run" --out "$work/nodir/x.png" 2>&1)"; code=$?

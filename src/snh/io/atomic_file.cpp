@@ -10,7 +10,34 @@
 
 namespace snh {
 
+namespace {
+
+/// What a file that is not a regular one is, for messages.
+const char* kind_of(std::filesystem::file_type t) {
+  using std::filesystem::file_type;
+  switch (t) {
+    case file_type::directory: return "a directory";
+    case file_type::fifo: return "a FIFO";
+    case file_type::socket: return "a socket";
+    case file_type::block: return "a block device";
+    case file_type::character: return "a character device";
+    default: return "not a regular file";
+  }
+}
+
+}  // namespace
+
+void check_replaceable(const std::filesystem::path& path) {
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);  // through a symbolic link
+  if (!std::filesystem::exists(st) || std::filesystem::is_regular_file(st)) return;
+  const std::string kind = kind_of(st.type());
+  throw OutputRefused(fmt::format("{}: is {}{}: refusing to replace it", path.string(),
+                                  kind == "not a regular file" ? "" : kind + ", ", "not a regular file"));
+}
+
 void write_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write) {
+  check_replaceable(path);
   const std::filesystem::path tmp = path.string() + fmt::format(".tmp.{}", ::getpid());
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);

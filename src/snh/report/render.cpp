@@ -87,10 +87,7 @@ void check_output_path(const fs::path& out) {
   const fs::file_status st = fs::status(out, ec);  // through a symbolic link
   if (fs::is_directory(st))
     throw ReportError(fmt::format("{}: is a directory (--out takes the PNG file to write)", out.string()));
-  if (fs::exists(st) && !fs::is_regular_file(st))
-    throw ReportError(fmt::format("{}: is not a regular file (a device, FIFO or socket): snh render only replaces "
-                                  "regular files",
-                                  out.string()));
+  check_replaceable(out);  // a FIFO, a device, a socket: OutputRefused, as for every writer
   if (out.has_parent_path() && !fs::is_directory(out.parent_path(), ec))
     throw ReportError(fmt::format("{}: the directory does not exist", out.parent_path().string()));
 }
