@@ -81,6 +81,7 @@ int main(int argc, char** argv) {
     snh::validate(config);
     snh::install_stop_handlers();
     // The directory stays locked until the report is written: no other run can start there meanwhile.
+    snh::refuse_foreign_directory(config.out, "choose an empty or new output directory");
     config.lock = std::make_shared<snh::RunDirectoryLock>(config.out);
     const snh::StretchResult result = snh::run_stretch(config, std::cout);
     (void)snh::cli::write_run_report(config.out, program);  // the browser report; a failure keeps the results

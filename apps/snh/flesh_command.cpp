@@ -20,7 +20,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     std::string model, animation, volume = "lattice", material = "stable_neo_hookean", out, solver = "cholmod";
     int resolution = FleshSpec{}.resolution;
     ParameterOptions params;
-    bool quasi_static = false, dynamic = false, resume = false, no_report = false;
+    bool quasi_static = false, dynamic = false, resume = false, no_report = false, force = false;
     double fps = FleshSpec::fps;
     int threads = 0;
   };
@@ -48,6 +48,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--out", o->out, "Output directory (default output/<model name>)")->check(non_empty_path());
   cmd->add_option("--solver", o->solver, "Linear solver (default cholmod; see snh stretch --help)");
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
+  cmd->add_flag("--force", o->force, "Write into --out even if it is not empty and holds no snh run (files with the names of ours are replaced)");
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
   cmd->callback([o, cmd, &exit_code]() {
@@ -93,7 +94,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     scene.settings = j.dump();
     scene.source = o->model;
     scene.run.resume = o->resume;
-    exit_code = run_scene_command(scene, o->threads, o->no_report);
+    exit_code = run_scene_command(scene, o->threads, o->no_report, o->force);
   });
 }
 

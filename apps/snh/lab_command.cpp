@@ -11,12 +11,13 @@
 #include "parameter_options.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/sim/lab.hpp"
+#include "snh/sim/run_directory.hpp"
 
 namespace snh::cli {
 
 void add_lab_command(CLI::App& app, int& exit_code) {
   struct Options {
-    bool quick = false, json = false, no_report = false;
+    bool quick = false, json = false, no_report = false, force = false;
     std::string out = "output/lab";
     std::vector<std::string> energies;
   };
@@ -29,6 +30,7 @@ void add_lab_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--quick", o->quick, "Smaller meshes and shorter times (about 4x faster)");
   cmd->add_flag("--json", o->json, "Print lab.json to stdout instead of the tables");
   cmd->add_option("--out", o->out, "Output directory (default output/lab)")->check(non_empty_path());
+  cmd->add_flag("--force", o->force, "Write into --out even if it is not empty and holds no snh run (files with the names of ours are replaced)");
   cmd->add_flag("--no-report", o->no_report,
                 "Do not write the browser reports (OUT/index.html and one per simulation; snh report OUT writes them later)");
   cmd->add_option("--energy", o->energies, "Only these energies (repeatable; default all): " + material_name_list())
@@ -40,6 +42,8 @@ void add_lab_command(CLI::App& app, int& exit_code) {
     lo.energies = o->energies;
     lo.command_line = invocation();
     lo.progress = o->json ? nullptr : &std::cerr;
+    // Locked (and refused if it holds someone else's files) until the reports are written.
+    const RunDirectoryLock lock(o->out, o->force);
     const LabReport r = run_lab(lo);
     if (o->json) std::cout << r.json.dump(1) << "\n";
     else std::cout << r.text << "\nlab.json and every run's frames and stats: " << o->out << "\n";

@@ -20,6 +20,7 @@ void add_run_command(CLI::App& app, int& exit_code) {
     int threads = 0;
     bool resume = false;
     bool no_report = false;
+    bool force = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -31,22 +32,23 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--out", o->out, "Output directory (default: the scene's output.dir, else output/<scene name>)")->check(non_empty_path());
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
+  cmd->add_flag("--force", o->force, "Write into the output directory even if it is not empty and holds no snh run (files with the names of ours are replaced)");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
   cmd->callback([o, &exit_code]() {
     Scene scene = load_scene(o->scene);
     if (!o->out.empty()) scene.output.dir = o->out;
     scene.run.resume = o->resume;
-    exit_code = run_scene_command(scene, o->threads, o->no_report);
+    exit_code = run_scene_command(scene, o->threads, o->no_report, o->force);
   });
 }
 
-int run_scene_command(Scene& scene, int threads, bool no_report) {
+int run_scene_command(Scene& scene, int threads, bool no_report, bool force) {
   scene.run.command_line = invocation();
   scene.run.live_progress = ::isatty(STDOUT_FILENO) != 0;
   if (threads > 0) omp_set_num_threads(threads);
   install_stop_handlers();
   // The directory stays locked until the report is written: no other run can start there meanwhile.
-  scene.run.lock = std::make_shared<RunDirectoryLock>(scene.output.dir);
+  scene.run.lock = std::make_shared<RunDirectoryLock>(scene.output.dir, force);
   const SceneResult r = run_scene(scene, std::cout);
   if (!no_report) (void)write_run_report(scene.output.dir, "snh");
   return r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;

@@ -47,6 +47,7 @@ struct Options {
   bool refactorize = false;
   bool resume = false;
   bool no_report = false;
+  bool force = false;
   std::string tet_split = "paper";
   std::string mesh, axis = "y";
 };
@@ -85,6 +86,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
                 "gradients on the next matrix, and a new factorization is made only when that converges slowly)");
   cmd->add_flag("--resume", o->resume,
                 "Continue a stopped run in --out from its last completed step (the other options must be the same)");
+  cmd->add_flag("--force", o->force, "Write into --out even if it is not empty and holds no snh run (files with the names of ours are replaced)");
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
   cmd->add_option("--tolerance", o->tolerance, "Newton stops when |f| < tolerance (default 1e-3: |f|^2 < 1e-6 as the paper)");
   cmd->add_option("--projection", o->projection, "PSD projection of element Hessians: clamp (default) or abs")
@@ -118,7 +120,7 @@ void add_stretch_command(CLI::App& app, int& exit_code) {
     validate(c);
     install_stop_handlers();
     // The directory stays locked until the report is written: no other run can start there meanwhile.
-    c.lock = std::make_shared<RunDirectoryLock>(c.out);
+    c.lock = std::make_shared<RunDirectoryLock>(c.out, o->force);
     const StretchResult r = run_stretch(c, std::cout);
     if (!o->no_report) (void)write_run_report(c.out, "snh");
     exit_code = r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;

@@ -81,11 +81,11 @@ out="$("$SNH" stretch --element tet --res 2 --steps 3 --stretch 1.5 --out "$work
 out="$("$SNH" stretch --res 2 --out "$work/empty" --resume 2>&1)"; code=$?
 [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "cannot resume: .* has no checkpoint.bin" && ok || bad "resume nothing (exit $code): $out"
 
-# A frame that cannot be written (a directory in its place): an error naming the step, earlier frames and
-# stats kept, and --resume finishes the run once the obstacle is gone.
+# A frame that cannot be written (a directory in its place, in a directory given with --force): an error
+# naming the step, earlier frames and stats kept, and --resume finishes the run once the obstacle is gone.
 mkdir -p "$work/blocked/003.obj"
-out="$("$SNH" stretch --element tet --res 2 --steps 5 --stretch 1.5 --out "$work/blocked" 2>&1)"; code=$?
-[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "snh: error: step 3: cannot rename .*003.obj" && [ -f "$work/blocked/002.obj" ] \
+out="$("$SNH" stretch --element tet --res 2 --steps 5 --stretch 1.5 --out "$work/blocked" --force 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "snh: error: step 3: .*003.obj: is a directory, not a regular file: refusing to replace it" && [ -f "$work/blocked/002.obj" ] \
   && grep -q '"step": 2' "$work/blocked/stats.json" && ok || bad "unwritable frame (exit $code): $out"
 rmdir "$work/blocked/003.obj"
 "$SNH" stretch --element tet --res 2 --steps 5 --stretch 1.5 --out "$work/blocked" --resume > /dev/null 2>&1 && [ -f "$work/blocked/005.obj" ] \
@@ -118,6 +118,16 @@ done
 for prog in "$TETCLI" "$HEXCLI"; do
   expect_exit2 "$(basename "$prog") empty output_directory" "output_directory is empty" -- "$prog" 2 stable_neo_hookean 1 10 ""
 done
+# An output directory holding someone else's files is refused before any work (tetcli once wrote its
+# frames and report/ into /), and a file that cannot be written (a file size limit: EFBIG, as a full disk)
+# exits 3.
+mkdir -p "$work/theirs" && echo "mine" > "$work/theirs/notes.txt"
+out="$("$TETCLI" 2 stable_neo_hookean 1 10 "$work/theirs" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "tetcli: error: $work/theirs: is not empty and holds no snh run (it has notes.txt): refusing to write a run into it; choose an empty or new output directory" ] \
+  && [ "$(ls -A "$work/theirs")" = "notes.txt" ] && ok || bad "tetcli into a foreign directory (exit $code): $out"
+out="$( (trap '' XFSZ; ulimit -f 1; timeout 60 "$TETCLI" 2 stable_neo_hookean 1 10 "$work/full") 2>&1)"; code=$?
+[ "$code" -eq 3 ] && printf '%s' "$out" | grep -q "tetcli: error: .*cannot write $work/full/.*: File too large" \
+  && ok || bad "tetcli onto a full disk (exit $code): $out"
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

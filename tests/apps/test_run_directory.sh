@@ -83,8 +83,24 @@ grep -q '"status": "finished"' "$d/stats.json" && ok || bad "status of a finishe
 d="$work/theirs"
 mkdir -p "$d" && echo "<html>my page</html>" > "$d/index.html"
 out="$("$SNH" stretch --res 2 --steps 2 --out "$d" 2>&1)"; code=$?
-[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "holds index.html but no snh run" && [ "$(cat "$d/index.html")" = "<html>my page</html>" ] \
-  && [ ! -e "$d/000.obj" ] && ok || bad "a directory that is not ours (exit $code): $out"
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $d: is not empty and holds no snh run (it has index.html): refusing to write a run into it; choose an empty or new output directory, or pass --force to write there anyway" ] \
+  && [ "$(cat "$d/index.html")" = "<html>my page</html>" ] && [ -z "$(ls -A "$d" | grep -v index.html)" ] \
+  && ok || bad "a directory that is not ours (exit $code): $out"
+# Any file of someone else's (not only ours by name) makes a directory theirs: the paper's programs and
+# every snh command refuse it (tetcli once wrote 60 files into /); --force writes there anyway.
+d="$work/foreign"
+mkdir -p "$d" && echo "mine" > "$d/notes.txt"
+for cmd in "stretch --res 2 --steps 2 --out $d" "lab --quick --energy arap --out $d"; do
+  out="$(timeout 60 "$SNH" $cmd 2>&1)"; code=$?
+  [ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -q "$d: is not empty and holds no snh run (it has notes.txt)" \
+    && [ "$(ls -A "$d")" = "notes.txt" ] && ok || bad "snh $cmd into a foreign directory (exit $code): $out"
+done
+cp "$(dirname "$0")/../../scenes/inverted_cube.json" "$work/tiny.json"
+out="$(timeout 60 "$SNH" run "$work/tiny.json" --out "$d" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "$d: is not empty and holds no snh run" && [ "$(ls -A "$d")" = "notes.txt" ] \
+  && ok || bad "snh run into a foreign directory (exit $code): $out"
+"$SNH" stretch --res 2 --steps 2 --out "$d" --force --no-report > /dev/null 2>&1 && [ -f "$d/002.obj" ] && [ "$(cat "$d/notes.txt")" = mine ] \
+  && ok || bad "stretch --force into a foreign directory: $(ls -A "$d")"
 
 # 4. --resume checks what it keeps: the frames, and the checkpoint's checksum.
 d="$work/resume"

@@ -2,6 +2,7 @@
 // checkpoints that refuse damage (a changed byte, a non-finite state, an older format).
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -55,31 +56,49 @@ TEST(RunDirectory, ALockedDirectoryRefusesASecondRunUntilReleased) {
 
 TEST(RunDirectory, ClearingRemovesOnlyWhatARunOfOursWrites) {
   const fs::path d = fresh_dir("clear");
-  for (const char* f : {"000.obj", "012.vtu", "1234.obj", "frames.pvd", "stats.json", "stats.csv", "index.html",
+  for (const char* f : {"000.obj", "012.vtu", "1234.obj", "stats.json", "stats.csv", "index.html",
                         "stats.json.tmp.77", ".snh-write-test.5"})
     std::ofstream(d / f) << "x";
   fs::create_directories(d / "report" / "frames");
   std::ofstream(d / "report" / "frames" / "000.js") << "x";
   for (const char* f : {"notes.txt", "12.obj", "mesh.vtu", "my_stats.json", "index.htm"}) std::ofstream(d / f) << "keep";
   fs::create_directories(d / "000.obj.d");
-  // No sign of a run of ours yet: the files are someone else's, and nothing is removed.
-  {
-    const RunDirectoryLock lock(d);
-    EXPECT_FALSE(lock.found_earlier());
-    EXPECT_NE(error_of([&] { (void)clear_previous_run(d, lock); }).find("but no snh run: an snh run would replace it"),
-              std::string::npos);
-  }
+  // No sign of a run of ours yet: the files are someone else's; the directory is refused, nothing is removed
+  // and no lock file is left.
+  EXPECT_NE(error_of([&] { RunDirectoryLock lock(d); }).find("is not empty and holds no snh run (it has .snh-write-test.5)"),
+            std::string::npos);
   EXPECT_TRUE(fs::exists(d / "index.html"));
+  EXPECT_FALSE(fs::exists(d / ".snh-lock"));
   std::ofstream(d / "checkpoint.bin") << "x";
-  // The lock file of an earlier run (here the one just released) shows a run of ours.
+  std::ofstream(d / "frames.pvd") << "x";
+  // A checkpoint (or frames.pvd) shows a run of ours.
   const RunDirectoryLock lock(d);
-  EXPECT_TRUE(lock.found_earlier());
+  EXPECT_FALSE(lock.found_earlier());
   EXPECT_EQ(clear_previous_run(d, lock), 11);
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(d)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
   EXPECT_EQ(left, (std::vector<std::string>{".snh-lock", "000.obj.d", "12.obj", "index.htm", "mesh.vtu", "my_stats.json",
                                             "notes.txt"}));
+  fs::remove_all(d);
+}
+
+TEST(RunDirectory, ForceWritesIntoADirectoryOfSomeoneElse) {
+  const fs::path d = fresh_dir("force");
+  std::ofstream(d / "notes.txt") << "keep";
+  std::ofstream(d / "index.html") << "theirs";
+  const RunDirectoryLock lock(d, true);
+  EXPECT_TRUE(lock.forced());
+  EXPECT_EQ(clear_previous_run(d, lock), 1);
+  EXPECT_TRUE(fs::exists(d / "notes.txt"));
+  fs::remove_all(d);
+}
+
+TEST(RunDirectory, AStatsFileOfOursIsReadOnlyIfRegular) {
+  const fs::path d = fresh_dir("fifo");
+  ASSERT_EQ(::mkfifo((d / "stats.json").c_str(), 0644), 0);  // opening it to read would block
+  EXPECT_FALSE(holds_a_run_of_ours(d));
+  EXPECT_NE(error_of([&] { RunDirectoryLock lock(d); }).find("holds no snh run (it has stats.json)"), std::string::npos);
   fs::remove_all(d);
 }
 

@@ -88,14 +88,19 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
     log.flush();
   }
 
+  auto frame_failure = [&](int index, const char* what) {
+    return fmt::format("{} {}: {} ({}stats.json and checkpoint.bin are kept: --resume continues once the output can be "
+                       "written)",
+                       word, index, what, index > 0 ? fmt::format("frames 000 to {:03d}, ", index - 1) : "");
+  };
   auto write_frame = [&](int index, const ElasticTerm::Deformation& d) {
     try {
       frames.write(index, index * plan.frame_duration, sim.x(), d);
       if (plan.write_frame) plan.write_frame(index, index * plan.frame_duration, sim.x());
     } catch (const WriteError& e) {
-      throw WriteError(fmt::format("{} {}: {} ({}stats.json and checkpoint.bin are kept: --resume continues once the "
-                                   "output can be written)",
-                                   word, index, e.what(), index > 0 ? fmt::format("frames 000 to {:03d}, ", index - 1) : ""));
+      throw WriteError(frame_failure(index, e.what()));
+    } catch (const OutputRefused& e) {  // something that is not a regular file where a frame goes
+      throw OutputRefused(frame_failure(index, e.what()));
     }
   };
   auto finish = [&](const std::string& status) {

@@ -20,7 +20,8 @@
 namespace snh {
 namespace fs = std::filesystem;
 
-RunDirectoryLock::RunDirectoryLock(const fs::path& dir) {
+RunDirectoryLock::RunDirectoryLock(const fs::path& dir, bool force) : forced_(force) {
+  if (!force) refuse_foreign_directory(dir, "choose an empty or new output directory, or pass --force to write there anyway");
   ensure_writable_directory(dir);
   const fs::path path = dir / ".snh-lock";
   std::error_code ec;
@@ -35,7 +36,7 @@ RunDirectoryLock::RunDirectoryLock(const fs::path& dir) {
     ::close(fd_);
     fd_ = -1;
     if (err == EWOULDBLOCK)
-      throw WriteError(fmt::format("another snh run is writing to {}{}: wait for it to finish or choose another output "
+      throw OutputRefused(fmt::format("another snh run is writing to {}{}: wait for it to finish or choose another output "
                                    "directory",
                                    dir.string(), n > 0 ? fmt::format(" (process {})", std::string(pid, std::strcspn(pid, "\n"))) : ""));
     throw WriteError(fmt::format("cannot lock {}: {}", path.string(), std::strerror(err)));
@@ -50,21 +51,33 @@ RunDirectoryLock::~RunDirectoryLock() {
   if (fd_ >= 0) ::close(fd_);  // releases the lock; the file stays (removing it would race a waiting run)
 }
 
-namespace {
-
-/// True if dir shows an snh run: a checkpoint, or a stats.json or lab.json naming snh's version.
 bool holds_a_run_of_ours(const fs::path& dir) {
   std::error_code ec;
-  if (fs::exists(dir / "checkpoint.bin", ec)) return true;
+  for (const char* f : {".snh-lock", "checkpoint.bin", "frames.pvd"})
+    if (fs::is_regular_file(dir / f, ec)) return true;
   for (const char* f : {"stats.json", "lab.json"}) {
-    std::ifstream in(dir / f);
-    const std::string head((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!fs::is_regular_file(dir / f, ec)) continue;  // a FIFO or a device there would block or never end
+    std::ifstream in(dir / f, std::ios::binary);
+    std::string head(64 * 1024, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
     if (head.find("\"snh_version\"") != std::string::npos) return true;
   }
   return false;
 }
 
-}  // namespace
+void refuse_foreign_directory(const fs::path& dir, const std::string& hint) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return;  // missing (created later), or not a directory (refused later)
+  std::string first;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (first.empty() || name < first) first = name;
+  }
+  if (first.empty() || holds_a_run_of_ours(dir)) return;
+  throw OutputRefused(fmt::format("{}: is not empty and holds no snh run (it has {}): refusing to write a run into it; {}",
+                                  dir.string(), first, hint));
+}
 
 int clear_previous_run(const fs::path& dir, const RunDirectoryLock& lock) {
   static const std::regex ours(R"((?:\d{3,}\.(?:obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html|flesh\.usda|bones\.json))"
@@ -78,8 +91,8 @@ int clear_previous_run(const fs::path& dir, const RunDirectoryLock& lock) {
   }
   if (ec) throw WriteError(fmt::format("cannot list {}: {}", dir.string(), ec.message()));
   // Files with our names in a directory that shows no run of ours are someone else's: refuse to replace them.
-  if (!doomed.empty() && !lock.found_earlier() && !holds_a_run_of_ours(dir))
-    throw WriteError(fmt::format("{} holds {} but no snh run: an snh run would replace it; choose an empty or new output "
+  if (!doomed.empty() && !lock.found_earlier() && !lock.forced() && !holds_a_run_of_ours(dir))
+    throw OutputRefused(fmt::format("{} holds {} but no snh run: an snh run would replace it; choose an empty or new output "
                                  "directory",
                                  dir.string(), doomed.front().filename().string()));
   for (const fs::path& p : doomed) {
