@@ -49,6 +49,18 @@ fi
 out="$( (trap '' XFSZ; ulimit -f 0; timeout 20 "$SNH" convert "$work/t.msh" "$work/full.vtu") 2>&1)"; code=$?
 [ "$code" -eq 3 ] && [ "$out" = "snh: error: cannot write $work/full.vtu: File too large" ] && [ -z "$(ls "$work" | grep full)" ] \
   && ok || bad "convert onto a full disk (exit $code): $out"
+# Input files are checked before they are read: a directory as a scene, a mesh file that is /dev/zero
+# (never read: it has no end), 10 MB of zeros named .msh (fails on its first line, at once).
+out="$(timeout 20 "$SNH" run "$work" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work: is a directory, not a scene file" ] && ok || bad "run a directory (exit $code): $out"
+printf '{"mesh": {"file": "/dev/zero"}}\n' > "$work/zero.json"
+out="$(timeout 20 "$SNH" run "$work/zero.json" --out "$work/zero" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "/dev/zero: is not a regular file (a character device): cannot read a mesh file from it" \
+  && ok || bad "mesh.file /dev/zero (exit $code): $out"
+head -c 10000000 /dev/zero > "$work/zeros.msh"
+out="$(timeout 20 "$SNH" info "$work/zeros.msh" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/zeros.msh:1: binary data (a NUL byte) where text was expected" ] \
+  && ok || bad "info on zeros (exit $code): $out"
 # snh stretch --mesh: a small hex mesh file, pulled along z.
 printf '$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n12\n' > "$work/b.msh"
 n=1; for k in 0 1 2; do for j in 0 1; do for i in 0 1; do printf '%d %d %d %d\n' $n $i $j $k >> "$work/b.msh"; n=$((n + 1)); done; done; done

@@ -2,8 +2,10 @@
 // inverted cells and give one-line errors naming the file and line for malformed input.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <cstdint>
 #include <fstream>
@@ -11,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "snh/io/mesh_read.hpp"
+#include "snh/io/mesh_write.hpp"
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/box.hpp"
 
@@ -39,6 +42,16 @@ class MeshRead : public ::testing::Test {
       const std::string msg = e.what();
       EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
       return msg.substr(p.string().size());  // drop the directory for comparison
+    }
+    return "";
+  }
+  /// The error message of reading what is already at `name`, or "" if it reads.
+  std::string error_of_existing(const std::string& name) {
+    const fs::path p = dir_ / name;
+    try {
+      (void)read_mesh(p);
+    } catch (const MeshError& e) {
+      return std::string(e.what()).substr(p.string().size());
     }
     return "";
   }
@@ -263,6 +276,60 @@ TEST_F(MeshRead, MalformedFilesGiveOneLineErrors) {
   EXPECT_EQ(error_of("o.vtu", "<VTKFile type=\"UnstructuredGrid\" compressor=\"vtkZLibDataCompressor\">"),
             ":1: compressed data (vtkZLibDataCompressor) is not supported: write the file uncompressed");
   EXPECT_THROW((void)read_mesh(dir_ / "missing.mesh"), MeshError);
+}
+
+TEST_F(MeshRead, AWrongLengthHeaderIsNamed) {
+  // The Points of one hex (24 Float32 values, 96 bytes) appended raw under a length header of 1000.
+  std::string blob;
+  put<std::uint32_t>(blob, 1000);
+  for (int i = 0; i < 24; ++i) put<float>(blob, 0.0F);
+  const std::string f =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+      "<UnstructuredGrid>\n<Piece NumberOfPoints=\"8\" NumberOfCells=\"1\">\n<Points><DataArray type=\"Float32\" "
+      "NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/>\n</Points>\n</Piece>\n</UnstructuredGrid>\n"
+      "<AppendedData encoding=\"raw\">\n_" + blob + "\n</AppendedData>\n</VTKFile>\n";
+  EXPECT_EQ(error_of("len.vtu", f), ":5: DataArray Points: its length header says 1000 bytes, expected 96 (24 values of Float32)");
+}
+
+// Every reader opens its file through one check (io/input_file): a directory, a FIFO or a device fails at
+// once, a file of something else fails on its first line without being read whole, and anything but
+// whitespace after the end of a mesh is refused.
+TEST_F(MeshRead, InputFilesAreCheckedBeforeReading) {
+  fs::create_directories(dir_ / "d.msh");
+  EXPECT_EQ(error_of_existing("d.msh"), ": is a directory, not a mesh file");
+  ASSERT_EQ(::mkfifo((dir_ / "f.mesh").c_str(), 0644), 0);
+  EXPECT_EQ(error_of_existing("f.mesh"), ": is not a regular file (a FIFO): cannot read a mesh file from it");
+  fs::create_symlink("/dev/zero", dir_ / "z.vtu");
+  EXPECT_EQ(error_of_existing("z.vtu"), ": is not a regular file (a character device): cannot read a mesh file from it");
+  // 10 MB of zeros, and of one long word: the first 64 KiB decide, fast.
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(error_of("zeros.msh", std::string(10 << 20, '\0')), ":1: binary data (a NUL byte) where text was expected");
+  EXPECT_EQ(error_of("zeros.mesh", std::string(10 << 20, '\0')), ":1: binary data (a NUL byte) where text was expected");
+  EXPECT_EQ(error_of("zeros.node", std::string(10 << 20, '\0')), ":1: binary data (a NUL byte) where text was expected");
+  EXPECT_EQ(error_of("zeros.vtu", std::string(10 << 20, '\0')), ":1: not a VTK UnstructuredGrid (.vtu) file");
+  EXPECT_EQ(error_of("a.msh", std::string(10 << 20, 'a')), ":1: a word longer than 4096 characters where text was expected");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 1.0);
+}
+
+TEST_F(MeshRead, DataAfterTheMeshIsRefused) {
+  const VolumeMesh t = box_tets(1);
+  write_msh(dir_ / "ok.msh", t);
+  write_medit(dir_ / "ok.mesh", t);
+  write_vtu(dir_ / "ok.vtu", t, t.vertices, {}, {});
+  for (const char* name : {"ok.msh", "ok.mesh", "ok.vtu"}) {
+    std::ifstream in(dir_ / name, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(error_of(name, text), "") << name;
+    const std::string ext = fs::path(name).extension().string();
+    const std::string padded = error_of("padded" + ext, text + std::string(1 << 20, '\0'));
+    EXPECT_TRUE(padded.find("binary data (a NUL byte) where text was expected") != std::string::npos ||
+                padded.find("data after </VTKFile>") != std::string::npos)
+        << name << ": " << padded;
+    EXPECT_NE(error_of("words" + ext, text + "\nmore words\n"), "") << name;
+  }
+  write("p.node", kNode);
+  EXPECT_NE(error_of("p.ele", std::string(kEle) + std::string(100, '\0')).find(":4: more data than the 2 tetrahedra the header announces"), std::string::npos);
+  EXPECT_EQ(error_of("q.mesh", "MeshVersionFormatted 2\nDimension 3\nEnd\ngarbage\n"), ":4: unexpected 'garbage' after End");
 }
 
 }  // namespace

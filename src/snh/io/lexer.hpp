@@ -3,29 +3,48 @@
 // line numbers, so that every error names the file and line.
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <string_view>
 
 #include <fmt/format.h>
 
+#include "snh/io/input_file.hpp"
 #include "snh/io/mesh_file.hpp"
 
 namespace snh::detail {
 
 namespace fs = std::filesystem;
 
-inline std::string read_all(const fs::path& path) {
+/// Words longer than this are not text of a mesh file (a binary or damaged file): refused at once.
+constexpr std::size_t max_word_chars = 4096;
+
+/// The whole of a mesh or surface file. It must be a regular file of at most max_input_bytes
+/// (input_file_problem: a directory, a FIFO, /dev/zero fail at once); `check_head`, when given, sees its
+/// first bytes (up to 64 KiB) before the rest is read and throws if they are not of the format, so that
+/// a large file of something else fails without being read. Throws MeshError naming the file.
+inline std::string read_all(const fs::path& path, const std::function<void(const std::string& head)>& check_head = {}) {
+  std::uintmax_t size = 0;
+  if (const std::string problem = input_file_problem(path, "mesh file", &size); !problem.empty()) throw MeshError(problem);
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw MeshError(fmt::format("{}: cannot open the mesh file", path.string()));
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
+  if (!in) throw MeshError(fmt::format("{}: cannot open the mesh file: {}", path.string(), std::strerror(errno)));
+  std::string text(std::min<std::uintmax_t>(size, 64 * 1024), '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (check_head) check_head(text);
+  const std::size_t head = text.size();
+  text.resize(static_cast<std::size_t>(size));
+  in.read(text.data() + head, static_cast<std::streamsize>(text.size() - head));
+  text.resize(head + static_cast<std::size_t>(in.gcount()));
+  if (in.bad()) throw MeshError(fmt::format("{}: cannot read the mesh file", path.string()));
+  return text;
 }
 
 /// The value of attribute `name` in the XML tag that starts at `tag` (up to its '>'), or "".
@@ -49,8 +68,14 @@ class Lexer {
   std::string_view next() {
     skip();
     const std::size_t start = pos_;
-    while (pos_ < text_.size() && !std::isspace(static_cast<unsigned char>(text_[pos_])) && text_[pos_] != comment_) ++pos_;
     token_line_ = line_;
+    while (pos_ < text_.size() && !std::isspace(static_cast<unsigned char>(text_[pos_])) &&
+           (comment_ == '\0' || text_[pos_] != comment_)) {
+      if (text_[pos_] == '\0') fail("binary data (a NUL byte) where text was expected");
+      if (pos_ - start >= max_word_chars)
+        fail(fmt::format("a word longer than {} characters where text was expected", max_word_chars));
+      ++pos_;
+    }
     return std::string_view(text_).substr(start, pos_ - start);
   }
   bool at_end() {
@@ -136,5 +161,26 @@ class Lexer {
   int line_ = 1, token_line_ = 1;
 };
 
+/// A check_head for read_all: the head's first word (after comments) must be text and, when `magic` is
+/// given, start with `magic` ("not FORMAT: it must start with MAGIC" otherwise). An empty head passes (the
+/// reader reports the empty file).
+inline std::function<void(const std::string&)> text_head(const fs::path& path, char comment, std::string magic = "",
+                                                          std::string format = "") {
+  return [=](const std::string& head) {
+    Lexer lx(path, head, comment);
+    const std::string_view w = lx.next();
+    if (!magic.empty() && !w.empty() && w.substr(0, magic.size()) != magic)
+      lx.fail(fmt::format("not {}: it must start with {}", format, magic));
+  };
+}
+
+/// Fails unless only whitespace (and comments) follow: data after the end of a mesh (a NUL-padded or
+/// damaged file) is refused, not ignored.
+inline void expect_file_end(Lexer& lx, const char* after) {
+  if (!lx.at_end()) {
+    const std::string_view w = lx.next();  // fails itself on binary data
+    lx.fail(fmt::format("unexpected '{}' after {}", w, after));
+  }
+}
 
 }  // namespace snh::detail

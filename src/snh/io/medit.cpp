@@ -17,7 +17,7 @@
 namespace snh {
 
 MeshFile read_medit(const std::filesystem::path& path) {
-  detail::Lexer lx(path, detail::read_all(path), '#');
+  detail::Lexer lx(path, detail::read_all(path, detail::text_head(path, '#')), '#');
   detail::MeshBuilder b;
   bool dimension_seen = false;
   // The sections read past (everything but vertices, tets and hexes), with the values of each item.
@@ -27,7 +27,11 @@ MeshFile read_medit(const std::filesystem::path& path) {
       {"NormalAtVertices", 2}, {"TangentAtVertices", 2}};
   for (;;) {
     const std::string_view key = lx.next();
-    if (key.empty() || key == "End") break;
+    if (key.empty()) break;
+    if (key == "End") {
+      detail::expect_file_end(lx, "End");
+      break;
+    }
     if (key == "MeshVersionFormatted") {
       const long long version = lx.integer("the format version");
       if (version != 1 && version != 2) lx.fail(fmt::format("unsupported MeshVersionFormatted {}", version));

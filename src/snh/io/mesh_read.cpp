@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "snh/io/gmsh.hpp"
+#include "snh/io/input_file.hpp"
 #include "snh/io/medit.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/io/tetgen.hpp"
@@ -12,6 +13,8 @@
 namespace snh {
 
 MeshFile read_mesh_file(const std::filesystem::path& path) {
+  // What is there first (/dev/zero, a directory), then the format its name gives.
+  if (const std::string problem = input_file_problem(path, "mesh file"); !problem.empty()) throw MeshError(problem);
   const std::string ext = path.extension().string();
   if (ext == ".node" || ext == ".ele") {
     std::filesystem::path node = path, ele = path;

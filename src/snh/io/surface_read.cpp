@@ -56,7 +56,7 @@ void read_counted_faces(Lexer& lx, Collect& c, long long count, bool rest_of_lin
 }
 
 SurfaceMesh read_obj_surface(const fs::path& path) {
-  const std::string text = read_all(path);
+  const std::string text = read_all(path, detail::text_head(path, '#'));
   Lexer err(path, "");
   Collect c;
   std::istringstream in(text);
@@ -90,7 +90,7 @@ SurfaceMesh read_obj_surface(const fs::path& path) {
 }
 
 SurfaceMesh read_off(const fs::path& path) {
-  Lexer lx(path, read_all(path), '#');
+  Lexer lx(path, read_all(path, detail::text_head(path, '#')), '#');
   const std::string_view magic = lx.word("OFF");
   Collect c;
   long long nv = 0;
@@ -105,11 +105,12 @@ SurfaceMesh read_off(const fs::path& path) {
   for (long long i = 0; i < nv; ++i)
     for (int a = 0; a < 3; ++a) c.xyz.push_back(lx.number("a coordinate"));
   read_counted_faces(lx, c, nf, true);
+  detail::expect_file_end(lx, "the faces the header announces");
   return c.finish(lx);
 }
 
 SurfaceMesh read_ply(const fs::path& path) {
-  Lexer lx(path, read_all(path));
+  Lexer lx(path, read_all(path, detail::text_head(path, '\0')));
   if (lx.word("ply") != "ply") lx.fail("not a PLY file: it must start with 'ply'");
   long long nv = -1, nf = -1;
   std::vector<std::string> vertex_props;
@@ -199,7 +200,11 @@ SurfaceMesh read_stl(const fs::path& path) {
   lx.skip_line();
   for (;;) {
     const std::string_view t = lx.word("facet or endsolid");
-    if (t == "endsolid") break;
+    if (t == "endsolid") {
+      lx.skip_line();  // the solid's name
+      detail::expect_file_end(lx, "endsolid");
+      break;
+    }
     if (t != "facet") lx.fail(fmt::format("expected 'facet', got '{}'", t));
     lx.skip_line();  // normal
     if (lx.word("outer") != "outer" || lx.word("loop") != "loop") lx.fail("expected 'outer loop'");

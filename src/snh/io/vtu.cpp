@@ -137,8 +137,11 @@ std::size_t vtk_type_size(std::string_view type) {
 
 /// Reads a .vtu file's mesh; when `data` is given, also every named array of <PointData> and <CellData>.
 MeshFile read_vtu_file(const std::filesystem::path& path, VtuData* data) {
-  const std::string text = detail::read_all(path);
   const std::string file = path.string();
+  // A file that does not name VTKFile in its first 64 KiB fails before the rest is read.
+  const std::string text = detail::read_all(path, [&](const std::string& head) {
+    if (head.find("<VTKFile") == std::string::npos) throw MeshError(fmt::format("{}:1: not a VTK UnstructuredGrid (.vtu) file", file));
+  });
   auto line_of = [&](std::size_t pos) {
     return 1 + static_cast<int>(std::count(text.begin(), text.begin() + std::min(pos, text.size()), '\n'));
   };
@@ -231,9 +234,11 @@ MeshFile read_vtu_file(const std::filesystem::path& path, VtuData* data) {
       if (bytes.size() < header_size) fail(at, fmt::format("DataArray {}: the data ends before its length header", label));
       std::uint64_t length = 0;
       std::memcpy(&length, bytes.data(), header_size);  // little-endian: the low bytes come first
-      if (length != static_cast<std::uint64_t>(expected) * size || bytes.size() < header_size + length)
-        fail(at, fmt::format("DataArray {}: {} bytes of data, expected {} ({} values of {})", label,
-                             std::min<std::uint64_t>(length, bytes.size() - header_size), expected * size, expected, type));
+      if (length != static_cast<std::uint64_t>(expected) * size)
+        fail(at, fmt::format("DataArray {}: its length header says {} bytes, expected {} ({} values of {})", label, length,
+                             expected * size, expected, type));
+      if (bytes.size() < header_size + length)
+        fail(at, fmt::format("DataArray {}: the data ends after {} of its {} bytes", label, bytes.size() - header_size, length));
       std::vector<double> out = *decode_values(type, bytes.data() + header_size, static_cast<std::size_t>(expected));
       if (std::strcmp(section, "Points") == 0)
         for (double v : out)
@@ -313,6 +318,11 @@ MeshFile read_vtu_file(const std::filesystem::path& path, VtuData* data) {
       }
     }
   }
+  // Only whitespace may follow the closing tag: a NUL-padded or damaged file is refused, not read in part.
+  const std::size_t close = text.rfind("</VTKFile>");
+  if (close == std::string::npos) fail(text.size(), "no </VTKFile>: the file is cut short");
+  if (const std::size_t after = text.find_first_not_of(" \t\r\n", close + 10); after != std::string::npos)
+    fail(after, "data after </VTKFile>");
   return b.finish(dummy);
 }
 

@@ -10,6 +10,7 @@
 
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/checksum.hpp"
+#include "snh/io/input_file.hpp"
 
 namespace snh {
 namespace {
@@ -48,6 +49,10 @@ void write_checkpoint(const std::filesystem::path& dir, const Checkpoint& c) {
 
 std::optional<Checkpoint> read_checkpoint(const std::filesystem::path& dir) {
   const std::filesystem::path path = dir / "checkpoint.bin";
+  std::error_code ec;
+  if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec))) return std::nullopt;
+  if (const std::string problem = input_file_problem(path, "checkpoint"); !problem.empty())
+    throw std::runtime_error(problem);  // a FIFO or a device would block or never end
   std::ifstream in(path, std::ios::binary);
   if (!in) return std::nullopt;
   std::ostringstream buffer;
@@ -96,6 +101,10 @@ std::optional<Checkpoint> read_checkpoint(const std::filesystem::path& dir) {
 }
 
 std::vector<nlohmann::json> history_for_resume(const std::filesystem::path& dir, const char* key, int count) {
+  std::error_code ec;
+  if (const std::string problem = input_file_problem(dir / "stats.json", "stats file");
+      !problem.empty() && std::filesystem::exists(std::filesystem::symlink_status(dir / "stats.json", ec)))
+    throw std::invalid_argument(fmt::format("cannot resume: {}", problem));
   std::ifstream in(dir / "stats.json");
   if (!in) throw std::invalid_argument(fmt::format("cannot resume: {} has no stats.json", dir.string()));
   nlohmann::json j;

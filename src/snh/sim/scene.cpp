@@ -10,6 +10,7 @@
 
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/checksum.hpp"
+#include "snh/io/input_file.hpp"
 #include "snh/io/mesh_read.hpp"
 #include "snh/io/obj.hpp"
 #include "snh/io/surface_read.hpp"
@@ -99,6 +100,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
 }
 
 Scene load_scene(const std::filesystem::path& file) {
+  if (const std::string problem = input_file_problem(file, "scene file"); !problem.empty()) throw SceneError(problem);
   std::ifstream in(file);
   if (!in) throw SceneError(fmt::format("{}: cannot open the scene file", file.string()));
   json j;
