@@ -17,6 +17,7 @@
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/run_directory.hpp"
 #include "snh/sim/stretch.hpp"
+#include "snh/solve/memory_estimate.hpp"
 
 namespace {
 
@@ -43,6 +44,13 @@ double parse_double(const std::string& program, const char* what, const char* te
   if (end == text || *end != '\0' || errno != 0 || !std::isfinite(v))
     fail(program, fmt::format("{} must be a finite number, got '{}'", what, text));
   return v;
+}
+
+/// The paper's programs take no options: how to run the same test with PCG.
+std::string pcg_hint(const std::string& program, const snh::StretchConfig& c) {
+  return fmt::format(" ({} takes no options: snh stretch --element {} --res {} --material {} --mu {} --lambda {} --out {} "
+                     "--solver pcg runs the same test)",
+                     program, kHex ? "hex" : "tet", c.resolution, c.material, c.params.mu, c.params.lambda, c.out.string());
 }
 
 }  // namespace
@@ -90,6 +98,14 @@ int main(int argc, char** argv) {
   } catch (const snh::WriteError& e) {  // a file that could not be written (disk full, no permission): 3
     std::cerr << program << ": error: " << e.what() << "\n";
     return 3;
+  } catch (const snh::OutOfMemoryError& e) {  // one line, exit 1; the completed steps are kept
+    std::cerr << program << ": error: " << e.what() << pcg_hint(program, config) << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << program << ": error: "
+              << snh::out_of_memory_message("the run", snh::lattice_size(config.resolution, config.element), config.solver)
+              << pcg_hint(program, config) << "\n";
+    return 1;
   } catch (const std::exception& e) {
     fail(program, e.what());
   }

@@ -13,6 +13,7 @@
 #include "mesh_commands.hpp"
 #include "report_commands.hpp"
 #include "run_command.hpp"
+#include "snh/solve/memory_estimate.hpp"
 #include "stretch_command.hpp"
 #include "snh/io/atomic_file.hpp"
 
@@ -41,6 +42,12 @@ int main(int argc, char** argv) {
   } catch (const snh::WriteError& e) {  // a file that could not be written (disk full, no permission): 3
     std::cerr << "snh: error: " << e.what() << "\n";
     return 3;
+  } catch (const snh::OutOfMemoryError& e) {  // a run out of memory: one line, exit 1 (frames kept)
+    std::cerr << "snh: error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "snh: error: out of memory (an allocation failed; see the README's \"Memory\" for what a run needs)\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "snh: error: " << e.what() << "\n";
     return 2;

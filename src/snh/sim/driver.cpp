@@ -10,6 +10,7 @@
 #include "snh/sim/checkpoint.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/output.hpp"
+#include "snh/solve/memory_estimate.hpp"
 
 namespace snh {
 namespace {
@@ -61,6 +62,11 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
 
   // A resume is checked before any work: the checkpoint (intact, these settings, this mesh), the frames it
   // keeps and their history. A fresh run starts from an empty directory of ours.
+  // A run whose memory estimate exceeds what this process may use is refused before any work.
+  const ProblemSize size = problem_size(sim.mesh());
+  const std::string& solver = sim.setup().linear.name;
+  check_memory(size, solver, fmt::format("{} {} cells", sim.mesh().cell_count(), to_string(sim.mesh().type)));
+
   std::optional<Checkpoint> resume_from;
   if (plan.resume) {
     resume_from = checkpoint_for_resume(plan.out, plan.fingerprint, sim.x().size());
@@ -156,8 +162,32 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
         log << "\r\x1b[2K" << plan.live(frame, substep, it, r);
         log.flush();
       };
-    const StepReport rep = sim.advance((frame - 1) * plan.frame_duration, plan.substep, plan.substeps, &newton,
-                                       [&](int k) { substep = k; });
+    // Out of memory (the linear solver's allocation failed, or any other): the stats say so, the frames
+    // and the checkpoint so far are kept, and the run ends with one OutOfMemoryError naming the estimate.
+    auto out_of_memory = [&](const std::string& what) {
+      if (plan.live_progress && plan.live) log << "\r\x1b[2K";
+      log.flush();
+      std::string message = out_of_memory_message(fmt::format("{} {} ({})", word, frame, what), size, solver);
+      if (frame > 1) message += fmt::format("; frames 000 to {:03d} and checkpoint.bin are kept", frame - 1);
+      result.all_converged = false;
+      result.failure = message;
+      result.total_seconds = since(t_start);
+      result.peak_memory_mib = peak_memory_mib();
+      try {
+        write_stats(plan, result, "stopped");
+      } catch (const std::exception&) {  // the message matters more than the stats
+      }
+      throw OutOfMemoryError(message);
+    };
+    StepReport rep;
+    try {
+      rep = sim.advance((frame - 1) * plan.frame_duration, plan.substep, plan.substeps, &newton,
+                        [&](int k) { substep = k; });
+    } catch (const OutOfMemoryError& e) {
+      out_of_memory(e.what());
+    } catch (const std::bad_alloc&) {
+      out_of_memory("an allocation failed");
+    }
     if (plan.live_progress && plan.live) log << "\r\x1b[2K";
     if (rep.interrupted) {  // the frame is abandoned: the state is the last completed frame's
       stopped = true;

@@ -65,7 +65,9 @@ struct RunPlan {
   std::function<std::string(const RunResult&)> summary;
 };
 
-/// Runs the plan: see the header. Throws WriteError (naming the frame and what is kept) when a file
+/// Runs the plan: see the header. Throws MemoryEstimateError before any work when the run's memory estimate
+/// (memory_estimate.hpp) exceeds this process' limits, OutOfMemoryError (one line: the estimate, what is
+/// kept, what needs less; stats.json says "stopped") when a frame runs out of memory. Throws WriteError (naming the frame and what is kept) when a file
 /// cannot be written, std::invalid_argument when a resume is not possible (before any work).
 [[nodiscard]] RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log);
 

@@ -1,5 +1,7 @@
 #include "snh/sim/stretch.hpp"
 
+#include "snh/solve/memory_estimate.hpp"
+
 #include <cmath>
 #include <limits>
 #include <string>
@@ -17,6 +19,7 @@
 #include "snh/mesh/box.hpp"
 #include "snh/sim/driver.hpp"
 #include "snh/sim/simulation.hpp"
+#include "snh/solve/memory_estimate.hpp"
 
 namespace snh {
 
@@ -51,6 +54,9 @@ void validate(const StretchConfig& c) {
   if (!is_linear_solver(c.solver))
     throw std::invalid_argument(fmt::format("unknown linear solver '{}'", printable(c.solver)));
   (void)make_material(c.material, c.params, c.reparametrize);  // unknown name or bad parameters
+  // The lattice's memory estimate, before building it (a mesh file's is checked by the driver).
+  if (c.mesh_file.empty())
+    check_memory(lattice_size(c.resolution, c.element), c.solver, fmt::format("{} res {}", to_string(c.element), c.resolution));
   ensure_writable_directory(c.out);
 }
 

@@ -8,6 +8,8 @@
 #include <Eigen/SparseCholesky>
 #include <fmt/format.h>
 
+#include "snh/solve/memory_estimate.hpp"
+
 namespace snh {
 namespace {
 
@@ -39,7 +41,7 @@ class DirectSolver final : public LinearSolver {
   bool try_factorize(const SparseLower& A) override {
     if (!analysed_ || !same_pattern(A, pattern_)) {
       pattern_ = A;
-      factor_.analyzePattern(A);
+      guarded("symbolic analysis", [&] { factor_.analyzePattern(A); });
       analysed_ = true;
     }
     return numeric(A);
@@ -76,8 +78,25 @@ class DirectSolver final : public LinearSolver {
   /// Factorizes A (pattern analysed); true if it succeeded and (for LDLᵀ) every pivot is positive.
   bool numeric(const SparseLower& A) {
     ++factorizations_;
-    factor_.factorize(A);
+    guarded("factorization", [&] { factor_.factorize(A); });
     return factor_.info() == Eigen::Success && positive_pivots();
+  }
+  /// Runs a step of the factorization; a failed allocation (CHOLMOD's status, or std::bad_alloc) throws
+  /// OutOfMemoryError instead of passing for a matrix that is not positive definite.
+  template <class Step>
+  void guarded(const char* what, Step step) {
+    const auto oom = [&] {
+      return OutOfMemoryError(fmt::format("{}'s {} ({} unknowns)", name_ == "cholmod" ? "CHOLMOD" : "LDLT", what,
+                                          pattern_.rows()));
+    };
+    if constexpr (requires(Factor& f) { f.cholmod(); }) factor_.cholmod().status = CHOLMOD_OK;
+    try {
+      step();
+    } catch (const std::bad_alloc&) {
+      throw oom();
+    }
+    if constexpr (requires(Factor& f) { f.cholmod(); })
+      if (factor_.cholmod().status == CHOLMOD_OUT_OF_MEMORY || factor_.cholmod().status == CHOLMOD_TOO_LARGE) throw oom();
   }
   bool positive_pivots() const {
     if constexpr (requires(const Factor& f) { f.vectorD(); }) return (factor_.vectorD().array() > 0.0).all();
