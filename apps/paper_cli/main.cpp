@@ -106,6 +106,8 @@ int main(int argc, char** argv) {
               << snh::out_of_memory_message("the run", snh::lattice_size(config.resolution, config.element), config.solver)
               << pcg_hint(program, config) << "\n";
     return 1;
+  } catch (const snh::MemoryEstimateError& e) {  // refused before any work: exit 2
+    fail(program, e.what() + pcg_hint(program, config));
   } catch (const std::exception& e) {
     fail(program, e.what());
   }

@@ -25,7 +25,7 @@ constexpr double kFactorPerN43 = 260.0;           // CHOLMOD's L and workspace, 
 // OpenBLAS buffers (a direct solver only), per hardware thread on top of a fixed part.
 constexpr double kReservedFixed = 120.0 * kMiB;
 constexpr double kReservedPerThread = 50.0 * kMiB;
-constexpr double kReservedPerThreadBlas = 125.0 * kMiB;
+constexpr double kReservedPerThreadBlas = 80.0 * kMiB;
 
 bool is_direct(std::string_view solver) { return solver != "pcg"; }
 
@@ -107,7 +107,7 @@ std::string out_of_memory_message(std::string_view what, const ProblemSize& size
   std::string limit;
   if (limits.address_space_bytes) limit = fmt::format(", limit {} (ulimit -v)", format_bytes(*limits.address_space_bytes));
   else if (limits.available_bytes) limit = fmt::format(", {} available", format_bytes(*limits.available_bytes));
-  return fmt::format("out of memory in {}: the run needs about {} ({} address space) with {}{}{}", what,
+  return fmt::format("out of memory in {}: this run needs about {} ({} address space) with {}{}{}", what,
                      format_bytes(e.resident_bytes), format_bytes(e.address_space_bytes), solver, limit,
                      pcg_alternative(size, solver, limits));
 }

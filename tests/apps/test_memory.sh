@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# Memory pressure (issue 13), each case under `ulimit -v` in a subshell:
+#  (a) a run whose memory estimate exceeds the limit is refused before any work: one line naming the
+#      estimate and the limit, exit 2, nothing written;
+#  (b) a run let through (SNH_MEMORY_CHECK=off) whose CHOLMOD factorization runs out of address space ends
+#      with one line saying out of memory (not NOT CONVERGED), exit 1, stats.json "stopped", frame 000 kept;
+#  (c) a std::bad_alloc (tetcli 400 let through) is one line naming out of memory, never "std::bad_alloc";
+#  (d) PCG fits where CHOLMOD does not (the estimate lets it through and it runs).
+# Usage: test_memory.sh TETCLI HEXCLI SNH
+set -u
+TETCLI="$1" HEXCLI="$2" SNH="$3"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+pass=0
+fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# run LIMIT_KB OUTFILE COMMAND...: the command under ulimit -v (and a time limit), its stdout and stderr apart.
+run() {
+  local limit="$1" out="$2"
+  shift 2
+  (ulimit -v "$limit" && exec timeout 60 "$@") >"$out.stdout" 2>"$out.stderr"
+}
+lines() { wc -l <"$1" | tr -d ' '; }
+
+# (a) hexcli 10 under 300 MB: the estimate (about 420 MiB of address space with CHOLMOD) does not fit.
+run 300000 "$work/a" "$HEXCLI" 10 stable_neo_hookean 1.0 10.0 "$work/a_out"
+code=$?
+if [ "$code" -eq 2 ] && [ "$(lines "$work/a.stderr")" = 1 ] &&
+   grep -Eq '^hexcli: error: not enough memory: hex8 res 10 with cholmod .* needs about [0-9]+ MiB of address space, more than the limit of 293 MiB \(ulimit -v\)' "$work/a.stderr" &&
+   [ ! -e "$work/a_out" ]; then ok; else bad "(a) refusal: exit $code: $(cat "$work/a.stderr")"; fi
+# the same for snh stretch, which names the option that needs less
+run 300000 "$work/a2" "$SNH" stretch --element tet --res 10 --out "$work/a2_out"
+code=$?
+if [ "$code" -eq 2 ] && [ "$(lines "$work/a2.stderr")" = 1 ] && grep -q 'not enough memory: tet4 res 10' "$work/a2.stderr" &&
+   grep -q -- '--solver pcg needs less' "$work/a2.stderr"; then ok; else bad "(a) snh stretch refusal: exit $code: $(cat "$work/a2.stderr")"; fi
+
+# (b) hexcli 20 under 450 MB (the issue's case: CHOLMOD's factor needs about 620 MiB of address space).
+SNH_MEMORY_CHECK=off run 450000 "$work/b" "$HEXCLI" 20 stable_neo_hookean 1.0 10.0 "$work/b_out"
+code=$?
+if [ "$code" -eq 1 ] && [ "$(lines "$work/b.stderr")" = 1 ] &&
+   grep -Eq "^hexcli: error: out of memory in step 1 \(CHOLMOD's factorization .*\): this run needs about .* --solver pcg needs less" "$work/b.stderr" &&
+   ! grep -q 'NOT CONVERGED' "$work/b.stdout" "$work/b.stderr" &&
+   grep -q '"status": "stopped"' "$work/b_out/stats.json" && grep -q 'out of memory' "$work/b_out/stats.json" &&
+   [ -s "$work/b_out/000.obj" ]; then ok; else bad "(b) OOM in factorization: exit $code: $(cat "$work/b.stderr") $(tail -2 "$work/b.stdout")"; fi
+
+# (c) tetcli 400 let through under 2 GB: the mesh cannot be allocated.
+SNH_MEMORY_CHECK=off run 2000000 "$work/c" "$TETCLI" 400 stable_neo_hookean 1.0 10.0 "$work/c_out"
+code=$?
+if [ "$code" -eq 1 ] && [ "$(lines "$work/c.stderr")" = 1 ] && grep -q '^tetcli: error: out of memory' "$work/c.stderr" &&
+   ! grep -q 'bad_alloc' "$work/c.stderr"; then ok; else bad "(c) bad_alloc: exit $code: $(cat "$work/c.stderr")"; fi
+# and without SNH_MEMORY_CHECK=off it is refused before any work
+run 2000000 "$work/c2" "$TETCLI" 400 stable_neo_hookean 1.0 10.0 "$work/c2_out"
+code=$?
+if [ "$code" -eq 2 ] && grep -q '^tetcli: error: not enough memory: tet4 res 400' "$work/c2.stderr"; then ok
+else bad "(c) refusal at res 400: exit $code: $(cat "$work/c2.stderr")"; fi
+
+# (d) PCG at hex res 10 under 300 MB runs to the end.
+run 300000 "$work/d" "$SNH" stretch --element hex --res 10 --solver pcg --out "$work/d_out"
+code=$?
+if [ "$code" -eq 0 ] && [ -s "$work/d_out/025.obj" ]; then ok; else bad "(d) pcg under 300 MB: exit $code: $(cat "$work/d.stderr")"; fi
+
+echo "memory: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]

@@ -1,0 +1,101 @@
+// Memory estimate (issue 13): lattice sizes, the estimate against peak memory measured on the 2-core VM
+// (README "Memory"), the shortfall against limits, and the refusal.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "snh/mesh/box.hpp"
+#include "snh/solve/memory_estimate.hpp"
+
+namespace snh {
+namespace {
+
+constexpr double kMiB = 1024.0 * 1024.0;
+
+TEST(MemoryEstimate, LatticeSizeMatchesTheBuiltMesh) {
+  for (int res : {1, 3, 5}) {
+    const ProblemSize tets = lattice_size(res, CellType::tet4), built_tets = problem_size(box_tets(res));
+    EXPECT_EQ(tets.vertices, built_tets.vertices);
+    EXPECT_EQ(tets.cells, built_tets.cells);
+    EXPECT_EQ(tets.nodes_per_cell, 4);
+    const ProblemSize hexes = lattice_size(res, CellType::hex8), built_hexes = problem_size(box_hexes(res));
+    EXPECT_EQ(hexes.vertices, built_hexes.vertices);
+    EXPECT_EQ(hexes.cells, built_hexes.cells);
+    EXPECT_EQ(hexes.nodes_per_cell, 8);
+  }
+  EXPECT_EQ(lattice_size(400, CellType::tet4).cells, 6LL * 400 * 400 * 400);  // no int overflow
+}
+
+// Peak resident set (MiB) measured with /usr/bin/time -v, `snh stretch --threads 2` (README "Memory"): the
+// estimate is above each, but not by more than 2x.
+TEST(MemoryEstimate, BracketsTheMeasuredPeaks) {
+  struct Measured {
+    int res;
+    CellType type;
+    const char* solver;
+    double rss_mib;
+  };
+  for (const Measured& m : {Measured{10, CellType::tet4, "cholmod", 37}, Measured{10, CellType::hex8, "pcg", 22},
+                            Measured{20, CellType::tet4, "cholmod", 277}, Measured{20, CellType::hex8, "cholmod", 286},
+                            Measured{20, CellType::tet4, "pcg", 130}, Measured{25, CellType::hex8, "cholmod", 623},
+                            Measured{25, CellType::tet4, "pcg", 243}}) {
+    const double e = estimate_memory(lattice_size(m.res, m.type), m.solver).resident_bytes / kMiB;
+    EXPECT_GT(e, m.rss_mib) << m.res << " " << m.solver;
+    EXPECT_LT(e, 2.0 * m.rss_mib) << m.res << " " << m.solver;
+  }
+}
+
+TEST(MemoryEstimate, GrowsWithSizeAndADirectSolverNeedsMore) {
+  double last = 0.0;
+  for (int res : {5, 10, 20, 40, 80}) {
+    const ProblemSize s = lattice_size(res, CellType::hex8);
+    const MemoryEstimate direct = estimate_memory(s, "cholmod"), pcg = estimate_memory(s, "pcg");
+    EXPECT_GT(direct.resident_bytes, last);
+    EXPECT_GT(direct.resident_bytes, pcg.resident_bytes);
+    EXPECT_GT(direct.address_space_bytes, direct.resident_bytes);
+    EXPECT_EQ(estimate_memory(s, "ldlt").resident_bytes, direct.resident_bytes);
+    last = direct.resident_bytes;
+  }
+  // The factor grows faster than linearly: at res 80 it is most of a direct run's memory.
+  const ProblemSize big = lattice_size(80, CellType::hex8);
+  EXPECT_GT(estimate_memory(big, "cholmod").resident_bytes, 4.0 * estimate_memory(big, "pcg").resident_bytes);
+}
+
+TEST(MemoryEstimate, ShortfallNamesTheLimit) {
+  const MemoryEstimate e{.resident_bytes = 300 * kMiB, .address_space_bytes = 600 * kMiB};
+  EXPECT_EQ(memory_shortfall(e, {}), "");
+  EXPECT_EQ(memory_shortfall(e, {.available_bytes = 1024 * kMiB, .address_space_bytes = 700 * kMiB}), "");
+  EXPECT_EQ(memory_shortfall(e, {.available_bytes = 200 * kMiB}),
+            "needs about 300 MiB of memory, more than the 200 MiB available (MemAvailable)");
+  EXPECT_EQ(memory_shortfall(e, {.address_space_bytes = 450 * kMiB}),
+            "needs about 600 MiB of address space, more than the limit of 450 MiB (ulimit -v)");
+  EXPECT_EQ(format_bytes(1.5 * 1024 * kMiB), "1.5 GiB");
+}
+
+TEST(MemoryEstimate, RefusesWhatDoesNotFitUnlessTurnedOff) {
+  // Res 400 hexes need terabytes: more than any machine this runs on has available.
+  const ProblemSize huge = lattice_size(400, CellType::hex8);
+  try {
+    check_memory(huge, "cholmod", "hex8 res 400");
+    FAIL() << "not refused";
+  } catch (const MemoryEstimateError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("not enough memory: hex8 res 400 with cholmod"), std::string::npos) << m;
+    EXPECT_NE(m.find("--solver pcg needs less"), std::string::npos) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+  }
+  EXPECT_NO_THROW(check_memory(lattice_size(5, CellType::hex8), "cholmod", "hex8 res 5"));
+  ::setenv("SNH_MEMORY_CHECK", "off", 1);
+  EXPECT_NO_THROW(check_memory(huge, "cholmod", "hex8 res 400"));
+  ::unsetenv("SNH_MEMORY_CHECK");
+}
+
+TEST(MemoryEstimate, OutOfMemoryMessageNamesTheEstimateAndPcg) {
+  const std::string m = out_of_memory_message("step 1 (CHOLMOD's factorization)", lattice_size(20, CellType::hex8), "cholmod");
+  EXPECT_EQ(m.rfind("out of memory in step 1 (CHOLMOD's factorization): this run needs about ", 0), 0u) << m;
+  EXPECT_NE(m.find("--solver pcg needs less"), std::string::npos) << m;
+  EXPECT_EQ(out_of_memory_message("step 1", lattice_size(20, CellType::hex8), "pcg").find("--solver pcg"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace snh
