@@ -17,6 +17,17 @@
 #include "stretch_command.hpp"
 #include "snh/io/atomic_file.hpp"
 
+namespace {
+/// `snh run` takes its solver from the scene file: a memory message's "--solver pcg" names the scene's field.
+std::string pcg_option_for(const CLI::App& app, std::string message) {
+  if (!app.got_subcommand("run")) return message;
+  const std::string option = "--solver pcg", field = "the scene's \"solver\": {\"linear\": \"pcg\"}";
+  for (auto at = message.find(option); at != std::string::npos; at = message.find(option, at + field.size()))
+    message.replace(at, option.size(), field);
+  return message;
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   snh::cli::ensure_passive_omp_wait(argv);
   snh::cli::invocation() = snh::cli::quoted_command_line(argc, argv);
@@ -42,8 +53,11 @@ int main(int argc, char** argv) {
   } catch (const snh::WriteError& e) {  // a file that could not be written (disk full, no permission): 3
     std::cerr << "snh: error: " << e.what() << "\n";
     return 3;
+  } catch (const snh::MemoryEstimateError& e) {  // refused before any work
+    std::cerr << "snh: error: " << pcg_option_for(app, e.what()) << "\n";
+    return 2;
   } catch (const snh::OutOfMemoryError& e) {  // a run out of memory: one line, exit 1 (frames kept)
-    std::cerr << "snh: error: " << e.what() << "\n";
+    std::cerr << "snh: error: " << pcg_option_for(app, e.what()) << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << "snh: error: out of memory (an allocation failed; see the README's \"Memory\" for what a run needs)\n";

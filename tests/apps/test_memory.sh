@@ -35,6 +35,14 @@ code=$?
 if [ "$code" -eq 2 ] && [ "$(lines "$work/a2.stderr")" = 1 ] && grep -q 'not enough memory: tet4 res 10' "$work/a2.stderr" &&
    grep -q -- '--solver pcg needs less' "$work/a2.stderr"; then ok; else bad "(a) snh stretch refusal: exit $code: $(cat "$work/a2.stderr")"; fi
 
+# snh run takes its solver from the scene: the line names the scene's field instead of --solver.
+scenes="$(cd "$(dirname "$0")/../../scenes" && pwd)"
+run 300000 "$work/a3" "$SNH" run "$scenes/twist.json" --out "$work/a3_out" --no-report
+code=$?
+if [ "$code" -eq 2 ] && [ "$(lines "$work/a3.stderr")" = 1 ] && grep -q '^snh: error: not enough memory: ' "$work/a3.stderr" &&
+   grep -q 'the scene.s "solver": {"linear": "pcg"} needs less' "$work/a3.stderr" && [ ! -e "$work/a3_out/000.obj" ]; then ok
+else bad "(a) snh run refusal: exit $code: $(cat "$work/a3.stderr")"; fi
+
 # (b) hexcli 20 under 450 MB (the issue's case: CHOLMOD's factor needs about 620 MiB of address space).
 SNH_MEMORY_CHECK=off run 450000 "$work/b" "$HEXCLI" 20 stable_neo_hookean 1.0 10.0 "$work/b_out"
 code=$?

@@ -65,7 +65,7 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
   // A run whose memory estimate exceeds what this process may use is refused before any work.
   const ProblemSize size = problem_size(sim.mesh());
   const std::string& solver = sim.setup().linear.name;
-  check_memory(size, solver, fmt::format("{} {} cells", sim.mesh().cell_count(), to_string(sim.mesh().type)));
+  check_memory(size, solver, fmt::format("{} mesh", to_string(sim.mesh().type)));
 
   std::optional<Checkpoint> resume_from;
   if (plan.resume) {
