@@ -4,6 +4,7 @@
 #      estimate and the limit, exit 2, nothing written;
 #  (b) a run let through (SNH_MEMORY_CHECK=off) whose CHOLMOD factorization runs out of address space ends
 #      with one line saying out of memory (not NOT CONVERGED), exit 1, stats.json "stopped", frame 000 kept;
+#      The same under 600 MB, where OpenBLAS used to loop forever;
 #  (c) a std::bad_alloc (tetcli 400 let through) is one line naming out of memory, never "std::bad_alloc";
 #  (d) PCG fits where CHOLMOD does not (the estimate lets it through and it runs).
 # Usage: test_memory.sh TETCLI HEXCLI SNH
@@ -51,6 +52,13 @@ if [ "$code" -eq 1 ] && [ "$(lines "$work/b.stderr")" = 1 ] &&
    ! grep -q 'NOT CONVERGED' "$work/b.stdout" "$work/b.stderr" &&
    grep -q '"status": "stopped"' "$work/b_out/stats.json" && grep -q 'out of memory' "$work/b_out/stats.json" &&
    [ -s "$work/b_out/000.obj" ]; then ok; else bad "(b) OOM in factorization: exit $code: $(cat "$work/b.stderr") $(tail -2 "$work/b.stdout")"; fi
+
+# (b) under 600 MB CHOLMOD's factor fits but OpenBLAS's 128 MiB buffer does not: OpenBLAS used to retry
+# forever; the address space is checked before the first factorization and the run ends the same way.
+SNH_MEMORY_CHECK=off run 600000 "$work/b2" "$HEXCLI" 20 stable_neo_hookean 1.0 10.0 "$work/b2_out"
+code=$?
+if [ "$code" -eq 1 ] && [ "$(lines "$work/b2.stderr")" = 1 ] && grep -q "^hexcli: error: out of memory in step 1" "$work/b2.stderr"; then ok
+else bad "(b) OOM before OpenBLAS's buffer: exit $code: $(cat "$work/b2.stderr")"; fi
 
 # (c) tetcli 400 let through under 2 GB: the mesh cannot be allocated.
 SNH_MEMORY_CHECK=off run 2000000 "$work/c" "$TETCLI" 400 stable_neo_hookean 1.0 10.0 "$work/c_out"

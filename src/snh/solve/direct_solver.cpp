@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <new>
 #include <stdexcept>
+#include <type_traits>
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <fmt/format.h>
+#include <sys/mman.h>
 
 #include "snh/solve/memory_estimate.hpp"
 
@@ -29,6 +33,31 @@ void add_to_diagonal(SparseLower& A, double shift) {
 }
 
 Eigen::VectorXd not_a_solution(Eigen::Index n) { return Eigen::VectorXd::Constant(n, std::nan("")); }
+
+/// CHOLMOD's supernodal LLᵀ with access to its symbolic factor.
+class Cholmod final : public Eigen::CholmodSupernodalLLT<SparseLower, Eigen::Lower> {
+ public:
+  /// The analysed (symbolic, or numeric after a factorization) factor; null before the analysis.
+  const cholmod_factor* factor() const { return m_cholmodFactor; }
+};
+
+/// OpenBLAS's work buffer (BUFFER_SIZE of Debian's build, 128 MiB), mapped at the first BLAS call that
+/// needs it; when that mapping fails, its blas_memory_alloc retries forever (a hang, not an error).
+constexpr std::size_t kBlasBuffer = std::size_t{128} << 20;
+
+/// Before the first numeric factorization of an analysis: whether the address space has room for the
+/// supernodal factor (xsize values), its largest update workspace (maxcsize) and OpenBLAS's buffer. Only
+/// reserved, never touched, and released at once; false where a factorization would run out of memory, or
+/// hang inside OpenBLAS.
+bool room_for_first_factorization(const cholmod_factor* L) {
+  if (!L || !L->is_super || L->x) return true;  // analysed only: the first factorization still allocates
+  const double bytes = 8.0 * (static_cast<double>(L->xsize) + static_cast<double>(L->maxcsize)) + kBlasBuffer;
+  if (bytes > 0.9 * static_cast<double>(SIZE_MAX)) return false;
+  void* p = ::mmap(nullptr, static_cast<std::size_t>(bytes), PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+  if (p == MAP_FAILED) return false;
+  ::munmap(p, static_cast<std::size_t>(bytes));
+  return true;
+}
 
 /// CHOLMOD and LDLᵀ share the symbolic-reuse and shift logic.
 template <class Factor>
@@ -78,7 +107,11 @@ class DirectSolver final : public LinearSolver {
   /// Factorizes A (pattern analysed); true if it succeeded and (for LDLᵀ) every pivot is positive.
   bool numeric(const SparseLower& A) {
     ++factorizations_;
-    guarded("factorization", [&] { factor_.factorize(A); });
+    guarded("factorization", [&] {
+      if constexpr (std::is_same_v<Factor, Cholmod>)
+        if (!room_for_first_factorization(factor_.factor())) throw std::bad_alloc();
+      factor_.factorize(A);
+    });
     return factor_.info() == Eigen::Success && positive_pivots();
   }
   /// Runs a step of the factorization; a failed allocation (CHOLMOD's status, or std::bad_alloc) throws
@@ -189,7 +222,7 @@ class FactorReuse final : public LinearSolver {
 }  // namespace
 
 std::unique_ptr<LinearSolver> make_cholmod_solver() {
-  return std::make_unique<DirectSolver<Eigen::CholmodSupernodalLLT<SparseLower, Eigen::Lower>>>("cholmod");
+  return std::make_unique<DirectSolver<Cholmod>>("cholmod");
 }
 
 std::unique_ptr<LinearSolver> make_ldlt_solver() {
