@@ -18,6 +18,8 @@ MaterialSpec parse_material(Keys& top) {
         if (!m.has("youngs") || !m.has("poisson")) m.fail("youngs and poisson go together");
         s.params = lame_from_youngs(m.number("youngs", 0.0), m.number("poisson", 0.0));
       } else {
+        if (lame && !(m.has("mu") && m.has("lambda")))
+          m.fail(m.has("mu") ? "mu and lambda go together (got mu, no lambda)" : "mu and lambda go together (got lambda, no mu)");
         s.params = Lame{m.number("mu", s.params.mu), m.number("lambda", s.params.lambda)};
         validate(s.params);
       }
