@@ -52,5 +52,30 @@ TEST(SceneInput, LameParametersGoTogether) {
   EXPECT_EQ(error_of(json::parse(R"({"material": {"mu": 1000, "lambda": 2000}})")), "");
 }
 
+TEST(SceneInput, RunsThatCannotBeDoneAreRefused) {
+  // The substep count was an int that overflowed (one substep per frame instead); now counted in double.
+  EXPECT_EQ(error_of(json::parse(R"({"dt": 1e-11})")),
+            "s.json: dt: 1e-11 with end_time 1 over 25 frames makes 1e+11 substeps; at most 1e+08 can run (raise dt or lower end_time)");
+  EXPECT_TRUE(contains(error_of(json::parse(R"({"dt": 1e-300})")), "s.json: dt: 1e-300 with end_time 1 over 25 frames makes 1e+300 substeps"));
+  EXPECT_TRUE(contains(error_of(json::parse(R"({"end_time": 1e308})")), "s.json: dt: 0.01 with end_time 1e+308 over 25 frames makes"));
+  EXPECT_TRUE(contains(error_of(json::parse(R"({"dt": 1e-7, "end_time": 10.1})")), "makes 1.01e+08 substeps"));
+  EXPECT_EQ(error_of(json::parse(R"({"dt": 1e-7, "end_time": 10})")), "") << "1e8 substeps in all may run";
+  EXPECT_EQ(error_of(json::parse(R"({"frames": 100001})")), "s.json: frames: must be from 1 to 100000, got 100001");
+  EXPECT_EQ(error_of(json::parse(R"({"integrator": "quasi_static", "dt": 1e-300})")), "") << "dt unused when quasi-static";
+  // A scene built in code is checked when it runs.
+  Scene s;
+  s.source = "code";
+  s.time.dt = 1e-12;
+  s.output.dir = std::filesystem::temp_directory_path() / ("snh_scene_input_run_" + std::to_string(::getpid()));
+  std::ostringstream log;
+  try {
+    (void)run_scene(s, log);
+    ADD_FAILURE() << "no error";
+  } catch (const SceneError& e) {
+    EXPECT_TRUE(contains(e.what(), "code: dt: 1e-12 with end_time 1 over 25 frames makes 1e+12 substeps")) << e.what();
+  }
+  std::filesystem::remove_all(s.output.dir);
+}
+
 }  // namespace
 }  // namespace snh

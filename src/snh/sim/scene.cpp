@@ -38,6 +38,28 @@ auto as_scene_error(F&& f) {
   }
 }
 
+constexpr double max_substeps_in_run = 1e8;  ///< substeps a run may take in all (issue 13)
+constexpr int max_frames = 100000;
+
+/// Substeps per frame (backward Euler splits a frame into equal substeps no longer than dt; quasi-static: one),
+/// computed in double so that no count overflows; a run that cannot be done (over 1e8 substeps in all, over
+/// 100000 frames) is a SceneError naming the file and the value at fault.
+int checked_substeps(const TimeSpec& t, const std::string& file) {
+  if (t.frames < 1 || t.frames > max_frames)
+    throw SceneError(fmt::format("{}: frames: must be from 1 to {}, got {}", file, max_frames, t.frames));
+  if (!(t.end_time > 0.0) || !std::isfinite(t.end_time))
+    throw SceneError(fmt::format("{}: end_time: must be a finite number > 0, got {:g}", file, t.end_time));
+  if (t.integrator != Integrator::backward_euler) return 1;
+  if (!(t.dt > 0.0) || !std::isfinite(t.dt)) throw SceneError(fmt::format("{}: dt: must be a finite number > 0, got {:g}", file, t.dt));
+  const double per_frame = std::max(1.0, std::ceil(t.end_time / t.frames / t.dt - 1e-9));
+  const double total = per_frame * t.frames;
+  if (!(total <= max_substeps_in_run))
+    throw SceneError(fmt::format("{}: dt: {:g} with end_time {:g} over {} frames makes {:.3g} substeps; at most {:g} can run "
+                                 "(raise dt or lower end_time)",
+                                 file, t.dt, t.end_time, t.frames, total, max_substeps_in_run));
+  return static_cast<int>(per_frame);
+}
+
 /// Newton's stopping rule in words, for the header line.
 std::string stopping_rule(const NewtonOptions& o) {
   std::string rule;
@@ -82,6 +104,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
 
   // The mesh, read once (a flesh scene's: its volume and bones; the animation's length is the run's when
   // the scene gives none); the pins must select something on it and hold each coordinate once.
+  if (!s.flesh) (void)checked_substeps(s.time, source.string());  // before the mesh is built (a flesh's clip may set end_time)
   s.loaded = as_scene_error([&] { return scene_mesh(s); });
   if (s.loaded->flesh) {
     // Newton's stopping rule at the flesh's own scale (unless the scene sets one): a force of 1e-6 of what a
@@ -92,8 +115,15 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
     if (!solver || !solver->contains("step_tolerance")) s.solver.newton.step_tolerance = 1e-4 * h;
     const double duration = s.loaded->flesh->clip.duration();
     if (!top.has("end_time") && duration > 0.0) s.time.end_time = duration;
-    if (!top.has("frames")) s.time.frames = std::max(1, static_cast<int>(std::lround(s.time.end_time * FleshSpec::fps)));
+    if (!top.has("frames")) {
+      const double frames = std::max(1.0, std::round(s.time.end_time * FleshSpec::fps));
+      if (!(frames <= max_frames))
+        throw SceneError(fmt::format("{}: end_time: {:g} s at {:g} frames per second makes {:.3g} frames; at most {} can run",
+                                     source.string(), s.time.end_time, FleshSpec::fps, frames, max_frames));
+      s.time.frames = static_cast<int>(frames);
+    }
   }
+  if (s.flesh) (void)checked_substeps(s.time, source.string());
   const Eigen::VectorXd x0 = initial_positions(s, s.loaded->mesh);
   (void)as_scene_error([&] { return kinematic_dof_flags(scene_kinematics(s, s.loaded->mesh, x0), s.loaded->mesh.vertex_count()); });
   return s;
@@ -305,7 +335,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   const Eigen::VectorXd x0 = initial_positions(s, mesh);
   const bool dynamic = s.time.integrator == Integrator::backward_euler;
   const double frame_dt = s.time.end_time / s.time.frames;
-  const int substeps = dynamic ? std::max(1, static_cast<int>(std::ceil(frame_dt / s.time.dt - 1e-9))) : 1;
+  const int substeps = checked_substeps(s.time, s.source.string());
   const double h = frame_dt / substeps;
 
   SimulationSetup setup;
