@@ -77,5 +77,34 @@ TEST(SceneInput, RunsThatCannotBeDoneAreRefused) {
   std::filesystem::remove_all(s.output.dir);
 }
 
+TEST(SceneInput, KeysGivenTwiceAreRefused) {
+  // nlohmann keeps the last of two equal keys silently; a scene names the key instead.
+  EXPECT_EQ(file_error_of(R"({"dt": 0.01, "dt": 0.02})"), "F: dt: the key is given twice in the same object (give each key once)");
+  EXPECT_EQ(file_error_of(R"({"pins": [{"indices": [0]}, {"indices": [1], "axes": "x", "axes": "y"}]})"),
+            "F: pins[1].axes: the key is given twice in the same object (give each key once)");
+  EXPECT_EQ(file_error_of(R"({"mesh": {"box": {"res": 2, "min": [0, 0, 0], "res": 3}}})"),
+            "F: mesh.box.res: the key is given twice in the same object (give each key once)");
+  EXPECT_EQ(file_error_of(R"({"initial": [[], {"type": "perturb"}, {"type": "perturb", "seed": 1, "seed": 2}]})"),
+            "F: initial[2].seed: the key is given twice in the same object (give each key once)");
+  // The same key in different objects is fine.
+  EXPECT_EQ(file_error_of(R"({"mesh": {"box": {"min": [0, 0, 0], "max": [1, 1, 1]}},
+                              "pins": [{"region": {"min": [0, 0, 0], "max": [1, 1, 0]}}], "frames": 1})"), "");
+}
+
+TEST(SceneInput, NumbersOutOfRangeAndDeepNestingAreOneLine) {
+  EXPECT_EQ(file_error_of("{\n  \"dt\": 0.01,\n  \"end_time\": 1e309\n}"), "F: line 3: number out of range: 1e309");
+  EXPECT_EQ(file_error_of("{\"gravity\": [0, -1e400, 0]}"), "F: line 1: number out of range: -1e400");
+  EXPECT_EQ(file_error_of("{\"dt\": 1" + std::string(400, '0') + "}"),
+            "F: line 1: number out of range: 1" + std::string(39, '0') + "...");
+  EXPECT_EQ(file_error_of(R"({"gravity": [[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]})"),
+            "F: gravity[0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0]"
+            "[0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0]: nested deeper than 64 levels");
+  const std::string bad = file_error_of("{\"dt\": 0.1,");
+  EXPECT_TRUE(contains(bad, "F: not valid JSON: ")) << bad;
+  EXPECT_TRUE(contains(bad, "line 1")) << bad;
+  EXPECT_EQ(file_error_of(""), file_error_of("")) << "empty file";
+  EXPECT_TRUE(contains(file_error_of(""), "F: not valid JSON")) << file_error_of("");
+}
+
 }  // namespace
 }  // namespace snh

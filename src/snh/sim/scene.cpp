@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <random>
+#include <sstream>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -131,16 +132,12 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
 
 Scene load_scene(const std::filesystem::path& file) {
   if (const std::string problem = input_file_problem(file, "scene file"); !problem.empty()) throw SceneError(problem);
-  std::ifstream in(file);
+  std::ifstream in(file, std::ios::binary);
   if (!in) throw SceneError(fmt::format("{}: cannot open the scene file", file.string()));
-  json j;
-  try {
-    j = json::parse(in);
-  } catch (const json::parse_error& e) {
-    // nlohmann's message names the byte; keep it on one line.
-    throw SceneError(fmt::format("{}: not valid JSON: {}", file.string(), e.what()));
-  }
-  return parse_scene(j, file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw SceneError(fmt::format("{}: cannot read the scene file", file.string()));
+  return parse_scene(read_scene_json(text.str(), file.string()), file);
 }
 
 std::shared_ptr<const SceneMesh> scene_mesh(const Scene& s) {

@@ -14,6 +14,7 @@
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -174,6 +175,9 @@ struct Scene {
 
 /// Reads and checks a scene file. Throws SceneError.
 [[nodiscard]] Scene load_scene(const std::filesystem::path& file);
+/// A scene file's text as JSON, strictly: a key given twice in one object, a number beyond double's range
+/// (1e309) or nesting over 64 levels is a SceneError naming `file` and the key or line. Also for bad JSON.
+[[nodiscard]] nlohmann::json read_scene_json(std::string_view text, const std::string& file);
 /// Checks a parsed scene; `source` names it in messages. Throws SceneError (MeshError for a bad mesh file).
 [[nodiscard]] Scene parse_scene(const nlohmann::json& j, const std::filesystem::path& source);
 
