@@ -39,7 +39,8 @@ std::string file_error_of(const std::string& text) {
     out = e.what();
   }
   std::filesystem::remove(path);
-  for (std::size_t at; (at = out.find(path.string())) != std::string::npos;) out.replace(at, path.string().size(), "F");
+  for (std::size_t at; (at = out.find(path.string())) != std::string::npos;)
+    out = out.substr(0, at) + "F" + out.substr(at + path.string().size());
   return out;
 }
 
@@ -57,7 +58,8 @@ TEST(SceneInput, RunsThatCannotBeDoneAreRefused) {
   EXPECT_EQ(error_of(json::parse(R"({"dt": 1e-11})")),
             "s.json: dt: 1e-11 with end_time 1 over 25 frames makes 1e+11 substeps; at most 1e+08 can run (raise dt or lower end_time)");
   EXPECT_TRUE(contains(error_of(json::parse(R"({"dt": 1e-300})")), "s.json: dt: 1e-300 with end_time 1 over 25 frames makes 1e+300 substeps"));
-  EXPECT_TRUE(contains(error_of(json::parse(R"({"end_time": 1e308})")), "s.json: dt: 0.01 with end_time 1e+308 over 25 frames makes"));
+  EXPECT_TRUE(contains(error_of(json::parse(R"({"end_time": 1e15})")), "s.json: dt: 0.01 with end_time 1e+15 over 25 frames makes 1e+17"));
+  EXPECT_EQ(error_of(json::parse(R"({"end_time": 1e308})")), "s.json: end_time: must be at most 1e+15 in magnitude, got 1e+308");
   EXPECT_TRUE(contains(error_of(json::parse(R"({"dt": 1e-7, "end_time": 10.1})")), "makes 1.01e+08 substeps"));
   EXPECT_EQ(error_of(json::parse(R"({"dt": 1e-7, "end_time": 10})")), "") << "1e8 substeps in all may run";
   EXPECT_EQ(error_of(json::parse(R"({"frames": 100001})")), "s.json: frames: must be from 1 to 100000, got 100001");
@@ -104,6 +106,27 @@ TEST(SceneInput, NumbersOutOfRangeAndDeepNestingAreOneLine) {
   EXPECT_TRUE(contains(bad, "line 1")) << bad;
   EXPECT_EQ(file_error_of(""), file_error_of("")) << "empty file";
   EXPECT_TRUE(contains(file_error_of(""), "F: not valid JSON")) << file_error_of("");
+}
+
+TEST(SceneInput, ValuesOutsideTheDocumentedRangeAreRefused) {
+  EXPECT_EQ(error_of(json::parse(R"({"mesh": {"box": {"min": [-1e308, 0, 0]}}})")),
+            "s.json: mesh.box.min: expected 3 numbers at most 1e+15 in magnitude, got [-1e+308,0,0]");
+  EXPECT_EQ(error_of(json::parse(R"({"mesh": {"box": {"min": [0, 0, 0], "max": [1e200, 1, 1]}}})")),
+            "s.json: mesh.box.max: expected 3 numbers at most 1e+15 in magnitude, got [1e+200,1,1]");
+  EXPECT_EQ(error_of(json::parse(R"({"gravity": [0, -1e16, 0]})")),
+            "s.json: gravity: expected 3 numbers at most 1e+15 in magnitude, got [0,-1e+16,0]");
+  EXPECT_EQ(error_of(json::parse(R"({"density": 1e200})")), "s.json: density: must be at most 1e+15 in magnitude, got 1e+200");
+  EXPECT_EQ(error_of(json::parse(R"({"damping": {"mass": 2e15}})")), "s.json: damping.mass: must be at most 1e+15 in magnitude, got 2e+15");
+  EXPECT_EQ(error_of(json::parse(R"({"initial": [{"type": "scale", "factors": [1e16, 1, 1]}]})")),
+            "s.json: initial[0].factors: expected 3 numbers at most 1e+15 in magnitude, got [1e+16,1,1]");
+  EXPECT_EQ(error_of(json::parse(R"({"pins": [{"indices": [0], "motion": [{"type": "translate", "by": [1e300, 0, 0]}]}]})")),
+            "s.json: pins[0].motion[0].by: expected 3 numbers at most 1e+15 in magnitude, got [1e+300,0,0]");
+  EXPECT_EQ(error_of(json::parse(R"({"material": {"mu": 1e300, "lambda": 1}})")),
+            "s.json: material.mu: must be at most 1e+15 in magnitude, got 1e+300");
+  // In range one by one, out of range together: the initial operations' product is checked too.
+  EXPECT_EQ(error_of(json::parse(R"({"initial": [{"type": "scale", "factors": [1e15, 1, 1]}, {"type": "scale", "factors": [1e15, 1, 1]}]})")),
+            "s.json: initial: the operations move a vertex beyond the 1e+15 a scene allows (largest coordinate 1e+30)");
+  EXPECT_EQ(error_of(json::parse(R"({"mesh": {"box": {"min": [-1e15, -1e15, -1e15], "max": [1e15, 1e15, 1e15]}}, "frames": 1})")), "");
 }
 
 }  // namespace

@@ -125,7 +125,18 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
     }
   }
   if (s.flesh) (void)checked_substeps(s.time, source.string());
+  // Coordinates in range: a mesh file's (a box's are, from its checked corners), then after the initial operations.
+  const Eigen::Matrix3Xd& X = s.loaded->mesh.vertices;
+  for (Eigen::Index v = 0; v < X.cols(); ++v)
+    for (int a = 0; a < 3; ++a)
+      if (!(std::abs(X(a, v)) <= scene::max_magnitude))
+        throw SceneError(fmt::format("{}: {}: vertex {} has coordinate {:g}, beyond the {:g} a scene allows", source.string(),
+                                     s.mesh.file.empty() ? std::string("mesh") : "mesh.file " + s.mesh.file.string(), v, X(a, v),
+                                     scene::max_magnitude));
   const Eigen::VectorXd x0 = initial_positions(s, s.loaded->mesh);
+  if (!(x0.array().abs() <= scene::max_magnitude).all())
+    throw SceneError(fmt::format("{}: initial: the operations move a vertex beyond the {:g} a scene allows (largest coordinate {:g})",
+                                 source.string(), scene::max_magnitude, x0.array().abs().maxCoeff()));
   (void)as_scene_error([&] { return kinematic_dof_flags(scene_kinematics(s, s.loaded->mesh, x0), s.loaded->mesh.vertex_count()); });
   return s;
 }

@@ -19,6 +19,11 @@ namespace snh::scene {
 
 using json = nlohmann::json;
 
+/// Every number a scene gives is finite and at most this in magnitude (sizes, coordinates, translations,
+/// gravity, density, damping, scale factors, material parameters, times): a bound far beyond any physical
+/// scene, low enough that products of a few such values stay finite (issue 13).
+constexpr double max_magnitude = 1e15;
+
 class Keys {
  public:
   Keys(const json& j, std::string path, const std::string& file) : j_(j), path_(std::move(path)), file_(file) {
@@ -40,7 +45,9 @@ class Keys {
     const json* v = get(key);
     if (!v) return fallback;
     if (!v->is_number() || !std::isfinite(v->get<double>())) fail("expected a finite number, got " + v->dump(), key);
-    return v->get<double>();
+    const double x = v->get<double>();
+    if (!(std::abs(x) <= max_magnitude)) fail(fmt::format("must be at most {:g} in magnitude, got {:g}", max_magnitude, x), key);
+    return x;
   }
   double positive(const std::string& key, double fallback) {
     const double v = number(key, fallback);
@@ -83,6 +90,8 @@ class Keys {
     Eigen::Vector3d out;
     for (int i = 0; i < 3; ++i) {
       if (!(*v)[i].is_number() || !std::isfinite((*v)[i].get<double>())) fail("expected 3 finite numbers, got " + v->dump(), key);
+      if (!(std::abs((*v)[i].get<double>()) <= max_magnitude))
+        fail(fmt::format("expected 3 numbers at most {:g} in magnitude, got {}", max_magnitude, v->dump()), key);
       out[i] = (*v)[i].get<double>();
     }
     return out;

@@ -18,7 +18,8 @@ std::pair<double, Eigen::Quaterniond> parse_key(const json& j, const std::string
     if (!q->is_array() || q->size() != 4) k.fail("expected 4 numbers [x, y, z, w], got " + q->dump(), "quaternion");
     double c[4];
     for (int i = 0; i < 4; ++i) {
-      if (!(*q)[i].is_number() || !std::isfinite((*q)[i].get<double>())) k.fail("expected 4 finite numbers, got " + q->dump(), "quaternion");
+      if (!(*q)[i].is_number() || !std::isfinite((*q)[i].get<double>()) || !(std::abs((*q)[i].get<double>()) <= max_magnitude))
+        k.fail(fmt::format("expected 4 finite numbers at most {:g} in magnitude, got {}", max_magnitude, q->dump()), "quaternion");
       c[i] = (*q)[i].get<double>();
     }
     r = Eigen::Quaterniond(c[3], c[0], c[1], c[2]);
