@@ -129,5 +129,19 @@ TEST(SceneInput, ValuesOutsideTheDocumentedRangeAreRefused) {
   EXPECT_EQ(error_of(json::parse(R"({"mesh": {"box": {"min": [-1e15, -1e15, -1e15], "max": [1e15, 1e15, 1e15]}}, "frames": 1})")), "");
 }
 
+TEST(SceneInput, PinSetsDrivingOneVertexDifferentlyAreRefused) {
+  // Vertex 1 held in x by a still set and in y by a moving one: contradictory targets, silently combined before.
+  EXPECT_EQ(error_of(json::parse(R"({"mesh": {"box": {"res": 2}}, "pins": [{"indices": [0, 1], "axes": "x"},
+              {"indices": [1, 2], "axes": "y", "motion": [{"type": "translate", "by": [0, 0.1, 0]}]}]})")),
+            "s.json: pins[0] and pins[1] both drive vertex 1, in different ways (one of them moves): give each vertex to one pin set");
+  EXPECT_EQ(error_of(json::parse(R"({"mesh": {"box": {"res": 2}}, "pins": [{"indices": [5], "axes": "z",
+              "motion": [{"type": "rotate", "axis": [0, 0, 1], "degrees": 10}]}, {"indices": [3, 4, 5], "axes": "xy"}]})")),
+            "s.json: pins[0] and pins[1] both drive vertex 5, in different ways (one of them moves): give each vertex to one pin set");
+  // The same coordinate twice was already refused; two still sets sharing a vertex on different axes are fine.
+  EXPECT_TRUE(contains(error_of(json::parse(R"({"mesh": {"box": {"res": 2}}, "pins": [{"indices": [0, 1]}, {"indices": [1]}]})")),
+                       "holds the x coordinate of vertex 1"));
+  EXPECT_EQ(error_of(json::parse(R"({"mesh": {"box": {"res": 2}}, "pins": [{"indices": [0, 1], "axes": "x"}, {"indices": [1], "axes": "yz"}]})")), "");
+}
+
 }  // namespace
 }  // namespace snh

@@ -138,6 +138,18 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
     throw SceneError(fmt::format("{}: initial: the operations move a vertex beyond the {:g} a scene allows (largest coordinate {:g})",
                                  source.string(), scene::max_magnitude, x0.array().abs().maxCoeff()));
   (void)as_scene_error([&] { return kinematic_dof_flags(scene_kinematics(s, s.loaded->mesh, x0), s.loaded->mesh.vertex_count()); });
+  // Two pin sets may share a vertex (holding different coordinates) only while neither moves: a moving set's
+  // targets are a motion of the whole vertex, which another set's coordinates would contradict.
+  std::vector<int> holder(static_cast<std::size_t>(s.loaded->mesh.vertex_count()), -1);
+  for (std::size_t i = 0; i < s.pins.size(); ++i)
+    for (int v : select_vertices(s.pins[i].select, s.loaded->mesh.vertices, fmt::format("{}: pins[{}]", source.string(), i))) {
+      int& h = holder[static_cast<std::size_t>(v)];
+      if (h >= 0 && h != static_cast<int>(i) && (!s.pins[i].motions.empty() || !s.pins[static_cast<std::size_t>(h)].motions.empty()))
+        throw SceneError(fmt::format("{}: pins[{}] and pins[{}] both drive vertex {}, in different ways (one of them moves): "
+                                     "give each vertex to one pin set",
+                                     source.string(), h, i, v));
+      if (h < 0) h = static_cast<int>(i);
+    }
   return s;
 }
 
