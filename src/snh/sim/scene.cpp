@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 
@@ -59,6 +60,47 @@ int checked_substeps(const TimeSpec& t, const std::string& file) {
                                  "(raise dt or lower end_time)",
                                  file, t.dt, t.end_time, t.frames, total, max_substeps_in_run));
   return static_cast<int>(per_frame);
+}
+
+/// Two pin sets may share a vertex, each holding its own coordinates; a moving set must then not move the
+/// vertex along a coordinate that the other set holds elsewhere (a rotation about z, say, while another set holds
+/// y still): the two would drive the vertex in different ways. Checked at the motions' starts, ends and
+/// in between; `sets` are the scene's kinematic sets (its pins first).
+void check_shared_pins(const Scene& s, const std::vector<KinematicSet>& sets) {
+  const std::size_t pins = s.pins.size();
+  if (pins < 2) return;
+  std::vector<double> times{0.0, s.time.end_time};
+  for (const PinSpec& p : s.pins)
+    for (const Motion& m : p.motions)
+      std::visit(
+          [&](const auto& mo) {
+            for (int k = 0; k <= 4; ++k) times.push_back(mo.start + 0.25 * k * (mo.end - mo.start));
+          },
+          m);
+  std::map<int, std::vector<std::pair<std::size_t, Eigen::Index>>> at;  // vertex → (set, column)
+  for (std::size_t i = 0; i < pins; ++i)
+    for (std::size_t c = 0; c < sets[i].vertices.size(); ++c) at[sets[i].vertices[c]].push_back({i, static_cast<Eigen::Index>(c)});
+  std::vector<Eigen::Matrix3Xd> targets(pins);
+  for (double t : times) {
+    for (std::size_t i = 0; i < pins; ++i) {
+      targets[i].resize(3, static_cast<Eigen::Index>(sets[i].vertices.size()));
+      sets[i].provider->targets(t, targets[i]);
+    }
+    for (const auto& [v, holders] : at)
+      for (const auto& [moving, cm] : holders) {
+        if (s.pins[moving].motions.empty()) continue;
+        for (const auto& [other, co] : holders)
+          for (int a = 0; a < 3; ++a) {
+            if (other == moving || !sets[other].axes[a] || sets[moving].axes[a]) continue;
+            const double x = targets[moving](a, cm), y = targets[other](a, co);
+            if (std::abs(x - y) > 1e-9 * std::max({1.0, std::abs(x), std::abs(y)}))
+              throw SceneError(fmt::format("{}: pins[{}] and pins[{}] both drive vertex {} in different ways: pins[{}] moves it along "
+                                           "{} (to {:g} at t = {:g}), which pins[{}] holds at {:g}; give each vertex to one pin set",
+                                           s.source.string(), std::min(moving, other), std::max(moving, other), v, moving,
+                                           char('x' + a), x, t, other, y));
+          }
+      }
+  }
 }
 
 /// Newton's stopping rule in words, for the header line.
@@ -138,18 +180,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
     throw SceneError(fmt::format("{}: initial: the operations move a vertex beyond the {:g} a scene allows (largest coordinate {:g})",
                                  source.string(), scene::max_magnitude, x0.array().abs().maxCoeff()));
   (void)as_scene_error([&] { return kinematic_dof_flags(scene_kinematics(s, s.loaded->mesh, x0), s.loaded->mesh.vertex_count()); });
-  // Two pin sets may share a vertex (holding different coordinates) only while neither moves: a moving set's
-  // targets are a motion of the whole vertex, which another set's coordinates would contradict.
-  std::vector<int> holder(static_cast<std::size_t>(s.loaded->mesh.vertex_count()), -1);
-  for (std::size_t i = 0; i < s.pins.size(); ++i)
-    for (int v : select_vertices(s.pins[i].select, s.loaded->mesh.vertices, fmt::format("{}: pins[{}]", source.string(), i))) {
-      int& h = holder[static_cast<std::size_t>(v)];
-      if (h >= 0 && h != static_cast<int>(i) && (!s.pins[i].motions.empty() || !s.pins[static_cast<std::size_t>(h)].motions.empty()))
-        throw SceneError(fmt::format("{}: pins[{}] and pins[{}] both drive vertex {}, in different ways (one of them moves): "
-                                     "give each vertex to one pin set",
-                                     source.string(), h, i, v));
-      if (h < 0) h = static_cast<int>(i);
-    }
+  check_shared_pins(s, scene_kinematics(s, s.loaded->mesh, x0));
   return s;
 }
 
