@@ -24,6 +24,12 @@ run() {
 }
 lines() { wc -l <"$1" | tr -d ' '; }
 
+# A sanitizer build reserves terabytes of shadow memory and cannot start under ulimit -v: skip (77).
+if ! (ulimit -v 300000 && exec "$HEXCLI" --help) >/dev/null 2>&1; then
+  echo "memory: skipped (the programs do not start under ulimit -v 300000: a sanitizer build?)"
+  exit 77
+fi
+
 # (a) hexcli 10 under 300 MB: the estimate (about 420 MiB of address space with CHOLMOD) does not fit.
 run 300000 "$work/a" "$HEXCLI" 10 stable_neo_hookean 1.0 10.0 "$work/a_out"
 code=$?
