@@ -148,5 +148,35 @@ TEST(SceneInput, PinSetsDrivingOneVertexDifferentlyAreRefused) {
               {"indices": [1, 2], "axes": "y", "motion": [{"type": "translate", "by": [0, 0.1, 0]}]}]})")), "");
 }
 
+TEST(SceneRunGuard, ANonFiniteStateStopsTheRunAndKeepsTheCompletedFrames) {
+  // A scene made in code (unchecked) whose pin's target is NaN: no NaN may reach a frame or the log (before, frame 1
+  // was written and its line printed "|g| = inf, energy nan" and blamed J <= 0).
+  Scene s;
+  s.source = "code";
+  s.mesh.resolution = 2;
+  s.time.frames = 4;
+  s.time.end_time = 1.0;
+  s.time.dt = 0.25;
+  s.pins.push_back({.select = {.region = std::nullopt, .indices = {0}}, .axes = {true, true, true},
+                    .motions = {Translate{.by = Eigen::Vector3d(std::nan(""), 0, 0), .start = 0.5, .end = 1.0}}});
+  s.output.dir = std::filesystem::temp_directory_path() / ("snh_scene_guard_" + std::to_string(::getpid()));
+  std::ostringstream log;
+  const SceneResult r = run_scene(s, log);
+  EXPECT_FALSE(r.all_converged);
+  EXPECT_EQ(r.failure, "frame 1: the state is not finite (NaN or Inf) after t = 0.25; stopped, frames 000 to 000 kept") << r.failure;
+  EXPECT_EQ(r.frames.size(), 1u) << "the initial state";
+  EXPECT_TRUE(r.final_positions.allFinite()) << "the last completed frame's state";
+  EXPECT_FALSE(contains(log.str(), "nan")) << log.str();
+  EXPECT_FALSE(contains(log.str(), "inf")) << log.str();
+  EXPECT_TRUE(std::filesystem::exists(s.output.dir / "000.obj"));
+  EXPECT_FALSE(std::filesystem::exists(s.output.dir / "001.obj"));
+  std::ifstream stats(s.output.dir / "stats.json");
+  const json j = json::parse(stats);
+  EXPECT_EQ(j["status"], "stopped");
+  EXPECT_EQ(j["frames"].size(), 1u);
+  EXPECT_EQ(j["failure"], r.failure);
+  std::filesystem::remove_all(s.output.dir);
+}
+
 }  // namespace
 }  // namespace snh

@@ -51,6 +51,14 @@ void record_deformation(const ElasticTerm::Deformation& d, double rest_volume, S
   r.volume_ratio = d.volume / rest_volume;
 }
 
+/// Whether every number of a record that the log line and the stats show is finite.
+bool finite_record(const StepRecord& r) {
+  for (double v : {r.residual, r.energy, r.volume_ratio, r.min_J, r.elastic_energy, r.kinetic_energy, r.gravity_energy,
+                   r.total_energy, r.surface_volume_ratio, r.lbs_volume_ratio})
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
 }  // namespace
 
 RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log) {
@@ -179,6 +187,7 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
       }
       throw OutOfMemoryError(message);
     };
+    const SimulationState before = sim.state();
     StepReport rep;
     try {
       rep = sim.advance((frame - 1) * plan.frame_duration, plan.substep, plan.substeps, &newton,
@@ -212,6 +221,16 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
     const ElasticTerm::Deformation d = sim.elastic().deformation(sim.x());
     record_deformation(d, sim.rest_volume(), r);
     if (plan.fill) plan.fill(r, &rep);
+    // No NaN or Inf reaches a frame, the records or the screen: a state (or its energies, residual, volume)
+    // that is not finite ends the run at the last completed frame, whose files and checkpoint stay.
+    const SimulationState after = sim.state();
+    if (!after.x.allFinite() || !after.aux.allFinite() || !finite_record(r)) {
+      sim.restore(before);
+      result.all_converged = false;
+      result.failure = fmt::format("{} {}: the state is not finite (NaN or Inf) after t = {:g}; stopped, {}s 000 to {:03d} kept",
+                                   word, frame, r.time, word, frame - 1);
+      return finish("stopped");
+    }
     write_frame(frame, d);
     r.wall_seconds = since(t_frame);
     result.records.push_back(r);
