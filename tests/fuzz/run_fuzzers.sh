@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer harnesses (fuzz/, clang with ASan + UBSan) in BUILD_DIR and runs each for SECONDS
-# (default 7: about a minute for the eight readers) from its seed corpus in fuzz/corpus/. New inputs go
+# (default 7: about a minute for the eight readers and the scene JSON) from its seed corpus in fuzz/corpus/. New inputs go
 # to a temporary directory, not into the repository. Fails on any crash, sanitizer report, leak,
 # timeout or out-of-memory, leaving the reproducer in BUILD_DIR/crashes.
 # Usage: run_fuzzers.sh SOURCE_DIR BUILD_DIR [SECONDS]
@@ -17,9 +17,11 @@ mkdir -p "$BUILD/crashes"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 status=0
-for format in msh mesh vtu tetgen obj off ply stl; do
+for format in msh mesh vtu tetgen obj off ply stl scene_json; do
   mkdir -p "$work/$format"
-  if "$BUILD/fuzz_$format" "$work/$format" "$SRC/fuzz/corpus/$format" -max_total_time="$SECONDS_EACH" -timeout=10 \
+  seeds=("$SRC/fuzz/corpus/$format")
+  [ "$format" = scene_json ] && seeds=("$SRC/scenes" "$SRC/tests/data/malformed_scenes")  # the example and malformed scenes
+  if "$BUILD/fuzz_$format" "$work/$format" "${seeds[@]}" -max_total_time="$SECONDS_EACH" -timeout=10 \
        -rss_limit_mb=2048 -max_len=4096 -artifact_prefix="$BUILD/crashes/$format-" -print_final_stats=1 \
        > "$work/$format.log" 2>&1; then
     echo "fuzz_$format: $(grep -o 'stat::number_of_executed_units: [0-9]*' "$work/$format.log" | grep -o '[0-9]*$') inputs, no failure"

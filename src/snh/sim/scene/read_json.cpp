@@ -58,7 +58,11 @@ class StrictReader {
       throw SceneError(fmt::format("{}: line {}: number out of range: {}", file_, line,
                                    token.size() > 40 ? token.substr(0, 40) + "..." : token));
     }
-    throw SceneError(fmt::format("{}: not valid JSON: {}", file_, e.what()));  // nlohmann names line and column
+    // nlohmann names line and column; its "[json.exception.parse_error.101] " tag is dropped.
+    std::string what = e.what();
+    if (what.rfind("[json.exception.", 0) == 0)
+      if (const std::size_t at = what.find("] "); at != std::string::npos) what.erase(0, at + 2);
+    throw SceneError(fmt::format("{}: not valid JSON: {}", file_, what));
   }
 
  private:
