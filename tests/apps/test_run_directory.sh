@@ -12,18 +12,8 @@ work="$(mktemp -d)"
 pids=()
 trap 'for p in "${pids[@]}"; do kill -9 "$p" 2> /dev/null; done; rm -rf "$work"' EXIT
 pass=0 fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
-
-# wait_for FILE PATTERN SECONDS: true once FILE has a line matching PATTERN.
-wait_for() {
-  local i
-  for ((i = 0; i < $3 * 50; i++)); do
-    grep -q -- "$2" "$1" 2> /dev/null && return 0
-    sleep 0.02
-  done
-  return 1
-}
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for
 
 # 1. The header is in the log as soon as the run starts, before step 1 ends (res 24 hexes: step 1 takes
 #    a factorization of 46 875 unknowns); then SIGKILL after step 2: the stats say "running".

@@ -13,18 +13,8 @@ work="$(mktemp -d)"
 pid=""
 trap '[ -n "$pid" ] && kill -9 "$pid" 2> /dev/null; rm -rf "$work"' EXIT
 pass=0 fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
-
-# wait_for FILE PATTERN SECONDS: true once FILE has a line matching PATTERN.
-wait_for() {
-  local i
-  for ((i = 0; i < $3 * 50; i++)); do
-    grep -q -- "$2" "$1" 2> /dev/null && return 0
-    sleep 0.02
-  done
-  return 1
-}
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for
 
 # wait_exists PATH SECONDS: true once PATH exists.
 wait_exists() {

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "snh/sim/interrupt.hpp"
+#include "scene_error.hpp"
 #include "snh/sim/scene.hpp"
 
 namespace snh {
@@ -21,15 +22,7 @@ namespace {
 
 using json = nlohmann::json;
 
-/// The SceneError message for j, or "" if it parses.
-std::string error_of(const json& j) {
-  try {
-    (void)parse_scene(j, "s.json");
-  } catch (const SceneError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::error_of;
 
 TEST(SceneFile, DefaultsAndAFullScene) {
   const Scene d = parse_scene(json::object(), "dir/empty.json");

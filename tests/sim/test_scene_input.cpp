@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scene_error.hpp"
 #include "snh/sim/scene.hpp"
 
 namespace snh {
@@ -18,15 +19,7 @@ namespace {
 
 using json = nlohmann::json;
 
-/// The SceneError message for j, or "" if it parses.
-std::string error_of(const json& j) {
-  try {
-    (void)parse_scene(j, "s.json");
-  } catch (const SceneError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::error_of;
 
 /// The SceneError message for the scene file holding `text`, or "" if it loads; the file's name is replaced by "F".
 std::string file_error_of(const std::string& text) {
