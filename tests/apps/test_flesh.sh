@@ -31,6 +31,11 @@ python3 "$HERE/check_usda.py" "$work/broken.usda" > /dev/null 2>&1 && bad "check
 # Tets, and a second run into the same directory replacing the first.
 "$SNH" flesh "$limb" --volume tets --resolution 10 --out "$work/limb" --no-report > "$work/tets.log" 2>&1 && grep -q 'tets (TetGen)' "$work/tets.log" \
   && [ ! -f "$work/limb/index.html" ] && [ -f "$work/limb/surface/024.obj" ] && ok || bad "limb tets: $(tail -2 "$work/tets.log")"
+# A soft binding shell from the command line: its header line, its settings, every frame converged.
+"$SNH" flesh "$limb" --resolution 12 --soft-shell 0.15 --soft-stiffness 5 --out "$work/soft" --no-report > "$work/soft.log" 2>&1 \
+  && grep -q '^soft binding: [1-9][0-9]* more volume vertices within 0.15 of the capsules, pulled by springs of 5 x E x h' "$work/soft.log" \
+  && grep -q '"stiffness": 5' "$work/soft/stats.json" && grep -q '"all_converged": true' "$work/soft/stats.json" \
+  && ok || bad "soft binding: $(tail -2 "$work/soft.log")"
 
 # The hand closing into a fist (scenes/hand_fist.json): every frame converges and the flesh keeps the volume
 # inside its render surface within 3 % at every frame, while skinning loses more.
@@ -63,6 +68,8 @@ expect_error missing "missing.glb" "$work/missing.glb"
 expect_error no_clip "no animation clip" "$MODELS/hand/left.glb"
 expect_error clip_name 'no animation clip "wave"' "$limb" --animation wave
 expect_error lame "go together" "$limb" --mu 1
+expect_error soft_alone "requires --soft-shell" "$limb" --soft-stiffness 3
+expect_error soft_shell "flesh.soft_binding.shell: must be > 0, got -1" "$limb" --soft-shell -1
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -75,5 +75,30 @@ TEST(Bones, BindingTakesTheDeepestCapsule) {
   EXPECT_EQ(c.bone[1], 0);
 }
 
+TEST(Bones, SoftBindingTakesTheShellOutsideTheCapsulesWithFadingWeights) {
+  std::vector<Bone> bones{{.name = "x", .joint = 0, .child = 1, .a = {0, 0, 0}, .b = {1, 0, 0}, .radius = 0.3},
+                          {.name = "y", .joint = 0, .child = 2, .a = {0, 0, 0}, .b = {0, 1, 0}, .radius = 0.2}};
+  Eigen::Matrix3Xd X(3, 6);
+  X.col(0) = Eigen::Vector3d(0.5, 0.1, 0);   // inside x: hard
+  X.col(1) = Eigen::Vector3d(0.5, 0.35, 0);  // 0.05 outside x, 0.3 outside y: soft to x, weight 0.75
+  X.col(2) = Eigen::Vector3d(0.5, 0.45, 0);  // 0.15 outside x, 0.3 outside y: soft to x, weight 0.25
+  X.col(3) = Eigen::Vector3d(0.5, 0.5, 0);   // 0.2 outside x: on the shell's outer edge, not bound
+  X.col(4) = Eigen::Vector3d(0.25, 0.8, 0);  // 0.5 outside x, 0.05 outside y: soft to y
+  X.col(5) = Eigen::Vector3d(3, 3, 3);       // far from both
+  const Binding hard = bind_to_bones(bones, X);
+  EXPECT_EQ(hard.vertex, (std::vector<int>{0}));
+  const SoftBinding soft = soft_bind_to_bones(bones, X, 0.2, hard);
+  EXPECT_EQ(soft.vertex, (std::vector<int>{1, 2, 4}));
+  EXPECT_EQ(soft.bone, (std::vector<int>{0, 0, 1}));
+  ASSERT_EQ(soft.weight.size(), 3u);
+  EXPECT_NEAR(soft.weight[0], 1.0 - 0.05 / 0.2, 1e-12);
+  EXPECT_NEAR(soft.weight[1], 1.0 - 0.15 / 0.2, 1e-12);
+  EXPECT_NEAR(soft.weight[2], 1.0 - 0.05 / 0.2, 1e-12);
+  EXPECT_TRUE(soft_bind_to_bones(bones, X, 0.0, hard).vertex.empty()) << "no shell, no soft binding";
+  // A vertex held hard is never bound softly too.
+  const SoftBinding all = soft_bind_to_bones(bones, X, 10.0, hard);
+  EXPECT_EQ(all.vertex, (std::vector<int>{1, 2, 3, 4, 5}));
+}
+
 }  // namespace
 }  // namespace snh

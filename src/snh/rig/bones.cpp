@@ -70,4 +70,27 @@ Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X)
   return out;
 }
 
+SoftBinding soft_bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X, double shell,
+                               const Binding& hard) {
+  SoftBinding out;
+  if (!(shell > 0.0)) return out;
+  std::vector<bool> held(static_cast<std::size_t>(X.cols()), false);
+  for (int v : hard.vertex) held[static_cast<std::size_t>(v)] = true;
+  for (Eigen::Index v = 0; v < X.cols(); ++v) {
+    if (held[static_cast<std::size_t>(v)]) continue;
+    int best = -1;
+    double gap = 0.0;  // distance − radius: > 0 outside the capsule; ties go to the first bone
+    for (int b = 0; b < static_cast<int>(bones.size()); ++b) {
+      const double d = segment_distance(bones[b].a, bones[b].b, X.col(v)) - bones[b].radius;
+      if (best < 0 || d < gap) best = b, gap = d;
+    }
+    if (best >= 0 && gap < shell) {
+      out.vertex.push_back(static_cast<int>(v));
+      out.bone.push_back(best);
+      out.weight.push_back(1.0 - std::max(gap, 0.0) / shell);
+    }
+  }
+  return out;
+}
+
 }  // namespace snh

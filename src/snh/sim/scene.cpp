@@ -310,6 +310,8 @@ void add_flesh_output(const Flesh& flesh, const Scene& s, const Simulation& sim,
   plan.settings["volume_of_cells"] = flesh.volume_of_cells;
   plan.settings["surface_volume"] = flesh.surface_volume;
   plan.settings["bones"] = bones;
+  if (spec.soft_shell > 0.0)
+    plan.settings["soft_binding"] = {{"shell", spec.soft_shell}, {"stiffness", spec.soft_stiffness}, {"vertices", flesh.soft.vertex.size()}};
   const double rest_surface = surface_volume(flesh, m.vertices);
 
   const auto base_header = plan.header;
@@ -329,6 +331,10 @@ void add_flesh_output(const Flesh& flesh, const Scene& s, const Simulation& sim,
     for (std::size_t b = 0; b < flesh.bones.size(); ++b)
       counts += fmt::format("{}{} {}", b ? ", " : "", flesh.bones[b].name, flesh.bound_per_bone[b]);
     o << fmt::format("bones: {} binding {} volume vertices ({})\n", flesh.bones.size(), flesh.binding.vertex.size(), counts);
+    if (spec.soft_shell > 0.0)
+      o << fmt::format("soft binding: {} more volume vertices within {:.4g} of the capsules, pulled by springs of {:g} x E x h "
+                       "(fading to 0 at the shell's edge)\n",
+                       flesh.soft.vertex.size(), spec.soft_shell, spec.soft_stiffness);
     for (std::size_t b = 0; b < flesh.bones.size(); ++b)
       if (flesh.bound_per_bone[b] == 0)
         o << fmt::format("warning: bone {} binds no volume vertex (capsule radius {:.4g}; cells {:.4g} wide)\n", flesh.bones[b].name,
@@ -399,6 +405,9 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   setup.mass_damping = s.forces.mass_damping;
   setup.stiffness_damping = s.forces.stiffness_damping;
   setup.kinematic = scene_kinematics(s, mesh, x0);
+  if (loaded->flesh)
+    if (std::shared_ptr<Term> soft = soft_binding_term(loaded->flesh, s.flesh->soft_stiffness, youngs_modulus(s.material.params)))
+      setup.terms.push_back(std::move(soft));
   setup.initial = x0;
   setup.linear.name = s.solver.linear;
   setup.linear.reuse_factor = !s.solver.refactorize;

@@ -50,6 +50,10 @@ Simulation::Simulation(SimulationSetup setup)
   // Inertia, damping and gravity: only where there is something to add (a quasi-static run without
   // gravity minimises the elastic energy alone).
   if (dynamic() || setup_.gravity != Eigen::Vector3d::Zero()) problem_.add(inertia_);
+  for (const std::shared_ptr<Term>& term : setup_.terms) {
+    if (!term) throw std::invalid_argument("simulation: an energy term is missing (null)");
+    problem_.add(*term);
+  }
   solver_ = make_linear_solver(setup_.linear, {.mesh = &elastic_.mesh(), .free_index = &dofs_.free_index()});
   const Eigen::Index n = 3 * elastic_.mesh().vertex_count();
   if (setup_.initial.size() == 0) x_ = Eigen::Map<const Eigen::VectorXd>(elastic_.mesh().vertices.data(), n);
@@ -90,6 +94,7 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
   else if (steps_ >= 1) guess = 2.0 * x_ - previous_;
   else guess = setup_.first_guess ? setup_.first_guess(x_, t) : x_;
   place_kinematic(guess, t);
+  problem_.at_time(t);
   inertia_.begin_step(x_n, v_);
   if (!std::isfinite(problem_.energy(guess))) {  // the prediction leaves an energy's domain
     guess = setup_.fallback_guess ? setup_.fallback_guess(x_n, t) : x_n;
