@@ -68,7 +68,8 @@ expect_error missing "missing.glb" "$work/missing.glb"
 expect_error no_clip "no animation clip" "$MODELS/hand/left.glb"
 expect_error clip_name 'no animation clip "wave"' "$limb" --animation wave
 expect_error lame "go together" "$limb" --mu 1
-expect_error soft_alone "requires --soft-shell" "$limb" --soft-stiffness 3
+expect_error soft_stiffness "flesh.soft_binding.stiffness: must be > 0, got 0" "$limb" --soft-stiffness 0
+expect_error joint_cells "joint-cells: loose not in" "$limb" --joint-cells loose
 expect_error soft_shell "flesh.soft_binding.shell: must be > 0, got -1" "$limb" --soft-shell -1
 
 echo "$pass passed, $fail failed"

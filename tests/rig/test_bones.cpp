@@ -100,5 +100,33 @@ TEST(Bones, SoftBindingTakesTheShellOutsideTheCapsulesWithFadingWeights) {
   EXPECT_EQ(all.vertex, (std::vector<int>{1, 2, 3, 4, 5}));
 }
 
+TEST(Bones, SplitAtJointsReleasesTheVerticesOfCellsHeldByTwoJoints) {
+  // Three tets in a row sharing faces: vertices 0..5; bones of joints 0 and 1 (and a second bone of joint 0).
+  std::vector<Bone> bones{{.name = "a", .joint = 0}, {.name = "b", .joint = 1}, {.name = "c", .joint = 0}};
+  Eigen::MatrixXi cells(4, 3);
+  cells << 0, 1, 2, 1, 2, 3, 2, 3, 4, 3, 4, 5;  // columns: {0,1,2,3}, {1,2,3,4}, {2,3,4,5}
+  Binding b;
+  b.vertex = {0, 1, 4, 5};
+  b.bone = {0, 2, 1, 1};  // 0 and 1 with joint 0 (two bones of it), 4 and 5 with joint 1
+  const JointSplit split = split_at_joints(b, bones, cells, 6);
+  // Cell {1,2,3,4} holds 1 (joint 0) and 4 (joint 1): both released; cell {0,1,2,3} holds joint 0 only.
+  EXPECT_EQ(split.kept.vertex, (std::vector<int>{0, 5}));
+  EXPECT_EQ(split.kept.bone, (std::vector<int>{0, 1}));
+  EXPECT_EQ(split.released.vertex, (std::vector<int>{1, 4}));
+  EXPECT_EQ(split.released.bone, (std::vector<int>{2, 1}));
+  // Two bones of one joint never conflict.
+  b.bone = {0, 2, 0, 2};
+  EXPECT_TRUE(split_at_joints(b, bones, cells, 6).released.vertex.empty());
+  // Released vertices join a soft binding at weight 1, in vertex order; a vertex already soft keeps its weight.
+  SoftBinding soft;
+  soft.vertex = {2, 4};
+  soft.bone = {0, 0};
+  soft.weight = {0.5, 0.25};
+  const SoftBinding merged = merge_soft(soft, split.released, 1.0);
+  EXPECT_EQ(merged.vertex, (std::vector<int>{1, 2, 4}));
+  EXPECT_EQ(merged.bone, (std::vector<int>{2, 0, 0}));
+  EXPECT_EQ(merged.weight, (std::vector<double>{1.0, 0.5, 0.25}));
+}
+
 }  // namespace
 }  // namespace snh

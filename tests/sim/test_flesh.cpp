@@ -10,6 +10,8 @@
 #include <optional>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -134,6 +136,7 @@ TEST_F(FleshLimb, SoftBindingPullsTheShellTowardItsBonesAndStiffensWithItsStiffn
   auto soft_scene = [&](const std::string& out, std::optional<double> stiffness) {
     json j = scene("lattice", 14, out);
     j["flesh"]["bones"] = json::array({{{"joint", "shoulder"}, {"radius", 0.12}}, {{"joint", "elbow"}, {"radius", 0.12}}});
+    j["flesh"]["joint_cells"] = "hard";  // the shell alone
     if (stiffness) j["flesh"]["soft_binding"] = {{"shell", shell}, {"stiffness", *stiffness}};
     return j;
   };
@@ -172,6 +175,39 @@ TEST_F(FleshLimb, SoftBindingPullsTheShellTowardItsBonesAndStiffensWithItsStiffn
   }
   const json st = stats("soft_1");
   EXPECT_EQ(st["soft_binding"]["vertices"].get<std::size_t>(), f.soft.vertex.size());
+}
+
+TEST_F(FleshLimb, CellsSpanningTheElbowAreHeldByOneJointAtMost) {
+  std::map<std::string, std::size_t> released;
+  for (const char* mode : {"soft", "free", "hard"}) {
+    json j = scene("lattice", 14, std::string("joints_") + mode);
+    j["flesh"]["joint_cells"] = mode;
+    const Scene s = parse_scene(j, dir_ / "limb.json");
+    const Flesh& f = *s.loaded->flesh;
+    released[mode] = f.released.vertex.size();
+    std::vector<int> joint(f.volume.vertex_count(), -1);
+    for (std::size_t i = 0; i < f.binding.vertex.size(); ++i) joint[f.binding.vertex[i]] = f.bones[f.binding.bone[i]].joint;
+    int spanning = 0;  // cells whose hard-bound vertices move with two joints
+    for (Eigen::Index c = 0; c < f.volume.cell_count(); ++c) {
+      std::set<int> joints;
+      for (Eigen::Index k = 0; k < f.volume.cells.rows(); ++k)
+        if (joint[f.volume.cells(k, c)] >= 0) joints.insert(joint[f.volume.cells(k, c)]);
+      spanning += joints.size() > 1;
+    }
+    if (std::string(mode) == "hard") {
+      EXPECT_GT(spanning, 0) << "the default capsules of the limb meet at the elbow";
+      EXPECT_TRUE(f.soft.vertex.empty());
+    } else {
+      EXPECT_EQ(spanning, 0) << mode;
+      EXPECT_GT(f.released.vertex.size(), 0u) << mode;
+      EXPECT_EQ(f.soft.vertex, std::string(mode) == "soft" ? f.released.vertex : std::vector<int>{}) << mode;
+    }
+    // The bend runs in every mode.
+    const SceneResult r = run(j);
+    EXPECT_EQ(r.frames.size(), 5u) << mode;
+  }
+  EXPECT_EQ(released["soft"], released["free"]);
+  EXPECT_EQ(released["hard"], 0u);
 }
 
 TEST_F(FleshLimb, LatticeAndTetsAgreeInShape) {
@@ -236,8 +272,9 @@ TEST_F(FleshLimb, BadFleshScenesAreNamed) {
   j["flesh"]["keyframes"] = keyframes("elbow", json::array({key(1, 0), key(1, 5)}));
   EXPECT_NE(error_of(j).find("must increase"), std::string::npos) << error_of(j);
   j = scene("lattice", 10, "bad");
-  j["flesh"]["soft_binding"] = {{"stiffness", 2.0}};
-  EXPECT_NE(error_of(j).find("flesh.soft_binding: needs shell"), std::string::npos) << error_of(j);
+  j["flesh"]["joint_cells"] = "loose";
+  EXPECT_NE(error_of(j).find("flesh.joint_cells: expected one of soft, free, hard, got \"loose\""), std::string::npos) << error_of(j);
+  j = scene("lattice", 10, "bad");
   j["flesh"]["soft_binding"] = {{"shell", 0.0}};
   EXPECT_NE(error_of(j).find("flesh.soft_binding.shell: must be > 0, got 0"), std::string::npos) << error_of(j);
   j["flesh"]["soft_binding"] = {{"shell", 0.1}, {"stiffness", -1}};

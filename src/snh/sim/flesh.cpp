@@ -136,14 +136,22 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
       throw std::invalid_argument(fmt::format("{}: bone {} binds no volume vertex with the radius {:g} given for it (cells are "
                                               "{:.3g} wide: raise the radius or the resolution)",
                                               where, f.bones[b].name, f.bones[b].radius, f.cell_size));
-  if (spec.soft_shell > 0.0) {
-    f.soft = soft_bind_to_bones(f.bones, f.volume.vertices, spec.soft_shell, f.binding);
-    f.soft_per_bone = f.soft.count_per_bone(static_cast<int>(f.bones.size()));
-  }
   if (f.binding.vertex.empty())
     throw std::invalid_argument(fmt::format("{}: no volume vertex lies inside a bone's capsule (cells are {:.3g} wide): raise the "
                                             "resolution or set bone radii",
                                             where, f.cell_size));
+  if (spec.soft_shell > 0.0) f.soft = soft_bind_to_bones(f.bones, f.volume.vertices, spec.soft_shell, f.binding);
+  if (spec.joint_cells != JointCells::hard) {
+    JointSplit split = split_at_joints(f.binding, f.bones, f.volume.cells, f.volume.vertex_count());
+    f.binding = std::move(split.kept);
+    f.released = std::move(split.released);
+    if (spec.joint_cells == JointCells::soft) f.soft = merge_soft(f.soft, f.released, 1.0);
+    f.bound_per_bone = f.binding.count_per_bone(static_cast<int>(f.bones.size()));
+    if (f.binding.vertex.empty() && f.soft.vertex.empty())
+      throw std::invalid_argument(fmt::format("{}: every bound vertex lies in a cell spanning a joint, and joint cells are free: "
+                                              "nothing holds the flesh (raise the resolution, or bind joint cells soft or hard)",
+                                              where));
+  }
   return f;
 }
 

@@ -23,6 +23,15 @@ namespace snh {
 
 enum class FleshVolume { lattice, tets };
 
+/// What becomes of bound vertices in cells that span a joint (a cell holding vertices of two joints' bones):
+/// `soft` (the default) releases them from the hard binding and binds them softly (weight 1) to their
+/// bones; `free` releases them; `hard` keeps them bound (HOBAK's binding: the cell is then forced by two
+/// rigid motions, and a sharply bent joint can stall Newton next to it).
+enum class JointCells { soft, free, hard };
+[[nodiscard]] inline const char* to_string(JointCells j) {
+  return j == JointCells::soft ? "soft" : j == JointCells::free ? "free" : "hard";
+}
+
 /// Keyframed rotations shared by one or more joints: at each time a rotation relative to the joint's rest
 /// rotation, about the joint's own axes (animation.hpp JointKeys), slerped between keys.
 struct KeyframeSpec {
@@ -51,6 +60,7 @@ struct FleshSpec {
   /// the capsule to 0 at the shell's edge).
   double soft_shell = 0.0;
   double soft_stiffness = 1.0;
+  JointCells joint_cells = JointCells::soft;
   // Defaults of a flesh run (the paper's: nu = 0.488) where the scene or command gives none:
   static constexpr double youngs = 1e5, poisson = 0.488;  ///< Pa; with quasi-static bones only nu matters
   static constexpr double density = 1000.0;               ///< kg/m³ (dynamics)
@@ -70,8 +80,9 @@ struct Flesh {
   std::vector<Bone> bones;                   ///< with their capsule radii
   Binding binding;                           ///< volume vertices that follow bones
   std::vector<int> bound_per_bone;
-  SoftBinding soft;                          ///< volume vertices pulled toward bones (empty without a shell)
-  std::vector<int> soft_per_bone;
+  Binding released;                          ///< vertices in a capsule released at the joints (joint_cells)
+  SoftBinding soft;                          ///< volume vertices pulled toward bones: the shell's, and the
+                                             ///< released ones when joint_cells is soft
 };
 
 /// Reads the model and builds its flesh. Throws RigError (bad model, a surface that is not closed: the open

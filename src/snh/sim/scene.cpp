@@ -310,6 +310,8 @@ void add_flesh_output(const Flesh& flesh, const Scene& s, const Simulation& sim,
   plan.settings["volume_of_cells"] = flesh.volume_of_cells;
   plan.settings["surface_volume"] = flesh.surface_volume;
   plan.settings["bones"] = bones;
+  plan.settings["joint_cells"] = to_string(spec.joint_cells);
+  plan.settings["released_vertices"] = flesh.released.vertex.size();
   if (spec.soft_shell > 0.0)
     plan.settings["soft_binding"] = {{"shell", spec.soft_shell}, {"stiffness", spec.soft_stiffness}, {"vertices", flesh.soft.vertex.size()}};
   const double rest_surface = surface_volume(flesh, m.vertices);
@@ -331,6 +333,9 @@ void add_flesh_output(const Flesh& flesh, const Scene& s, const Simulation& sim,
     for (std::size_t b = 0; b < flesh.bones.size(); ++b)
       counts += fmt::format("{}{} {}", b ? ", " : "", flesh.bones[b].name, flesh.bound_per_bone[b]);
     o << fmt::format("bones: {} binding {} volume vertices ({})\n", flesh.bones.size(), flesh.binding.vertex.size(), counts);
+    if (!flesh.released.vertex.empty())
+      o << fmt::format("joints: {} vertices of capsules in cells spanning two joints {} (joint cells {})\n", flesh.released.vertex.size(),
+                       spec.joint_cells == JointCells::soft ? "bound softly instead" : "released", to_string(spec.joint_cells));
     if (spec.soft_shell > 0.0)
       o << fmt::format("soft binding: {} more volume vertices within {:.4g} of the capsules, pulled by springs of {:g} x E x h "
                        "(fading to 0 at the shell's edge)\n",
