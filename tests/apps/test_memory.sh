@@ -15,8 +15,8 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 pass=0
 fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 # run LIMIT_KB OUTFILE COMMAND...: the command under ulimit -v (and a time limit), its stdout and stderr apart.
 run() {
   local limit="$1" out="$2"
