@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/bytes_read.hpp"
 #include "scene_error.hpp"
 #include "snh/sim/scene.hpp"
 
@@ -84,6 +85,28 @@ TEST(SceneInput, KeysGivenTwiceAreRefused) {
   // The same key in different objects is fine.
   EXPECT_EQ(file_error_of(R"({"mesh": {"box": {"min": [0, 0, 0], "max": [1, 1, 1]}},
                               "pins": [{"region": {"min": [0, 0, 0], "max": [1, 1, 0]}}], "frames": 1})"), "");
+}
+
+// JSON text holds no NUL byte: a scene followed by NUL padding was taken as the scene alone (nlohmann's lexer
+// ends the input at a NUL) after the whole file was read; it is refused, having read about as much as the text.
+TEST(SceneInput, ANulByteIsRefusedWhereItIs) {
+  EXPECT_EQ(file_error_of(std::string("{\n  \"dt\": 0.01\n}\n\0\0\0", 18)), "F: line 4: binary data (a NUL byte) where JSON text was expected");
+  EXPECT_EQ(file_error_of(std::string("{\"dt\": 0.") + '\0' + "1}"), "F: line 1: binary data (a NUL byte) where JSON text was expected");
+  if (test::bytes_read() < 0) GTEST_SKIP() << "no /proc/self/io";
+  const auto path = std::filesystem::temp_directory_path() / ("snh_scene_padded_" + std::to_string(::getpid()) + ".json");
+  std::ofstream(path) << R"({"mesh": {"box": {"res": 2}}, "frames": 1})" << "\n";
+  std::filesystem::resize_file(path, 300u << 20);
+  const long long before = test::bytes_read();
+  std::string error;
+  try {
+    (void)load_scene(path);
+  } catch (const SceneError& e) {
+    error = e.what();
+  }
+  const long long read = test::bytes_read() - before;
+  std::filesystem::remove(path);
+  EXPECT_EQ(error, path.string() + ": line 2: binary data (a NUL byte) where JSON text was expected");
+  EXPECT_LT(read, 8 << 20) << "read " << read << " bytes";
 }
 
 TEST(SceneInput, NumbersOutOfRangeAndDeepNestingAreOneLine) {
