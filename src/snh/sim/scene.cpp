@@ -188,10 +188,17 @@ Scene load_scene(const std::filesystem::path& file) {
   if (const std::string problem = input_file_problem(file, "scene file"); !problem.empty()) throw SceneError(problem);
   std::ifstream in(file, std::ios::binary);
   if (!in) throw SceneError(fmt::format("{}: cannot open the scene file", file.string()));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw SceneError(fmt::format("{}: cannot read the scene file", file.string()));
-  return parse_scene(read_scene_json(text.str(), file.string()), file);
+  // Read up to the first NUL byte, which JSON text never holds: a NUL-padded file fails having read about
+  // as much as its text.
+  std::string text;
+  for (std::size_t old = 0;; old = text.size()) {
+    text.resize(old + (1 << 20));
+    in.read(text.data() + old, 1 << 20);
+    text.resize(old + static_cast<std::size_t>(in.gcount()));
+    if (in.bad()) throw SceneError(fmt::format("{}: cannot read the scene file", file.string()));
+    if (text.size() == old || text.find('\0', old) != std::string::npos) break;
+  }
+  return parse_scene(read_scene_json(text, file.string()), file);
 }
 
 std::shared_ptr<const SceneMesh> scene_mesh(const Scene& s) {

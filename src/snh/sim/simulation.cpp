@@ -22,10 +22,16 @@ std::vector<std::uint8_t> kinematic_dof_flags(const std::vector<KinematicSet>& s
       for (int a = 0; a < 3; ++a) {
         if (!s.axes[a]) continue;
         const std::size_t d = 3 * static_cast<std::size_t>(v) + a;
-        if (owner[d] >= 0 && owner[d] != static_cast<int>(i))
+        if (owner[d] >= 0 && owner[d] != static_cast<int>(i)) {
+          // Two sets of one file ("s.json: pins[0]", "s.json: pins[1]") name the file once.
+          std::string other = sets[owner[d]].name;
+          const std::size_t file_end = s.name.rfind(": ");
+          if (file_end != std::string::npos && other.compare(0, file_end + 2, s.name, 0, file_end + 2) == 0)
+            other.erase(0, file_end + 2);
           throw std::invalid_argument(fmt::format("{} holds the {} coordinate of vertex {}, which {} already holds: give each "
                                                   "coordinate one motion",
-                                                  s.name, char('x' + a), v, sets[owner[d]].name));
+                                                  s.name, char('x' + a), v, other));
+        }
         owner[d] = static_cast<int>(i);
         flags[d] = 1;
       }
