@@ -255,3 +255,30 @@ def test_ctrl_c_in_a_callback():
     with pytest.raises(KeyboardInterrupt):
         sim.step()
     assert sim.steps == 0 and np.array_equal(sim.positions, V)
+
+
+def test_ctrl_c_stops_run_scene(tmp_path):
+    # As snh run on SIGINT: the run stops after the frame under way, keeps the frames and the stats ("interrupted"),
+    # and Python sees KeyboardInterrupt. The signal is sent once frame 1 is on disk, the run having 400 more to go.
+    import json
+    import subprocess
+    import sys
+    import time
+    scene = pin_scene(tmp_path)
+    scene.update({"mesh": {"box": {"element": "hex", "res": 6}}, "end_time": 40, "frames": 400})
+    script = ("import snh, sys, json\n"
+              "try:\n"
+              f"    snh.run_scene(json.loads(sys.argv[1]), report=False, quiet=True)\n"
+              "except KeyboardInterrupt:\n"
+              "    print('KeyboardInterrupt')\n")
+    p = subprocess.Popen([sys.executable, "-c", script, json.dumps(scene)], stdout=subprocess.PIPE, text=True)
+    out = tmp_path / "scene"
+    deadline = time.monotonic() + 60
+    while not (out / "001.obj").exists() and time.monotonic() < deadline and p.poll() is None:
+        time.sleep(0.01)
+    p.send_signal(signal.SIGINT)
+    stdout, _ = p.communicate(timeout=60)
+    assert p.returncode == 0 and stdout.strip() == "KeyboardInterrupt"
+    stats = json.loads((out / "stats.json").read_text())
+    assert stats["status"] == "interrupted"
+    assert 2 <= len(list(out.glob("*.obj"))) < 401
