@@ -282,3 +282,17 @@ def test_ctrl_c_stops_run_scene(tmp_path):
     stats = json.loads((out / "stats.json").read_text())
     assert stats["status"] == "interrupted"
     assert 2 <= len(list(out.glob("*.obj"))) < 401
+
+
+def test_flesh_scene_from_a_dict(tmp_path):
+    # scenes/hand_fist.json, coarse and short: bones drive the flesh; its render surface and USD stage are written.
+    import json
+    from conftest import SOURCE
+    scene = json.loads((SOURCE / "scenes/hand_fist.json").read_text())
+    scene["flesh"].update(model=str(SOURCE / "data/hand/left.glb"), resolution=8)
+    scene.update(end_time=0.2, frames=2)
+    scene.pop("output", None)
+    r = snh.run_scene(scene, out=tmp_path / "hand", quiet=True, report=False)
+    assert r["all_converged"] and r["frames"] == 3 and r["element"] == "hex8"
+    assert (tmp_path / "hand" / "flesh.usda").exists() and (tmp_path / "hand" / "002.obj").exists()
+    assert np.isfinite(r["final_positions"]).all()
