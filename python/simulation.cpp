@@ -309,7 +309,13 @@ pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesyst
   d["final_positions"] = positions_array(r.final_positions);
   d["report"] = pyb::none();
 #ifdef SNH_PYTHON_REPORT
-  if (report) d["report"] = write_report(scene.output.dir).index;
+  // As snh run: a report that cannot be written is a warning; the run's own results stay.
+  if (report) try {
+      d["report"] = write_report(scene.output.dir).index;
+    } catch (const std::exception& e) {
+      if (PyErr_WarnEx(PyExc_RuntimeWarning, fmt::format("the report was not written: {}", e.what()).c_str(), 1) != 0)
+        throw pyb::error_already_set();
+    }
 #else
   (void)report;
 #endif
