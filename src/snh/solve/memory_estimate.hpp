@@ -54,7 +54,7 @@ struct MemoryEstimate {
 };
 
 /// The estimated peak memory of a run of `size` with the linear solver `solver` (cholmod, ldlt: a factor;
-/// pcg: none).
+/// pcg: none; mg: the matrix in nodal blocks and its coarse levels).
 [[nodiscard]] MemoryEstimate estimate_memory(const ProblemSize& size, std::string_view solver);
 
 /// What this process may still use: the smaller of MemAvailable (against resident memory) and RLIMIT_AS
