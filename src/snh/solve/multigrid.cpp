@@ -25,12 +25,11 @@ constexpr int kMaxLevels = 16;
 /// Offset of hex corner k from corner 0 in lattice units (VolumeMesh's corner order).
 Eigen::Vector3i corner_offset(int k) { return {k & 1, (k >> 1) & 1, (k >> 2) & 1}; }
 
-/// A symmetric matrix in 3×3 nodal blocks, both triangles stored: row i's blocks at start[i] .. start[i+1],
-/// columns sorted, values row-major (9 per block).
+/// A symmetric matrix in 3×3 nodal blocks, its lower triangle stored: row i's blocks (i, j ≤ i) at
+/// start[i] .. start[i+1], columns sorted (the diagonal block last), values row-major (9 per block).
 struct Blocks {
   std::vector<int> start{0}, col;
   std::vector<double> val;
-  [[nodiscard]] int rows() const { return static_cast<int>(start.size()) - 1; }
   /// The slot of block (i, j); −1 if absent.
   [[nodiscard]] int find(int i, int j) const {
     const auto b = col.begin() + start[i], e = col.begin() + start[i + 1];
@@ -159,7 +158,8 @@ LatticeCoordinates lattice_coordinates(const VolumeMesh& mesh) {
   return out;
 }
 
-/// A fingerprint of a sparse matrix's pattern (its size and index arrays), to tell a new pattern from the last.
+/// A fingerprint of a sparse matrix's pattern (its size and index arrays, FNV-1a), to tell a new pattern from
+/// the last without keeping a copy (a collision is caught by values()' check of every block it fills).
 std::uint64_t pattern_hash(const SparseLower& A) {
   std::uint64_t h = 1469598103934665603ull;
   const auto mix = [&h](std::uint64_t v) { h = (h ^ v) * 1099511628211ull; };
@@ -175,8 +175,7 @@ struct MultigridPreconditioner::Impl {
   std::vector<int> row_dof;  ///< free row → DOF of level 0 (3 v + axis)
   bool have_structure = false;
   std::uint64_t pattern = 0;  ///< pattern_hash of the A the structure was built for
-  std::vector<int> transposed;  ///< level 0: per block slot (i, j), the slot of (j, i)
-  std::vector<int> where;       ///< work: a slot per node
+  std::vector<int> cursor;  ///< work: a slot per node
   // The coarsest level as a scalar matrix for the direct solver.
   std::vector<int> coarse_dof;    ///< its free DOFs (3 node + axis)
   std::vector<int> coarse_value;  ///< per stored entry of `coarse`, its index in the last level's A.val
@@ -193,7 +192,7 @@ struct MultigridPreconditioner::Impl {
   void galerkin(Level& fine, Level& coarse_level);
   void vcycle(std::size_t l);
   void product(const Eigen::VectorXd& p, Eigen::VectorXd& Ap);
-  Eigen::VectorXd product_in;
+  Eigen::VectorXd product_in, product_out;
 };
 
 MultigridPreconditioner::Impl::Impl(const VolumeMesh& mesh, const std::vector<int>& free_index) {
@@ -318,27 +317,20 @@ void MultigridPreconditioner::Impl::structure(const SparseLower& A) {
     std::vector<int> below;
     for (Eigen::Index c = 0; c < A.outerSize();) {
       const int j = row_dof[c] / 3;
-      below.assign(1, j);
+      below.clear();
       for (; c < A.outerSize() && row_dof[c] / 3 == j; ++c)
         for (SparseLower::InnerIterator it(A, c); it; ++it) below.push_back(row_dof[it.row()] / 3);
       sort_unique(below);
-      for (int i : below) {
-        rows[j].push_back(i);
-        if (i != j) rows[i].push_back(j);
-      }
+      for (int i : below)
+        if (i != j) rows[i].push_back(j);  // j ascending: rows stay sorted
     }
-    for (int i = 0; i < L0.nodes; ++i) {
-      rows[i].push_back(i);
-      sort_unique(rows[i]);
-    }
+    for (int i = 0; i < L0.nodes; ++i) rows[i].push_back(i);
     L0.A.set_pattern(rows);
   }
-  transposed.resize(L0.A.col.size());
-  for (int i = 0; i < L0.nodes; ++i)
-    for (int s = L0.A.start[i]; s < L0.A.start[i + 1]; ++s) transposed[s] = L0.A.find(L0.A.col[s], i);
-  where.assign(L0.nodes, -1);
+  cursor.assign(L0.nodes, 0);
   for (std::size_t l = 0; l + 1 < levels.size(); ++l) {
     Level &F = levels[l], &C = levels[l + 1];
+    // Block (i, k ≤ i) reaches the coarse pairs (I, K), I a parent of i and K of k, stored at (max, min).
     std::vector<std::vector<int>> coarse_rows(C.nodes);
     std::vector<int> reach;
     for (int i = 0; i < F.nodes; ++i) {
@@ -349,8 +341,8 @@ void MultigridPreconditioner::Impl::structure(const SparseLower& A) {
       }
       sort_unique(reach);
       for (int p = F.down.start[i]; p < F.down.start[i + 1]; ++p) {
-        auto& r = coarse_rows[F.down.node[p]];
-        r.insert(r.end(), reach.begin(), reach.end());
+        const int I = F.down.node[p];
+        for (int K : reach) coarse_rows[std::max(I, K)].push_back(std::min(I, K));
       }
     }
     for (int I = 0; I < C.nodes; ++I) {
@@ -374,21 +366,28 @@ void MultigridPreconditioner::Impl::structure(const SparseLower& A) {
       coarse_dof.push_back(d);
     }
   const int n = static_cast<int>(coarse_dof.size());
-  std::vector<int> outer{0}, inner;
-  coarse_value.clear();
-  for (int c = 0; c < n; ++c) {
-    const int j = coarse_dof[c] / 3, b = coarse_dof[c] % 3;
-    for (int s = K.A.start[j]; s < K.A.start[j + 1]; ++s) {
-      const int i = K.A.col[s];
-      for (int a = 0; a < 3; ++a) {
-        const int r = index[3 * i + a];
-        if (r < c) continue;  // not free, or above the diagonal
-        inner.push_back(r);
-        coarse_value.push_back(9 * s + 3 * b + a);  // A(i a, j b) = block (j, i) entry (b, a)
-      }
+  struct Entry {
+    int c, r, value;
+  };
+  std::vector<Entry> entries;  // A(i a, j b) = block (i, j)'s entry (a, b), i ≥ j
+  for (int i = 0; i < K.nodes; ++i)
+    for (int s = K.A.start[i]; s < K.A.start[i + 1]; ++s) {
+      const int j = K.A.col[s];
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+          const int r = index[3 * i + a], c = index[3 * j + b];
+          if (r >= 0 && c >= 0 && r >= c) entries.push_back({c, r, 9 * s + 3 * a + b});
+        }
     }
-    outer.push_back(static_cast<int>(inner.size()));
+  std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) { return x.c != y.c ? x.c < y.c : x.r < y.r; });
+  std::vector<int> outer(n + 1, 0), inner;
+  coarse_value.clear();
+  for (const Entry& e : entries) {
+    ++outer[e.c + 1];
+    inner.push_back(e.r);
+    coarse_value.push_back(e.value);
   }
+  for (int c = 0; c < n; ++c) outer[c + 1] += outer[c];
   coarse = SparseLower(n, n);
   coarse.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
   std::copy(outer.begin(), outer.end(), coarse.outerIndexPtr());
@@ -396,8 +395,10 @@ void MultigridPreconditioner::Impl::structure(const SparseLower& A) {
   coarse_b.resize(n);
 }
 
-/// The next level's A from this one's, Wᵀ A W, one fine block row at a time (its row of A W, then spread to
-/// the row's parents); then the coarse DOFs that are not free masked out.
+/// The next level's A from this one's, Wᵀ A W, one fine block row at a time: the row's part of A W (A's
+/// diagonal blocks halved) spread to the row's parents I, each product Y for the coarse pair (I, K) stored
+/// as Y at (I, K) below the diagonal, Yᵀ at (K, I) above it, Y + Yᵀ on it (A is symmetric); then the coarse
+/// DOFs that are not free masked out.
 void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
   std::fill(C.A.val.begin(), C.A.val.end(), 0.0);
   row.assign(9 * static_cast<std::size_t>(C.nodes), 0.0);
@@ -407,6 +408,7 @@ void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
     for (int s = F.A.start[i]; s < F.A.start[i + 1]; ++s) {
       const int k = F.A.col[s];
       const double* a = &F.A.val[9 * static_cast<std::size_t>(s)];
+      const double half = k == i ? 0.5 : 1.0;
       for (int p = F.down.start[k]; p < F.down.start[k + 1]; ++p) {
         const int K = F.down.node[p];
         double* t = &row[9 * static_cast<std::size_t>(K)];
@@ -414,7 +416,7 @@ void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
           where_coarse[K] = 0;
           touched.push_back(K);
         }
-        const double w = F.down.weight[p];
+        const double w = half * F.down.weight[p];
         for (int e = 0; e < 9; ++e) t[e] += w * a[e];
       }
     }
@@ -424,10 +426,21 @@ void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
       const double w = F.down.weight[p];
       int s = C.A.start[I];
       for (int K : touched) {
-        while (C.A.col[s] < K) ++s;  // both sorted; every K reached from i is in row I
-        double* c = &C.A.val[9 * static_cast<std::size_t>(s)];
         const double* t = &row[9 * static_cast<std::size_t>(K)];
-        for (int e = 0; e < 9; ++e) c[e] += w * t[e];
+        if (K <= I) {
+          while (C.A.col[s] < K) ++s;  // both sorted; every K ≤ I reached from i is in row I
+          double* c = &C.A.val[9 * static_cast<std::size_t>(s)];
+          if (K < I) {
+            for (int e = 0; e < 9; ++e) c[e] += w * t[e];
+          } else {
+            for (int a = 0; a < 3; ++a)
+              for (int b = 0; b < 3; ++b) c[3 * a + b] += w * (t[3 * a + b] + t[3 * b + a]);
+          }
+        } else {
+          double* c = &C.A.val[9 * static_cast<std::size_t>(C.A.find(K, I))];
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) c[3 * a + b] += w * t[3 * b + a];
+        }
       }
     }
     for (int K : touched) {
@@ -446,28 +459,27 @@ void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
 
 bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift) {
   Level& L0 = levels.front();
-  // Column c (DOF b of node j) of A's lower triangle: entry (i a, j b) is block (j, i)'s entry (b, a), i ≥ j.
+  // Column c (DOF b of node j) of A's lower triangle: entry (i a, j b), i ≥ j, is block (i, j)'s entry (a, b).
+  // Columns come in increasing j, so each row's cursor only moves forward to block (i, j).
   const double* v = A.valuePtr();
+  std::copy(L0.A.start.begin(), L0.A.start.end() - 1, cursor.begin());
   for (Eigen::Index c = 0; c < A.outerSize(); ++c) {
     const int dc = row_dof[c], j = dc / 3, b = dc % 3;
-    for (int s = L0.A.start[j]; s < L0.A.start[j + 1]; ++s) where[L0.A.col[s]] = s;
     for (int k = A.outerIndexPtr()[c]; k < A.outerIndexPtr()[c + 1]; ++k) {
-      const int dr = row_dof[A.innerIndexPtr()[k]];
-      L0.A.val[9 * static_cast<std::size_t>(where[dr / 3]) + 3 * b + dr % 3] = v[k];
+      const int dr = row_dof[A.innerIndexPtr()[k]], i = dr / 3;
+      while (L0.A.col[cursor[i]] < j) ++cursor[i];  // stops at the diagonal block (i ≥ j) at the latest
+      if (L0.A.col[cursor[i]] != j) throw std::logic_error("multigrid: the matrix's pattern changed unnoticed");
+      L0.A.val[9 * static_cast<std::size_t>(cursor[i]) + 3 * (dr % 3) + b] = v[k];
     }
   }
-  // The rest by symmetry: blocks (i, j) with j < i, and the lower halves of the diagonal blocks.
-  for (int i = 0; i < L0.nodes; ++i)
-    for (int s = L0.A.start[i]; s < L0.A.start[i + 1] && L0.A.col[s] <= i; ++s) {
-      double* to = &L0.A.val[9 * static_cast<std::size_t>(s)];
-      const double* from = &L0.A.val[9 * static_cast<std::size_t>(transposed[s])];
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b)
-          if (L0.A.col[s] < i || a > b) to[3 * a + b] = from[3 * b + a];
-      if (L0.A.col[s] == i)
-        for (int a = 0; a < 3; ++a)
-          if (L0.free[3 * i + a]) to[4 * a] += shift;
-    }
+  // The upper halves of the diagonal blocks by symmetry, and the shift.
+  for (int i = 0; i < L0.nodes; ++i) {
+    double* d = &L0.A.val[9 * static_cast<std::size_t>(L0.diagonal[i])];
+    for (int a = 0; a < 3; ++a)
+      for (int b = a + 1; b < 3; ++b) d[3 * a + b] = d[3 * b + a];
+    for (int a = 0; a < 3; ++a)
+      if (L0.free[3 * i + a]) d[4 * a] += shift;
+  }
   for (std::size_t l = 0; l + 1 < levels.size(); ++l) galerkin(levels[l], levels[l + 1]);
   // Inverses of the diagonal blocks' free parts (Cholesky: a block that is not positive definite proves A is not).
   for (std::size_t l = 0; l + 1 < levels.size(); ++l) {
@@ -491,46 +503,69 @@ bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift) {
 
 namespace {
 
-/// One nodal-block Gauss–Seidel sweep on L.x for L.A x = L.b, forward or backward.
-void sweep(Level& L, bool forward) {
+/// y −= a x for a row-major 3×3 block a; yt −= aᵀ x.
+inline void subtract(const double* a, const double* x, double* y) {
+  y[0] -= a[0] * x[0] + a[1] * x[1] + a[2] * x[2];
+  y[1] -= a[3] * x[0] + a[4] * x[1] + a[5] * x[2];
+  y[2] -= a[6] * x[0] + a[7] * x[1] + a[8] * x[2];
+}
+inline void subtract_transposed(const double* a, const double* x, double* y) {
+  y[0] -= a[0] * x[0] + a[3] * x[1] + a[6] * x[2];
+  y[1] -= a[1] * x[0] + a[4] * x[1] + a[7] * x[2];
+  y[2] -= a[2] * x[0] + a[5] * x[1] + a[8] * x[2];
+}
+
+/// x_i = D_i⁻¹ s for node i.
+inline void solve_diagonal(const Level& L, int i, const double* s, double* x) {
+  const double* d = &L.inverse[9 * static_cast<std::size_t>(i)];
+  x[0] = d[0] * s[0] + d[1] * s[1] + d[2] * s[2];
+  x[1] = d[3] * s[0] + d[4] * s[1] + d[5] * s[2];
+  x[2] = d[6] * s[0] + d[7] * s[1] + d[8] * s[2];
+}
+
+/// A forward nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0 (the blocks above the diagonal meet
+/// only zeros).
+void forward_sweep(Level& L) {
+  L.x.setZero();
   const double* val = L.A.val.data();
   double* x = L.x.data();
-  const double* b = L.b.data();
-  for (int n = 0; n < L.nodes; ++n) {
-    const int i = forward ? n : L.nodes - 1 - n;
-    double s0 = b[3 * i], s1 = b[3 * i + 1], s2 = b[3 * i + 2];
-    for (int s = L.A.start[i]; s < L.A.start[i + 1]; ++s) {
-      const int j = L.A.col[s];
-      if (j == i) continue;
-      const double* a = val + 9 * static_cast<std::size_t>(s);
-      const double* y = x + 3 * j;
-      s0 -= a[0] * y[0] + a[1] * y[1] + a[2] * y[2];
-      s1 -= a[3] * y[0] + a[4] * y[1] + a[5] * y[2];
-      s2 -= a[6] * y[0] + a[7] * y[1] + a[8] * y[2];
-    }
-    const double* d = &L.inverse[9 * static_cast<std::size_t>(i)];
-    x[3 * i] = d[0] * s0 + d[1] * s1 + d[2] * s2;
-    x[3 * i + 1] = d[3] * s0 + d[4] * s1 + d[5] * s2;
-    x[3 * i + 2] = d[6] * s0 + d[7] * s1 + d[8] * s2;
+  for (int i = 0; i < L.nodes; ++i) {
+    double s[3] = {L.b[3 * i], L.b[3 * i + 1], L.b[3 * i + 2]};
+    for (int k = L.A.start[i]; k + 1 < L.A.start[i + 1]; ++k) subtract(val + 9 * static_cast<std::size_t>(k), x + 3 * L.A.col[k], s);
+    solve_diagonal(L, i, s, x + 3 * i);
   }
 }
 
-/// L.r = L.b − L.A L.x.
-void residual(Level& L) {
+/// A backward nodal-block Gauss–Seidel sweep on L.x: row i's blocks left of the diagonal meet the old x,
+/// the (transposed) blocks right of it the new values, gathered in L.r as each row is done.
+void backward_sweep(Level& L) {
+  L.r.setZero();
   const double* val = L.A.val.data();
-  const double* x = L.x.data();
+  double* x = L.x.data();
+  double* later = L.r.data();
+  for (int i = L.nodes - 1; i >= 0; --i) {
+    const int end = L.A.start[i + 1] - 1;  // the diagonal block
+    double s[3] = {L.b[3 * i] + later[3 * i], L.b[3 * i + 1] + later[3 * i + 1], L.b[3 * i + 2] + later[3 * i + 2]};
+    for (int k = L.A.start[i]; k < end; ++k) subtract(val + 9 * static_cast<std::size_t>(k), x + 3 * L.A.col[k], s);
+    solve_diagonal(L, i, s, x + 3 * i);
+    for (int k = L.A.start[i]; k < end; ++k)
+      subtract_transposed(val + 9 * static_cast<std::size_t>(k), x + 3 * i, later + 3 * L.A.col[k]);
+  }
+}
+
+/// y = b − A x with A's lower block triangle (b may be null: y = −A x).
+void subtract_product(const Level& L, const double* x, const double* b, double* y) {
+  const double* val = L.A.val.data();
+  for (int d = 0; d < 3 * L.nodes; ++d) y[d] = b ? b[d] : 0.0;
   for (int i = 0; i < L.nodes; ++i) {
-    double s0 = L.b[3 * i], s1 = L.b[3 * i + 1], s2 = L.b[3 * i + 2];
-    for (int s = L.A.start[i]; s < L.A.start[i + 1]; ++s) {
-      const double* a = val + 9 * static_cast<std::size_t>(s);
-      const double* y = x + 3 * L.A.col[s];
-      s0 -= a[0] * y[0] + a[1] * y[1] + a[2] * y[2];
-      s1 -= a[3] * y[0] + a[4] * y[1] + a[5] * y[2];
-      s2 -= a[6] * y[0] + a[7] * y[1] + a[8] * y[2];
+    const int end = L.A.start[i + 1] - 1;
+    for (int k = L.A.start[i]; k < end; ++k) {
+      const double* a = val + 9 * static_cast<std::size_t>(k);
+      const int j = L.A.col[k];
+      subtract(a, x + 3 * j, y + 3 * i);
+      subtract_transposed(a, x + 3 * i, y + 3 * j);
     }
-    L.r[3 * i] = s0;
-    L.r[3 * i + 1] = s1;
-    L.r[3 * i + 2] = s2;
+    subtract(val + 9 * static_cast<std::size_t>(end), x + 3 * i, y + 3 * i);
   }
 }
 
@@ -547,9 +582,8 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
     return;
   }
   Level& C = levels[l + 1];
-  L.x.setZero();
-  sweep(L, true);
-  residual(L);
+  forward_sweep(L);
+  subtract_product(L, L.x.data(), L.b.data(), L.r.data());
   // Restriction Wᵀ r on the coarse free DOFs.
   for (int I = 0; I < C.nodes; ++I) {
     double r0 = 0.0, r1 = 0.0, r2 = 0.0;
@@ -573,7 +607,7 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
       for (int a = 0; a < 3; ++a)
         if (L.free[3 * i + a]) L.x[3 * i + a] += w * C.x[3 * I + a];
     }
-  sweep(L, false);
+  backward_sweep(L);
 }
 
 MultigridPreconditioner::MultigridPreconditioner(const VolumeMesh& mesh, const std::vector<int>& free_index)
@@ -599,22 +633,10 @@ void MultigridPreconditioner::Impl::product(const Eigen::VectorXd& p, Eigen::Vec
   const Level& L0 = levels.front();
   product_in.setZero(3 * L0.nodes);
   for (std::size_t k = 0; k < row_dof.size(); ++k) product_in[row_dof[k]] = p[static_cast<Eigen::Index>(k)];
-  const double* val = L0.A.val.data();
-  const double* x = product_in.data();
+  product_out.resize(3 * L0.nodes);
+  subtract_product(L0, product_in.data(), nullptr, product_out.data());
   Ap.resize(p.size());
-  std::size_t k = 0;  // free rows follow the DOF order
-  for (int i = 0; i < L0.nodes && k < row_dof.size(); ++i) {
-    if (row_dof[k] / 3 != i) continue;
-    double s[3] = {0.0, 0.0, 0.0};
-    for (int b = L0.A.start[i]; b < L0.A.start[i + 1]; ++b) {
-      const double* a = val + 9 * static_cast<std::size_t>(b);
-      const double* y = x + 3 * L0.A.col[b];
-      s[0] += a[0] * y[0] + a[1] * y[1] + a[2] * y[2];
-      s[1] += a[3] * y[0] + a[4] * y[1] + a[5] * y[2];
-      s[2] += a[6] * y[0] + a[7] * y[1] + a[8] * y[2];
-    }
-    for (; k < row_dof.size() && row_dof[k] / 3 == i; ++k) Ap[static_cast<Eigen::Index>(k)] = s[row_dof[k] % 3];
-  }
+  for (std::size_t k = 0; k < row_dof.size(); ++k) Ap[static_cast<Eigen::Index>(k)] = -product_out[row_dof[k]];
 }
 
 void MultigridPreconditioner::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const {

@@ -4,16 +4,17 @@
 //
 // Levels: the simulated hex mesh, then lattices of twice the cell size, each cube of a coarse level the
 // union of the (up to 8) fine cubes inside it, until a level has few enough unknowns for a direct solve
-// (CHOLMOD). Lattice coordinates come from the cells' corner order (VolumeMesh: c1 = c0 + x̂, c2 = c0 + ŷ,
-// c4 = c0 + ẑ), walked from cell to cell, not from positions: any mesh whose hexes fit together as a lattice
-// (the stretch box, `snh flesh`'s partial lattices, a structured mesh file) has them exactly; a mesh whose
-// cells contradict one another is refused. Prolongation: trilinear interpolation of the coarse nodes, the
-// same for x, y and z, restricted to the free DOFs on both sides (a coarse DOF is dropped where the fine
-// vertex at its place is kinematic, or where it reaches no free fine DOF). Coarse operators: Galerkin,
-// A_c = Pᵀ A P, in 3×3 nodal blocks; the block pattern and the transfer operators are built once and
-// only the values are recomputed for each Newton matrix. Smoother: one forward nodal-block Gauss–Seidel
-// sweep before the coarse correction and one backward sweep after it, so the V-cycle is symmetric, and
-// positive definite when A is. Every loop runs in a fixed order: results do not depend on the thread count.
+// (Eigen's LDLT: small, so no BLAS). Lattice coordinates come from the cells' corner order (VolumeMesh:
+// c1 = c0 + x̂, c2 = c0 + ŷ, c4 = c0 + ẑ), walked from cell to cell, not from positions: any mesh whose hexes
+// fit together as a lattice (the stretch box, `snh flesh`'s partial lattices, a structured mesh file) has
+// them exactly; a mesh whose cells contradict one another is refused. Prolongation: trilinear
+// interpolation of the coarse nodes, the same for x, y and z, restricted to the free DOFs on both sides (a
+// coarse DOF is dropped where the fine vertex at its place is kinematic, or where it reaches no free fine
+// DOF). Coarse operators: Galerkin, A_c = Pᵀ A P, in 3×3 nodal blocks (lower triangle); the block patterns
+// and the transfer operators are built once and only the values are recomputed for each Newton matrix.
+// Smoother: one forward nodal-block Gauss–Seidel sweep before the coarse correction and one backward sweep
+// after it, so the V-cycle is symmetric, and positive definite when A is. Every loop runs in a fixed order
+// on one thread: results do not depend on the thread count.
 #include <memory>
 
 #include <Eigen/Core>
