@@ -22,6 +22,8 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     ParameterOptions params;
     bool quasi_static = false, dynamic = false, resume = false, no_report = false, force = false;
     double fps = FleshSpec::fps;
+    double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness;
+    std::string joint_cells = to_string(FleshSpec{}.joint_cells);
     int threads = 0;
   };
   auto o = std::make_shared<Options>();
@@ -40,6 +42,16 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
       ->check(CLI::IsMember({"lattice", "tets"}));
   cmd->add_option("--resolution", o->resolution, "Cubes along the model's longest side (tets: of that size; default 16)")
       ->check(CLI::Range(1, 1000));
+  cmd->add_option("--soft-shell", o->soft_shell,
+                                "Bind softly the flesh within this distance outside the bones' capsules (model units): springs "
+                                "pull it toward where its bone carries it (default: none, only the capsules' hard binding)");
+  cmd->add_option("--soft-stiffness", o->soft_stiffness,
+                  "Stiffness of the soft binding's springs (the shell's and the joint cells'), in Young's modulus x cell size "
+                  "(default 1: about one cell of flesh)");
+  cmd->add_option("--joint-cells", o->joint_cells,
+                  "Vertices of the bones' capsules in cells spanning two joints: soft (default: bound by springs of "
+                  "--soft-stiffness instead, so the joint's cells can give), free, or hard (bound, as HOBAK)")
+      ->check(CLI::IsMember({"soft", "free", "hard"}));
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params);
   auto* qs = cmd->add_flag("--quasi-static", o->quasi_static, "Quasi-static frames (the default, as the paper)");
@@ -56,6 +68,9 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     nlohmann::json j;
     j["flesh"] = {{"model", o->model}, {"volume", o->volume}, {"resolution", o->resolution}};
     if (!o->animation.empty()) j["flesh"]["animation"] = o->animation;
+    if (cmd->count("--soft-shell")) j["flesh"]["soft_binding"]["shell"] = o->soft_shell;
+    if (cmd->count("--soft-stiffness")) j["flesh"]["soft_binding"]["stiffness"] = o->soft_stiffness;
+    j["flesh"]["joint_cells"] = o->joint_cells;
     nlohmann::json material = {{"name", o->material}};
     if (cmd->count("--youngs") || cmd->count("--poisson")) {
       (void)o->params.lame();  // checks that they go together

@@ -5,22 +5,16 @@ set -u
 SNH="$1"
 pass=0
 fail=0
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 
-check() {  # check NAME EXPECTED_EXIT PATTERN -- ARGS...: runs snh ARGS, checks exit code and output
+# check NAME EXIT PATTERN -- ARGS...: snh ARGS exits with EXIT and its output matches PATTERN; EXIT "input":
+# refused as bad input (exit 2, one line).
+check() {
   local name="$1" want="$2" pattern="$3"
   shift 4
-  local out code
-  out="$("$SNH" "$@" 2>&1)"
-  code=$?
-  if { [ "$want" = "nonzero" ] && [ "$code" -ne 0 ]; } || [ "$code" = "$want" ]; then
-    if printf '%s' "$out" | grep -Eq -- "$pattern"; then
-      pass=$((pass + 1))
-      return
-    fi
-  fi
-  fail=$((fail + 1))
-  echo "FAIL: $name (exit $code, wanted $want, pattern '$pattern')"
-  echo "$out" | head -20
+  if [ "$want" = input ]; then expect_error "$name" "$pattern" -- "$SNH" "$@"
+  else expect_exit "$want" "$name" "$pattern" -- "$SNH" "$@"; fi
 }
 
 # Inspecting energies.
@@ -39,17 +33,17 @@ check "stability json" 0 '"energy": "corotated"' -- material --stability --json 
 check "help" 0 "--reparametrize" -- material --help
 
 # Errors: one line, non-zero exit.
-check "unknown material" nonzero "unknown material 'stable_neohookean' \(known: stable_neo_hookean," -- material stable_neohookean --stretch 1 1 1
-check "mu zero" nonzero "mu must be a finite number > 0, got 0" -- material stable_neo_hookean --mu 0 --stretch 1 1 1
-check "nu 0.5" nonzero "Poisson's ratio must satisfy -1 < nu < 0.5, got 0.5" -- material stable_neo_hookean --youngs 1 --poisson 0.5 --stretch 1 1 1
-check "youngs alone" nonzero "--youngs and --poisson go together" -- material stable_neo_hookean --youngs 1 --stretch 1 1 1
-check "F short" nonzero "--F needs 9 numbers" -- material stable_neo_hookean --F "1 0 0 0 1 0 0 0"
-check "F nan" nonzero "--F entry 4 is not a finite number: 'nan'" -- material stable_neo_hookean --F "1 0 0 0 nan 0 0 0 1"
-check "F and stretch" nonzero "excludes" -- material stable_neo_hookean --F "1 0 0 0 1 0 0 0 1" --stretch 1 1 1
-check "no F" nonzero "give exactly one of --F" -- material stable_neo_hookean
-check "bad projection" nonzero "--projection must be none, clamp or abs" -- material stable_neo_hookean --stretch 1 1 1 --projection foo
-check "stretch inf" nonzero "--stretch value 2 is not a finite number" -- material stable_neo_hookean --stretch 1 1 inf
-check "no reparam psi_d" nonzero "psi_d cannot be reparametrized" -- material psi_d --reparametrize --stretch 1 1 1
+check "unknown material" input "unknown material 'stable_neohookean' \(known: stable_neo_hookean," -- material stable_neohookean --stretch 1 1 1
+check "mu zero" input "mu must be a finite number > 0, got 0" -- material stable_neo_hookean --mu 0 --stretch 1 1 1
+check "nu 0.5" input "Poisson's ratio must satisfy -1 < nu < 0.5, got 0.5" -- material stable_neo_hookean --youngs 1 --poisson 0.5 --stretch 1 1 1
+check "youngs alone" input "--youngs and --poisson go together" -- material stable_neo_hookean --youngs 1 --stretch 1 1 1
+check "F short" input "--F needs 9 numbers" -- material stable_neo_hookean --F "1 0 0 0 1 0 0 0"
+check "F nan" input "--F entry 4 is not a finite number: 'nan'" -- material stable_neo_hookean --F "1 0 0 0 nan 0 0 0 1"
+check "F and stretch" input "excludes" -- material stable_neo_hookean --F "1 0 0 0 1 0 0 0 1" --stretch 1 1 1
+check "no F" input "give exactly one of --F" -- material stable_neo_hookean
+check "bad projection" input "--projection must be none, clamp or abs" -- material stable_neo_hookean --stretch 1 1 1 --projection foo
+check "stretch inf" input "--stretch value 2 is not a finite number" -- material stable_neo_hookean --stretch 1 1 inf
+check "no reparam psi_d" input "psi_d cannot be reparametrized" -- material psi_d --reparametrize --stretch 1 1 1
 # Issue 13: outside the supported ranges, refused before any work, naming the value (no nan printed).
 check "mu 1e300" 2 "^snh: error: mu = 1e\+300 is outside the supported range \[1e-12, 1e\+12\]$" -- material stable_neo_hookean --mu 1e300 --stretch 1 1 1
 check "stability mu 1e300" 2 "mu = 1e\+300 is outside the supported range" -- material --stability --mu 1e300

@@ -10,8 +10,8 @@ HERE="$(cd "$(dirname "$0")" && pwd)"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 pass=0 fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 limb="$DATA/flesh/limb.gltf"
 
 # The clip is 1 s: 24 frames at the default 24 fps, frame 0 the rest pose.
@@ -31,6 +31,11 @@ python3 "$HERE/check_usda.py" "$work/broken.usda" > /dev/null 2>&1 && bad "check
 # Tets, and a second run into the same directory replacing the first.
 "$SNH" flesh "$limb" --volume tets --resolution 10 --out "$work/limb" --no-report > "$work/tets.log" 2>&1 && grep -q 'tets (TetGen)' "$work/tets.log" \
   && [ ! -f "$work/limb/index.html" ] && [ -f "$work/limb/surface/024.obj" ] && ok || bad "limb tets: $(tail -2 "$work/tets.log")"
+# A soft binding shell from the command line: its header line, its settings, every frame converged.
+"$SNH" flesh "$limb" --resolution 12 --soft-shell 0.15 --soft-stiffness 5 --out "$work/soft" --no-report > "$work/soft.log" 2>&1 \
+  && grep -q '^soft binding: [1-9][0-9]* more volume vertices within 0.15 of the capsules, pulled by springs of 5 x E x h' "$work/soft.log" \
+  && grep -q '"stiffness": 5' "$work/soft/stats.json" && grep -q '"all_converged": true' "$work/soft/stats.json" \
+  && ok || bad "soft binding: $(tail -2 "$work/soft.log")"
 
 # The hand closing into a fist (scenes/hand_fist.json): every frame converges and the flesh keeps the volume
 # inside its render surface within 3 % at every frame, while skinning loses more.
@@ -46,23 +51,25 @@ sys.exit(0 if ok else 1)
 PY
 
 # Bad input: one line, exit code 2, no output directory.
-expect_error() {  # NAME PATTERN ARGS...
+flesh_error() {  # NAME PATTERN ARGS...
   local name="$1" pattern="$2"
   shift 2
-  out="$("$SNH" flesh "$@" --out "$work/bad_$name" 2>&1)"; code=$?
-  [ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -q -- "$pattern" && [ ! -e "$work/bad_$name" ] \
-    && ok || bad "$name (exit $code): $out"
+  expect_error "$name" "$pattern" -- "$SNH" flesh "$@" --out "$work/bad_$name"
+  [ ! -e "$work/bad_$name" ] || bad "$name: wrote $work/bad_$name"
 }
 mkdir -p "$work/dir.glb"
 head -c 30000 "$MODELS/hand/left.glb" > "$work/cut.glb"
 printf 'solid nothing\n' > "$work/text.gltf"
-expect_error directory "dir.glb" "$work/dir.glb"
-expect_error truncated "cut.glb" "$work/cut.glb"
-expect_error not_gltf "text.gltf" "$work/text.gltf"
-expect_error missing "missing.glb" "$work/missing.glb"
-expect_error no_clip "no animation clip" "$MODELS/hand/left.glb"
-expect_error clip_name 'no animation clip "wave"' "$limb" --animation wave
-expect_error lame "go together" "$limb" --mu 1
+flesh_error directory "dir.glb" "$work/dir.glb"
+flesh_error truncated "cut.glb" "$work/cut.glb"
+flesh_error not_gltf "text.gltf" "$work/text.gltf"
+flesh_error missing "missing.glb" "$work/missing.glb"
+flesh_error no_clip "no animation clip" "$MODELS/hand/left.glb"
+flesh_error clip_name 'no animation clip "wave"' "$limb" --animation wave
+flesh_error lame "go together" "$limb" --mu 1
+flesh_error soft_stiffness "flesh.soft_binding.stiffness: must be > 0, got 0" "$limb" --soft-stiffness 0
+flesh_error joint_cells "joint-cells: loose not in" "$limb" --joint-cells loose
+flesh_error soft_shell "flesh.soft_binding.shell: must be > 0, got -1" "$limb" --soft-shell -1
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -5,15 +5,16 @@
 set -u
 SNH="$1" DIR="$2"
 pass=0 fail=0
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 for expected in "$DIR"/*.expected; do
   file="${expected%.expected}"
   want="$(cat "$expected")"
   out="$("$SNH" info "$file" 2>&1)"; code=$?
   if [ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && [[ "$out" == *"$file"* ]] && [[ "$out" == *"$want"* ]]; then
-    pass=$((pass + 1))
+    ok
   else
-    fail=$((fail + 1))
-    echo "FAIL: $(basename "$file") (exit $code): $out"
+    bad "$(basename "$file") (exit $code): $out"
     echo "      expected: $want"
   fi
 done

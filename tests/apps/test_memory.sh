@@ -6,7 +6,8 @@
 #      with one line saying out of memory (not NOT CONVERGED), exit 1, stats.json "stopped", frame 000 kept;
 #      The same under 600 MB, where OpenBLAS used to loop forever;
 #  (c) a std::bad_alloc (tetcli 400 let through) is one line naming out of memory, never "std::bad_alloc";
-#  (d) PCG fits where CHOLMOD does not (the estimate lets it through and it runs).
+#  (d) PCG fits where CHOLMOD does not (the estimate lets it through and it runs);
+#  (e) a std::bad_alloc inside an OpenMP parallel loop takes the same path as (b).
 # Usage: test_memory.sh TETCLI HEXCLI SNH
 set -u
 TETCLI="$1" HEXCLI="$2" SNH="$3"
@@ -14,8 +15,8 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 pass=0
 fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 # run LIMIT_KB OUTFILE COMMAND...: the command under ulimit -v (and a time limit), its stdout and stderr apart.
 run() {
   local limit="$1" out="$2"
@@ -81,6 +82,19 @@ else bad "(c) refusal at res 400: exit $code: $(cat "$work/c2.stderr")"; fi
 run 300000 "$work/d" "$SNH" stretch --element hex --res 10 --solver pcg --out "$work/d_out"
 code=$?
 if [ "$code" -eq 0 ] && [ -s "$work/d_out/025.obj" ]; then ok; else bad "(d) pcg under 300 MB: exit $code: $(cat "$work/d.stderr")"; fi
+
+# (e) a std::bad_alloc inside an OpenMP parallel loop (the test hook SNH_TEST_BAD_ALLOC=N: the Nth iteration
+# of a parallel loop throws it) used to end the process (std::terminate, SIGABRT); it is caught in the
+# loop and takes the out-of-memory path: one line, exit 1, stats "stopped", the frames before it kept.
+for threads in 1 2; do
+  SNH_TEST_BAD_ALLOC=20000 timeout 60 "$SNH" stretch --element tet --res 5 --threads "$threads" --out "$work/e$threads" \
+    >"$work/e$threads.stdout" 2>"$work/e$threads.stderr"
+  code=$?
+  if [ "$code" -eq 1 ] && [ "$(lines "$work/e$threads.stderr")" = 1 ] &&
+     grep -Eq '^snh: error: out of memory in step [1-9][0-9]* ' "$work/e$threads.stderr" &&
+     grep -q '"status": "stopped"' "$work/e$threads/stats.json" && [ -s "$work/e$threads/000.obj" ]; then ok
+  else bad "(e) bad_alloc in a parallel loop, $threads threads: exit $code: $(cat "$work/e$threads.stderr")"; fi
+done
 
 echo "memory: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -8,17 +8,9 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 pass=0
 fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 
-expect_error() {  # expect_error NAME PATTERN -- COMMAND...
-  local name="$1" pattern="$2"
-  shift 3
-  local out code
-  out="$("$@" 2>&1)"
-  code=$?
-  if [ "$code" -ne 0 ] && printf '%s' "$out" | grep -Eq -- "$pattern"; then ok; else bad "$name (exit $code): $out"; fi
-}
 
 # A small run of each program: 26 frames 000..025 with (res+1)^3 vertices and 12 res^2 triangles.
 # Tets at res 3 and hexes at res 2: on the res-2 tet and res-3/4 hex meshes the symmetric state at the end
@@ -42,7 +34,7 @@ done
 cmp -s "$work/$(basename "$TETCLI")/025.obj" "$work/$(basename "$TETCCLI")/025.obj" && ok || bad "tetccli differs from tetcli"
 
 # Errors, before any work (no frame written).
-expect_error "usage" "expected 4 or 5 arguments" -- "$TETCLI" 10 stable_neo_hookean 1.0
+expect_exit 2 "usage" "expected 4 or 5 arguments" -- "$TETCLI" 10 stable_neo_hookean 1.0
 expect_error "resolution" "resolution must be an integer from 1 to 400, got 'ten'" -- "$TETCLI" ten stable_neo_hookean 1 10 "$work/e1"
 expect_error "resolution 0" "resolution must be an integer from 1 to 400, got '0'" -- "$HEXCLI" 0 stable_neo_hookean 1 10 "$work/e1"
 expect_error "material" "unknown material 'stable_neohookean'" -- "$TETCLI" 2 stable_neohookean 1 10 "$work/e1"
@@ -51,8 +43,8 @@ expect_error "mu negative" "mu must be a finite number > 0, got -1" -- "$TETCLI"
 expect_error "lambda nan" "lambda must be a finite number, got 'nan'" -- "$TETCLI" 2 stable_neo_hookean 1 nan "$work/e1"
 [ ! -e "$work/e1" ] || [ -z "$(ls -A "$work/e1")" ] && ok || bad "an error left files behind"
 touch "$work/file"
-expect_error "output is a file" "exists and is not a directory" -- "$TETCLI" 2 stable_neo_hookean 1 10 "$work/file"
-expect_error "unwritable" "cannot create output directory|not writable" -- "$TETCLI" 2 stable_neo_hookean 1 10 /proc/snh-not-here
+expect_exit 3 "output is a file" "exists and is not a directory" -- "$TETCLI" 2 stable_neo_hookean 1 10 "$work/file"
+expect_exit 3 "unwritable" "cannot create output directory|not writable" -- "$TETCLI" 2 stable_neo_hookean 1 10 /proc/snh-not-here
 "$TETCLI" --help | grep -q "usage: tetcli resolution material_model mu lambda" && ok || bad "tetcli --help"
 
 # snh stretch: named options, any material.
@@ -99,30 +91,21 @@ rmdir "$work/blocked/003.obj"
 
 # Issue 13: option mixes that were silently ignored, and an empty --out, are refused naming both options
 # (exit 2, before any work).
-expect_exit2() {  # expect_exit2 NAME PATTERN -- COMMAND...
-  local name="$1" pattern="$2"
-  shift 3
-  local out code
-  out="$("$@" 2>&1)"
-  code=$?
-  if [ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -Eq -- "$pattern"; then ok
-  else bad "$name (exit $code): $out"; fi
-}
 "$SNH" mesh box --res 1 "$work/cube.mesh" > /dev/null 2>&1 || true
 for opt in "--element hex" "--res 4" "--tet-split mirrored"; do
   # shellcheck disable=SC2086
-  expect_exit2 "stretch --mesh with $opt" "(--mesh excludes ${opt%% *}|${opt%% *} excludes --mesh)" -- "$SNH" stretch --mesh "$work/cube.mesh" $opt --out "$work/mix"
+  expect_error "stretch --mesh with $opt" "(--mesh excludes ${opt%% *}|${opt%% *} excludes --mesh)" -- "$SNH" stretch --mesh "$work/cube.mesh" $opt --out "$work/mix"
 done
-expect_exit2 "stability with F" "(--stability excludes --F|--F excludes --stability)" -- "$SNH" material --stability --F "1 0 0 0 1 0 0 0 1"
-expect_exit2 "stability with stretch" "(--stability excludes --stretch|--stretch excludes --stability)" -- "$SNH" material --stability --stretch 1 1 1
-expect_exit2 "stability with a name" "--stability measures every energy: drop the energy name 'stvk'" -- "$SNH" material --stability stvk
+expect_error "stability with F" "(--stability excludes --F|--F excludes --stability)" -- "$SNH" material --stability --F "1 0 0 0 1 0 0 0 1"
+expect_error "stability with stretch" "(--stability excludes --stretch|--stretch excludes --stability)" -- "$SNH" material --stability --stretch 1 1 1
+expect_error "stability with a name" "--stability measures every energy: drop the energy name 'stvk'" -- "$SNH" material --stability stvk
 [ ! -e "$work/mix" ] && ok || bad "a refused mix wrote $work/mix"
 for cmd in "stretch" "lab --quick" "run $work/none.json" "flesh $work/none.obj"; do
   # shellcheck disable=SC2086
-  expect_exit2 "$cmd --out ''" "--out: is empty: give an output directory" -- "$SNH" $cmd --out ""
+  expect_error "$cmd --out ''" "--out: is empty: give an output directory" -- "$SNH" $cmd --out ""
 done
 for prog in "$TETCLI" "$HEXCLI"; do
-  expect_exit2 "$(basename "$prog") empty output_directory" "output_directory is empty" -- "$prog" 2 stable_neo_hookean 1 10 ""
+  expect_error "$(basename "$prog") empty output_directory" "output_directory is empty" -- "$prog" 2 stable_neo_hookean 1 10 ""
 done
 # An output directory holding someone else's files is refused before any work (tetcli once wrote its
 # frames and report/ into /), and a file that cannot be written (a file size limit: EFBIG, as a full disk)

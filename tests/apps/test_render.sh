@@ -12,8 +12,8 @@ work="$(mktemp -d)"
 pid=""
 trap '[ -n "$pid" ] && kill -9 "$pid" 2> /dev/null; rm -rf "$work"' EXIT
 pass=0 fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 
 browser="$(command -v chromium || command -v chromium-browser)" || { echo "FAIL: chromium is not installed (scripts/install-deps installs it)"; exit 1; }
 # The browser through a wrapper that counts its starts.

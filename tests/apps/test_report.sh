@@ -10,8 +10,8 @@ SNH="$1" TETCLI="$2" VIEWER="$3" SCENES="$4"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 pass=0 fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 
 # Runs write their report and say where it is.
 out="$("$SNH" stretch --res 4 --steps 6 --stretch 2 --out "$work/run" 2>&1)"; code=$?

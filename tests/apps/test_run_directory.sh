@@ -13,7 +13,7 @@ pids=()
 trap 'for p in "${pids[@]}"; do kill -9 "$p" 2> /dev/null; done; rm -rf "$work"' EXIT
 pass=0 fail=0
 # shellcheck source=lib.sh
-. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 
 # 1. The header is in the log as soon as the run starts, before step 1 ends (res 24 hexes: step 1 takes
 #    a factorization of 46 875 unknowns); then SIGKILL after step 2: the stats say "running".

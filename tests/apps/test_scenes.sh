@@ -7,8 +7,8 @@ SNH="$1" SCENES="$2"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 pass=0 fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 
 for scene in "$SCENES"/*.json; do
   name="$(basename "$scene" .json)"

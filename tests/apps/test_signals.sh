@@ -14,7 +14,7 @@ pid=""
 trap '[ -n "$pid" ] && kill -9 "$pid" 2> /dev/null; rm -rf "$work"' EXIT
 pass=0 fail=0
 # shellcheck source=lib.sh
-. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for
+. "$(dirname "$0")/lib.sh"  # ok, bad, wait_for, expect_exit, expect_error
 
 # wait_exists PATH SECONDS: true once PATH exists.
 wait_exists() {

@@ -2,8 +2,10 @@
 // checked against finite differences, and a layout that grows when a term's stencil moves.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
+#include "snh/fem/attachment_term.hpp"
 #include "snh/fem/elastic_term.hpp"
 #include "snh/fem/problem.hpp"
 #include "snh/mesh/box.hpp"
@@ -187,6 +189,59 @@ TEST(Problem, TheLayoutGrowsWhenAVaryingStencilLeavesIt) {
   q.evaluate(x, gq, &Hq, PsdProjection::clamp);
   EXPECT_EQ(g, gq);
   EXPECT_EQ(Eigen::MatrixXd(H.matrix), Eigen::MatrixXd(Hq.matrix));
+}
+
+TEST(AttachmentTerm, PullsTowardTargetsThatMoveWithTimeAndMatchesFiniteDifferences) {
+  const VolumeMesh m = box_tets(2);
+  std::vector<std::uint8_t> fixed(3 * m.vertex_count(), 0);
+  for (int d : {0, 1, 2}) fixed[d] = 1;  // vertex 0 kinematic: its spring moves no free DOF
+  ElasticTerm elastic(m, make_material("stable_neo_hookean", {1.0, 10.0}));
+  const std::vector<int> attached{0, 13, 22, 7};
+  const Eigen::Vector4d k(3.0, 1.0, 2.5, 0.0);
+  AttachmentTerm springs(attached, k, [&](double t, Eigen::Matrix3Xd& out) {
+    out = m.vertices(Eigen::all, attached);
+    out.row(0).array() += t;           // targets slide along x with time
+    out.row(2).array() -= 0.5 * t * t;
+  });
+  Problem p{DofMap(fixed)};
+  p.add(elastic);
+  p.add(springs);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n(0.0, 0.05);
+  Eigen::VectorXd x = flatten(m.vertices);
+  for (Eigen::Index i = 0; i < x.size(); ++i) x[i] += n(rng);
+  for (double t : {0.0, 0.7}) {
+    p.at_time(t);
+    double expected = 0.0;  // ½ Σ k |x − target|², written out
+    for (std::size_t i = 0; i < attached.size(); ++i) {
+      Eigen::Vector3d target = m.vertices.col(attached[i]);
+      target += Eigen::Vector3d(t, 0.0, -0.5 * t * t);
+      expected += 0.5 * k[static_cast<Eigen::Index>(i)] * (x.segment<3>(3 * attached[i]) - target).squaredNorm();
+    }
+    EXPECT_NEAR(springs.energy(x), expected, 1e-14 * (1.0 + expected)) << "t = " << t;
+    const FdErrors e = problem_fd_errors(p, x);
+    EXPECT_LE(e.gradient, 1e-8) << "t = " << t;
+    EXPECT_LE(e.hessian, 1e-8) << "t = " << t;
+  }
+  // At its targets the term adds no force: the problem's gradient is the elastic one.
+  Eigen::VectorXd y = x, g_all, g_elastic;
+  for (std::size_t i = 0; i < attached.size(); ++i) y.segment<3>(3 * attached[i]) = springs.targets().col(static_cast<Eigen::Index>(i));
+  p.evaluate(y, g_all, nullptr, PsdProjection::none);
+  Problem only_elastic{DofMap(fixed)};
+  only_elastic.add(elastic);
+  only_elastic.evaluate(y, g_elastic, nullptr, PsdProjection::none);
+  EXPECT_EQ(g_all, g_elastic);
+}
+
+TEST(AttachmentTerm, RefusesInconsistentInput) {
+  auto none = [](double, Eigen::Matrix3Xd& out) { out.setZero(3, 2); };
+  EXPECT_THROW(AttachmentTerm({1, 1}, Eigen::Vector2d(1, 1), none), std::invalid_argument);
+  EXPECT_THROW(AttachmentTerm({1, -2}, Eigen::Vector2d(1, 1), none), std::invalid_argument);
+  EXPECT_THROW(AttachmentTerm({1, 2}, Eigen::Vector2d(1, -1), none), std::invalid_argument);
+  EXPECT_THROW(AttachmentTerm({1, 2}, Eigen::Vector2d(1, std::nan("")), none), std::invalid_argument);
+  EXPECT_THROW(AttachmentTerm({1, 2}, Eigen::Vector3d(1, 1, 1), none), std::invalid_argument);
+  EXPECT_THROW(AttachmentTerm({1, 2}, Eigen::Vector2d(1, 1), {}), std::invalid_argument);
+  EXPECT_THROW(AttachmentTerm({1, 2, 3}, Eigen::Vector3d(1, 1, 1), none), std::logic_error) << "2 targets for 3 vertices";
 }
 
 }  // namespace

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer harnesses (fuzz/, clang with ASan + UBSan) in BUILD_DIR and runs each for SECONDS
-# (default 7: about a minute for the eight readers and the scene JSON) from its seed corpus in fuzz/corpus/. New inputs go
+# (default 6: about a minute for the eight readers, the scene JSON and checkpoint.bin) from its seed corpus in fuzz/corpus/. New inputs go
 # to a temporary directory, not into the repository. Fails on any crash, sanitizer report, leak,
 # timeout or out-of-memory, leaving the reproducer in BUILD_DIR/crashes.
 # Usage: run_fuzzers.sh SOURCE_DIR BUILD_DIR [SECONDS]
 set -euo pipefail
-SRC="$1" BUILD="$2" SECONDS_EACH="${3:-7}"
+SRC="$1" BUILD="$2" SECONDS_EACH="${3:-6}"
 if ! command -v clang++ > /dev/null; then
   echo "run_fuzzers: clang++ is missing (scripts/install-deps installs clang)" >&2
   exit 1
@@ -17,7 +17,7 @@ mkdir -p "$BUILD/crashes"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 status=0
-for format in msh mesh vtu tetgen obj off ply stl scene_json; do
+for format in msh mesh vtu tetgen obj off ply stl scene_json checkpoint; do
   mkdir -p "$work/$format"
   seeds=("$SRC/fuzz/corpus/$format")
   [ "$format" = scene_json ] && seeds=("$SRC/scenes" "$SRC/tests/data/malformed_scenes")  # the example and malformed scenes

@@ -16,6 +16,7 @@
 #include "snh/io/mesh_write.hpp"
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/box.hpp"
+#include "io/bytes_read.hpp"
 
 namespace snh {
 namespace {
@@ -330,6 +331,37 @@ TEST_F(MeshRead, DataAfterTheMeshIsRefused) {
   write("p.node", kNode);
   EXPECT_NE(error_of("p.ele", std::string(kEle) + std::string(100, '\0')).find(":4: more data than the 2 tetrahedra the header announces"), std::string::npos);
   EXPECT_EQ(error_of("q.mesh", "MeshVersionFormatted 2\nDimension 3\nEnd\ngarbage\n"), ":4: unexpected 'garbage' after End");
+}
+
+// A valid mesh followed by 900 MB of NUL bytes (a sparse file: no disk used) fails after reading about as
+// much as the mesh, not the whole file: the text readers read as they parse, and VTU's XML stops at its
+// first NUL byte (before: the whole file in memory, 4.45 s, before the error).
+TEST_F(MeshRead, APaddedFileIsReadOnlyUpToItsPadding) {
+  if (test::bytes_read() < 0) GTEST_SKIP() << "no /proc/self/io";
+  const VolumeMesh t = box_tets(2);
+  write_msh(dir_ / "p.msh", t);
+  write_medit(dir_ / "p.mesh", t);
+  write_vtu(dir_ / "p.vtu", t, t.vertices, {}, {});
+  write("p.node", kNode);
+  write("p.ele", kEle);
+  constexpr std::uintmax_t padded_size = 900u << 20;
+  for (const char* name : {"p.msh", "p.mesh", "p.vtu", "p.ele"}) {
+    fs::resize_file(dir_ / name, padded_size);
+    const long long before = test::bytes_read();
+    const std::string error = error_of_existing(name);
+    const long long read = test::bytes_read() - before;
+    EXPECT_TRUE(error.find("binary data (a NUL byte) where text was expected") != std::string::npos ||
+                error.find("data after </VTKFile>") != std::string::npos ||
+                error.find("more data than the 2 tetrahedra the header announces") != std::string::npos)
+        << name << ": " << error;
+    EXPECT_LT(read, 8 << 20) << name << ": read " << read << " bytes of " << padded_size;
+  }
+  // The same for a NUL in the middle of a text mesh: the read stops there, at its line.
+  const std::string text = "MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n";
+  EXPECT_EQ(error_of("mid.mesh", text + std::string(1, '\0') + std::string(3 << 20, ' ')),
+            ":6: binary data (a NUL byte) where text was expected");
+  EXPECT_EQ(error_of("c.mesh", std::string("# a comment with a NUL \0 byte\nMeshVersionFormatted 2\n", 53)),
+            ":1: binary data (a NUL byte) where text was expected");
 }
 
 }  // namespace

@@ -9,11 +9,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
 #include "snh/fem/rest_state.hpp"
 #include "snh/io/surface_read.hpp"
+#include "io/bytes_read.hpp"
 
 namespace snh {
 namespace {
@@ -37,7 +41,8 @@ class Surface : public ::testing::Test {
   fs::path dir_;
 };
 
-TEST_F(Surface, EveryFormatGivesTheCube) {
+/// The unit cube in every surface format: c.obj, c.off, c.ply, a.stl (ASCII) and b.stl (binary).
+std::vector<std::pair<std::string, std::string>> cube_files() {
   std::string obj = "# cube\no cube\n", off = "OFF\n8 6 0\n", ply = "ply\nformat ascii 1.0\ncomment cube\nelement vertex 8\n"
                                                                   "property float x\nproperty float y\nproperty float z\n"
                                                                   "element face 6\nproperty list uchar int vertex_indices\nend_header\n";
@@ -67,7 +72,11 @@ TEST_F(Surface, EveryFormatGivesTheCube) {
     }
   }
   stl += "endsolid cube\n";
-  for (const auto& [name, text] : {std::pair{"c.obj", obj}, {"c.off", off}, {"c.ply", ply}, {"a.stl", stl}, {"b.stl", bin}}) {
+  return {{"c.obj", obj}, {"c.off", off}, {"c.ply", ply}, {"a.stl", stl}, {"b.stl", bin}};
+}
+
+TEST_F(Surface, EveryFormatGivesTheCube) {
+  for (const auto& [name, text] : cube_files()) {
     const SurfaceMesh s = read_surface(write(name, text));
     EXPECT_EQ(s.vertices.cols(), 8) << name;
     EXPECT_EQ(s.triangles.cols(), 12) << name;
@@ -102,6 +111,43 @@ TEST_F(Surface, ErrorsAreOneLine) {
   const std::string missing = error("g.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
   ::setenv("PATH", saved.c_str(), 1);
   EXPECT_NE(missing.find("Debian package tetgen"), std::string::npos) << missing;
+}
+
+// A surface followed by 900 MB of NUL bytes (a sparse file) fails after reading about as much as the
+// surface; a binary STL's triangle count is checked against its size, and an ASCII one's first word, before
+// the rest is read.
+TEST_F(Surface, APaddedFileIsReadOnlyUpToItsPadding) {
+  if (test::bytes_read() < 0) GTEST_SKIP() << "no /proc/self/io";
+  for (const auto& [name, text] : cube_files()) {
+    const fs::path p = write(name, text);
+    fs::resize_file(p, 900u << 20);
+    const long long before = test::bytes_read();
+    std::string error;
+    try {
+      (void)read_surface(p);
+    } catch (const MeshError& e) {
+      error = std::string(e.what()).substr(p.string().size());
+    }
+    const long long read = test::bytes_read() - before;
+    if (name == "b.stl")
+      EXPECT_EQ(error, ":1: not an STL file: it does not start with 'solid' (ASCII), and as binary STL its count of 12 triangles "
+                       "needs 84 + 50 x 12 = 684 bytes, not 943718400");
+    else
+      EXPECT_TRUE(error.find("binary data (a NUL byte) where text was expected") != std::string::npos ||
+                  error.find("more data than the header announces") != std::string::npos)
+          << name << ": " << error;
+    EXPECT_LT(read, 8 << 20) << name << ": read " << read << " bytes";
+  }
+  auto error = [&](const std::string& name, const std::string& text) {
+    try {
+      (void)read_surface(write(name, text));
+    } catch (const MeshError& e) {
+      return std::string(e.what()).substr((dir_ / name).string().size());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error("short.stl", "facet"), ":1: not an STL file: it does not start with 'solid' (ASCII) and its 5 bytes are fewer than a binary STL's 84");
+  EXPECT_EQ(error("solidx.stl", "solidx\n" + std::string(100, 'x')).substr(0, 47), ":1: not an STL file: it does not start with 'so");
 }
 
 }  // namespace

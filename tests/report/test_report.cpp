@@ -5,6 +5,7 @@
 // cannot describe (a flesh run's files at fault named).
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <csignal>
@@ -13,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -569,6 +571,31 @@ TEST(RunReport, OneLineErrors) {
   const std::string m = message(dir);
   EXPECT_EQ(m.rfind("frame 0: " + (dir / "000.vtu").string() + ": cannot open", 0), 0u) << m;
   EXPECT_EQ(m.find('\n'), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// The report's own reads (stats.json, lab.json, bones.json, data.js) are checked as every input file is: a
+// directory or a FIFO there fails at once with one line (a FIFO blocked the report forever).
+TEST(RunReport, ItsJsonInputsAreCheckedBeforeReading) {
+  const fs::path dir = fresh_dir("json_inputs");
+  fs::create_directories(dir / "stats.json");
+  auto message = [&](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const ReportError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message([&] { (void)write_report(dir); }), (dir / "stats.json").string() + ": is a directory, not a JSON file");
+  fs::remove(dir / "stats.json");
+  ASSERT_EQ(::mkfifo((dir / "stats.json").c_str(), 0644), 0);
+  EXPECT_EQ(message([&] { (void)write_report(dir); }),
+            (dir / "stats.json").string() + ": is not a regular file (a FIFO): cannot read a JSON file from it");
+  fs::create_directories(dir / "report");
+  ASSERT_EQ(::mkfifo((dir / "report" / "data.js").c_str(), 0644), 0);
+  EXPECT_EQ(message([&] { (void)read_report_data(dir); }),
+            (dir / "report" / "data.js").string() + ": is not a regular file (a FIFO): cannot read a report data file from it");
   fs::remove_all(dir);
 }
 

@@ -75,5 +75,58 @@ TEST(Bones, BindingTakesTheDeepestCapsule) {
   EXPECT_EQ(c.bone[1], 0);
 }
 
+TEST(Bones, SoftBindingTakesTheShellOutsideTheCapsulesWithFadingWeights) {
+  std::vector<Bone> bones{{.name = "x", .joint = 0, .child = 1, .a = {0, 0, 0}, .b = {1, 0, 0}, .radius = 0.3},
+                          {.name = "y", .joint = 0, .child = 2, .a = {0, 0, 0}, .b = {0, 1, 0}, .radius = 0.2}};
+  Eigen::Matrix3Xd X(3, 6);
+  X.col(0) = Eigen::Vector3d(0.5, 0.1, 0);   // inside x: hard
+  X.col(1) = Eigen::Vector3d(0.5, 0.35, 0);  // 0.05 outside x, 0.3 outside y: soft to x, weight 0.75
+  X.col(2) = Eigen::Vector3d(0.5, 0.45, 0);  // 0.15 outside x, 0.3 outside y: soft to x, weight 0.25
+  X.col(3) = Eigen::Vector3d(0.5, 0.5, 0);   // 0.2 outside x: on the shell's outer edge, not bound
+  X.col(4) = Eigen::Vector3d(0.25, 0.8, 0);  // 0.5 outside x, 0.05 outside y: soft to y
+  X.col(5) = Eigen::Vector3d(3, 3, 3);       // far from both
+  const Binding hard = bind_to_bones(bones, X);
+  EXPECT_EQ(hard.vertex, (std::vector<int>{0}));
+  const SoftBinding soft = soft_bind_to_bones(bones, X, 0.2, hard);
+  EXPECT_EQ(soft.vertex, (std::vector<int>{1, 2, 4}));
+  EXPECT_EQ(soft.bone, (std::vector<int>{0, 0, 1}));
+  ASSERT_EQ(soft.weight.size(), 3u);
+  EXPECT_NEAR(soft.weight[0], 1.0 - 0.05 / 0.2, 1e-12);
+  EXPECT_NEAR(soft.weight[1], 1.0 - 0.15 / 0.2, 1e-12);
+  EXPECT_NEAR(soft.weight[2], 1.0 - 0.05 / 0.2, 1e-12);
+  EXPECT_TRUE(soft_bind_to_bones(bones, X, 0.0, hard).vertex.empty()) << "no shell, no soft binding";
+  // A vertex held hard is never bound softly too.
+  const SoftBinding all = soft_bind_to_bones(bones, X, 10.0, hard);
+  EXPECT_EQ(all.vertex, (std::vector<int>{1, 2, 3, 4, 5}));
+}
+
+TEST(Bones, SplitAtJointsReleasesTheVerticesOfCellsHeldByTwoJoints) {
+  // Three tets in a row sharing faces: vertices 0..5; bones of joints 0 and 1 (and a second bone of joint 0).
+  std::vector<Bone> bones{{.name = "a", .joint = 0}, {.name = "b", .joint = 1}, {.name = "c", .joint = 0}};
+  Eigen::MatrixXi cells(4, 3);
+  cells << 0, 1, 2, 1, 2, 3, 2, 3, 4, 3, 4, 5;  // columns: {0,1,2,3}, {1,2,3,4}, {2,3,4,5}
+  Binding b;
+  b.vertex = {0, 1, 4, 5};
+  b.bone = {0, 2, 1, 1};  // 0 and 1 with joint 0 (two bones of it), 4 and 5 with joint 1
+  const JointSplit split = split_at_joints(b, bones, cells, 6);
+  // Cell {1,2,3,4} holds 1 (joint 0) and 4 (joint 1): both released; cell {0,1,2,3} holds joint 0 only.
+  EXPECT_EQ(split.kept.vertex, (std::vector<int>{0, 5}));
+  EXPECT_EQ(split.kept.bone, (std::vector<int>{0, 1}));
+  EXPECT_EQ(split.released.vertex, (std::vector<int>{1, 4}));
+  EXPECT_EQ(split.released.bone, (std::vector<int>{2, 1}));
+  // Two bones of one joint never conflict.
+  b.bone = {0, 2, 0, 2};
+  EXPECT_TRUE(split_at_joints(b, bones, cells, 6).released.vertex.empty());
+  // Released vertices join a soft binding at weight 1, in vertex order; a vertex already soft keeps its weight.
+  SoftBinding soft;
+  soft.vertex = {2, 4};
+  soft.bone = {0, 0};
+  soft.weight = {0.5, 0.25};
+  const SoftBinding merged = merge_soft(soft, split.released, 1.0);
+  EXPECT_EQ(merged.vertex, (std::vector<int>{1, 2, 4}));
+  EXPECT_EQ(merged.bone, (std::vector<int>{2, 0, 0}));
+  EXPECT_EQ(merged.weight, (std::vector<double>{1.0, 0.5, 0.25}));
+}
+
 }  // namespace
 }  // namespace snh

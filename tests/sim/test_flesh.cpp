@@ -5,10 +5,16 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <optional>
 #include <fstream>
+#include <iostream>
+#include <map>
+#include <set>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "limb_model.hpp"
@@ -122,6 +128,88 @@ TEST_F(FleshLimb, BentElbowKeepsTheFleshVolumeWhereSkinningLosesIt) {
   EXPECT_NE(text.str().find("            4: [("), std::string::npos);
 }
 
+TEST_F(FleshLimb, SoftBindingPullsTheShellTowardItsBonesAndStiffensWithItsStiffness) {
+  // Shrunken capsules (radius 0.12 of the limb's 0.3) with a shell of 0.2 outside them (the lattice's vertices
+  // lie 0.10, 0.23 and 0.31 from the axis): the shell's vertices are pulled toward where their bones carry
+  // them, by springs that fade across the shell.
+  constexpr double shell = 0.2;
+  auto soft_scene = [&](const std::string& out, std::optional<double> stiffness) {
+    json j = scene("lattice", 14, out);
+    j["flesh"]["bones"] = json::array({{{"joint", "shoulder"}, {"radius", 0.12}}, {{"joint", "elbow"}, {"radius", 0.12}}});
+    j["flesh"]["joint_cells"] = "hard";  // the shell alone
+    if (stiffness) j["flesh"]["soft_binding"] = {{"shell", shell}, {"stiffness", *stiffness}};
+    return j;
+  };
+  const Scene s = parse_scene(soft_scene("soft_rest", 1.0), dir_ / "limb.json");
+  const Flesh& f = *s.loaded->flesh;
+  ASSERT_GT(f.soft.vertex.size(), 0u);
+  for (std::size_t i = 0; i < f.soft.vertex.size(); ++i) {  // outside every capsule, within the shell of its own
+    const Eigen::Vector3d X = f.volume.vertices.col(f.soft.vertex[i]);
+    const Bone& b = f.bones[f.soft.bone[i]];
+    const double gap = segment_distance(b.a, b.b, X) - b.radius;
+    EXPECT_GT(gap, 0.0);
+    EXPECT_LT(gap, shell);
+    EXPECT_NEAR(f.soft.weight[i], 1.0 - gap / shell, 1e-12);
+    for (const Bone& other : f.bones) EXPECT_GE(segment_distance(other.a, other.b, X) - other.radius, gap - 1e-15);
+    EXPECT_EQ(std::find(f.binding.vertex.begin(), f.binding.vertex.end(), f.soft.vertex[i]), f.binding.vertex.end());
+  }
+  // How far the shell's vertices end from where their bones carry them (weighted), bent to 90°.
+  const std::vector<Eigen::Affine3d> world = joint_world(f, 1.0);
+  auto shell_miss = [&](const Eigen::VectorXd& x) {
+    double sum = 0.0, weights = 0.0;
+    for (std::size_t i = 0; i < f.soft.vertex.size(); ++i) {
+      const int v = f.soft.vertex[i], j = f.bones[f.soft.bone[i]].joint;
+      const Eigen::Vector3d carried = world[j] * (f.rest_world[j].inverse() * f.volume.vertices.col(v));
+      sum += f.soft.weight[i] * (x.segment<3>(3 * v) - carried).norm();
+      weights += f.soft.weight[i];
+    }
+    return sum / weights;
+  };
+  const double none = shell_miss(run(soft_scene("soft_none", std::nullopt)).final_positions);
+  double previous = none;
+  for (double k : {1.0, 10.0, 100.0}) {
+    const double miss = shell_miss(run(soft_scene(fmt::format("soft_{:g}", k), k)).final_positions);
+    std::cout << "soft binding " << k << " x E x h: the shell misses its bones by " << miss << " (no soft binding: " << none << ")\n";
+    EXPECT_LT(miss, 0.7 * previous) << "stiffness " << k;
+    previous = miss;
+  }
+  const json st = stats("soft_1");
+  EXPECT_EQ(st["soft_binding"]["vertices"].get<std::size_t>(), f.soft.vertex.size());
+}
+
+TEST_F(FleshLimb, CellsSpanningTheElbowAreHeldByOneJointAtMost) {
+  std::map<std::string, std::size_t> released;
+  for (const char* mode : {"soft", "free", "hard"}) {
+    json j = scene("lattice", 14, std::string("joints_") + mode);
+    j["flesh"]["joint_cells"] = mode;
+    const Scene s = parse_scene(j, dir_ / "limb.json");
+    const Flesh& f = *s.loaded->flesh;
+    released[mode] = f.released.vertex.size();
+    std::vector<int> joint(f.volume.vertex_count(), -1);
+    for (std::size_t i = 0; i < f.binding.vertex.size(); ++i) joint[f.binding.vertex[i]] = f.bones[f.binding.bone[i]].joint;
+    int spanning = 0;  // cells whose hard-bound vertices move with two joints
+    for (Eigen::Index c = 0; c < f.volume.cell_count(); ++c) {
+      std::set<int> joints;
+      for (Eigen::Index k = 0; k < f.volume.cells.rows(); ++k)
+        if (joint[f.volume.cells(k, c)] >= 0) joints.insert(joint[f.volume.cells(k, c)]);
+      spanning += joints.size() > 1;
+    }
+    if (std::string(mode) == "hard") {
+      EXPECT_GT(spanning, 0) << "the default capsules of the limb meet at the elbow";
+      EXPECT_TRUE(f.soft.vertex.empty());
+    } else {
+      EXPECT_EQ(spanning, 0) << mode;
+      EXPECT_GT(f.released.vertex.size(), 0u) << mode;
+      EXPECT_EQ(f.soft.vertex, std::string(mode) == "soft" ? f.released.vertex : std::vector<int>{}) << mode;
+    }
+    // The bend runs in every mode.
+    const SceneResult r = run(j);
+    EXPECT_EQ(r.frames.size(), 5u) << mode;
+  }
+  EXPECT_EQ(released["soft"], released["free"]);
+  EXPECT_EQ(released["hard"], 0u);
+}
+
 TEST_F(FleshLimb, LatticeAndTetsAgreeInShape) {
   // Two discretizations of the same flesh. The capsules bind the volume vertices that fall inside them, so
   // each volume resolves the bones (and the flesh near them) to its cell size: the bent surfaces differ by
@@ -183,6 +271,16 @@ TEST_F(FleshLimb, BadFleshScenesAreNamed) {
   j = scene("lattice", 10, "bad");
   j["flesh"]["keyframes"] = keyframes("elbow", json::array({key(1, 0), key(1, 5)}));
   EXPECT_NE(error_of(j).find("must increase"), std::string::npos) << error_of(j);
+  j = scene("lattice", 10, "bad");
+  j["flesh"]["joint_cells"] = "loose";
+  EXPECT_NE(error_of(j).find("flesh.joint_cells: expected one of soft, free, hard, got \"loose\""), std::string::npos) << error_of(j);
+  j = scene("lattice", 10, "bad");
+  j["flesh"]["soft_binding"] = {{"shell", 0.0}};
+  EXPECT_NE(error_of(j).find("flesh.soft_binding.shell: must be > 0, got 0"), std::string::npos) << error_of(j);
+  j["flesh"]["soft_binding"] = {{"shell", 0.1}, {"stiffness", -1}};
+  EXPECT_NE(error_of(j).find("flesh.soft_binding.stiffness: must be > 0, got -1"), std::string::npos) << error_of(j);
+  j["flesh"]["soft_binding"] = {{"shell", 0.1}, {"stifness", 1}};
+  EXPECT_NE(error_of(j).find("flesh.soft_binding.stifness: unknown key"), std::string::npos) << error_of(j);
   // An open surface: the limb without its end caps has two rims of 16 edges.
   test::LimbOptions open;
   open.caps = false;

@@ -166,6 +166,27 @@ TEST(Checkpoint, RoundTripsAndRefusesDamage) {
   write_checkpoint(d, nan);
   EXPECT_EQ(error_of([&] { (void)read_checkpoint(d); }),
             (d / "checkpoint.bin").string() + ": damaged checkpoint (its state is not finite)");
+  // Nor a time that is not finite or negative (a resumed run would carry it into every frame).
+  for (const double t : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -1.0}) {
+    Checkpoint bad_time = c;
+    bad_time.time = t;
+    write_checkpoint(d, bad_time);
+    EXPECT_EQ(error_of([&] { (void)read_checkpoint(d); }), (d / "checkpoint.bin").string() + ": damaged checkpoint (bad time)") << t;
+  }
+  // Empty vectors round trip (reading them copied 0 bytes to a null pointer: undefined, found by fuzz_checkpoint
+  // under UBSan).
+  Checkpoint empty = c;
+  empty.x.resize(0);
+  empty.aux.resize(0);
+  write_checkpoint(d, empty);
+  ASSERT_TRUE(read_checkpoint(d));
+  EXPECT_EQ(read_checkpoint(d)->x.size(), 0);
+  // A fingerprint with control bytes is echoed on one line, escaped (fuzz_checkpoint aborts on a line break).
+  Checkpoint odd = c;
+  odd.fingerprint = "two\nlines\x01";
+  write_checkpoint(d, odd);
+  EXPECT_NE(error_of([&] { (void)checkpoint_for_resume(d, "other", 30); }).find("used other settings (two\\x0alines\\x01; now other)"),
+            std::string::npos);
   fs::remove_all(d);
 }
 

@@ -258,7 +258,7 @@ TEST(SceneSections, MixedOrMeaninglessInputIsRefused) {
   // Two pin sets moving the same coordinate of a vertex.
   EXPECT_EQ(error_of(R"({"pins": [{"indices": [0, 1]}, {"indices": [1], "axes": "y",
                        "motion": [{"type": "translate", "by": [0, 1, 0]}]}]})"),
-            "s.json: pins[1] holds the y coordinate of vertex 1, which s.json: pins[0] already holds: give each coordinate one "
+            "s.json: pins[1] holds the y coordinate of vertex 1, which pins[0] already holds: give each coordinate one "
             "motion");
   // The same vertex held on different axes by two sets is fine.
   EXPECT_EQ(error_of(R"({"pins": [{"indices": [0, 1], "axes": "x"}, {"indices": [1], "axes": "yz"}]})"), "");

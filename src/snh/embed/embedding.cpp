@@ -12,6 +12,8 @@
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 
+#include "snh/math/parallel.hpp"
+
 namespace snh {
 namespace {
 
@@ -152,12 +154,16 @@ Eigen::Matrix3Xd apply_to(const Embedding& e, const Eigen::Ref<const Eigen::Matr
           throw std::invalid_argument(
               fmt::format("embedded point {} refers to vertex {} (the positions have {})", p, e.vertex(a, p), X.cols()));
   Eigen::Matrix3Xd out(3, n);
+  ParallelErrors errors;
 #pragma omp parallel for schedule(static) if (n >= 4096)
   for (Eigen::Index p = 0; p < n; ++p) {
-    Eigen::Vector3d x = Eigen::Vector3d::Zero();
-    for (Eigen::Index a = 0; a < k; ++a) x += e.weight(a, p) * X.col(e.vertex(a, p));
-    out.col(p) = x;
+    errors.run(p, [&] {
+      Eigen::Vector3d x = Eigen::Vector3d::Zero();
+      for (Eigen::Index a = 0; a < k; ++a) x += e.weight(a, p) * X.col(e.vertex(a, p));
+      out.col(p) = x;
+    });
   }
+  errors.rethrow();
   return out;
 }
 
@@ -188,48 +194,52 @@ Embedding embed_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& point
   e.vertex.resize(8, n);
   e.weight.resize(8, n);
   std::vector<unsigned char> failed(static_cast<std::size_t>(n), 0);
+  ParallelErrors errors;
 #pragma omp parallel for schedule(static) if (n >= 1024)
   for (Eigen::Index p = 0; p < n; ++p) {
-    const Eigen::Vector3d s = lattice.grid_coordinates(points.col(p));
-    // The cube floor(s), then those whose faces (within the tolerance) the point is on; a point beyond the
-    // grid by more than the tolerance is in none.
-    std::array<std::array<int, 3>, 3> choices{};  // per axis: up to three cube indices, the first preferred
-    std::array<int, 3> count{};
-    bool outside = false;
-    for (int a = 0; a < 3; ++a) {
-      const int base = clamped_floor(s[a], dims[a]);
-      const double u = s[a] - base;
-      if (u < -kCubeTolerance || u > 1.0 + kCubeTolerance) outside = true;
-      choices[a][count[a]++] = base;
-      if (u <= kCubeTolerance && base > 0) choices[a][count[a]++] = base - 1;
-      if (u >= 1.0 - kCubeTolerance && base < dims[a] - 1) choices[a][count[a]++] = base + 1;
-    }
-    int cell = -1;
-    std::array<int, 3> cube{};
-    for (int c = 0; c < count[2] && cell < 0 && !outside; ++c)
-      for (int b = 0; b < count[1] && cell < 0; ++b)
-        for (int a = 0; a < count[0] && cell < 0; ++a) {
-          cube = {choices[0][a], choices[1][b], choices[2][c]};
-          cell = lattice.cell_at[static_cast<std::size_t>(lattice.cube_index(cube[0], cube[1], cube[2]))];
-        }
-    if (cell < 0 || cell >= lattice.mesh.cell_count()) {
-      failed[static_cast<std::size_t>(p)] = 1;
-      e.cell[static_cast<std::size_t>(p)] = -1;
-      e.vertex.col(p).setZero();
-      e.weight.col(p).setZero();
-      continue;
-    }
-    // Trilinear weights of the corners c0..c7 (corner a at offset (a & 1, a >> 1 & 1, a >> 2 & 1)).
-    const Eigen::Vector3d u = s - Eigen::Vector3d(cube[0], cube[1], cube[2]);
-    e.cell[static_cast<std::size_t>(p)] = cell;
-    for (int a = 0; a < 8; ++a) {
-      const double wx = (a & 1) ? u.x() : 1.0 - u.x();
-      const double wy = (a & 2) ? u.y() : 1.0 - u.y();
-      const double wz = (a & 4) ? u.z() : 1.0 - u.z();
-      e.vertex(a, p) = lattice.mesh.cells(a, cell);
-      e.weight(a, p) = wx * wy * wz;
-    }
+    errors.run(p, [&] {
+      const Eigen::Vector3d s = lattice.grid_coordinates(points.col(p));
+      // The cube floor(s), then those whose faces (within the tolerance) the point is on; a point beyond the
+      // grid by more than the tolerance is in none.
+      std::array<std::array<int, 3>, 3> choices{};  // per axis: up to three cube indices, the first preferred
+      std::array<int, 3> count{};
+      bool outside = false;
+      for (int a = 0; a < 3; ++a) {
+        const int base = clamped_floor(s[a], dims[a]);
+        const double u = s[a] - base;
+        if (u < -kCubeTolerance || u > 1.0 + kCubeTolerance) outside = true;
+        choices[a][count[a]++] = base;
+        if (u <= kCubeTolerance && base > 0) choices[a][count[a]++] = base - 1;
+        if (u >= 1.0 - kCubeTolerance && base < dims[a] - 1) choices[a][count[a]++] = base + 1;
+      }
+      int cell = -1;
+      std::array<int, 3> cube{};
+      for (int c = 0; c < count[2] && cell < 0 && !outside; ++c)
+        for (int b = 0; b < count[1] && cell < 0; ++b)
+          for (int a = 0; a < count[0] && cell < 0; ++a) {
+            cube = {choices[0][a], choices[1][b], choices[2][c]};
+            cell = lattice.cell_at[static_cast<std::size_t>(lattice.cube_index(cube[0], cube[1], cube[2]))];
+          }
+      if (cell < 0 || cell >= lattice.mesh.cell_count()) {
+        failed[static_cast<std::size_t>(p)] = 1;
+        e.cell[static_cast<std::size_t>(p)] = -1;
+        e.vertex.col(p).setZero();
+        e.weight.col(p).setZero();
+        return;
+      }
+      // Trilinear weights of the corners c0..c7 (corner a at offset (a & 1, a >> 1 & 1, a >> 2 & 1)).
+      const Eigen::Vector3d u = s - Eigen::Vector3d(cube[0], cube[1], cube[2]);
+      e.cell[static_cast<std::size_t>(p)] = cell;
+      for (int a = 0; a < 8; ++a) {
+        const double wx = (a & 1) ? u.x() : 1.0 - u.x();
+        const double wy = (a & 2) ? u.y() : 1.0 - u.y();
+        const double wz = (a & 4) ? u.z() : 1.0 - u.z();
+        e.vertex(a, p) = lattice.mesh.cells(a, cell);
+        e.weight(a, p) = wx * wy * wz;
+      }
+    });
   }
+  errors.rethrow();
   throw_first_failure(failed, points, "in no cell of the lattice");
   return e;
 }
@@ -263,48 +273,52 @@ Embedding embed_in_tets(const VolumeMesh& tets, const Eigen::Matrix3Xd& points) 
   e.vertex.resize(4, n);
   e.weight.resize(4, n);
   std::vector<unsigned char> failed(static_cast<std::size_t>(n), 0);
+  ParallelErrors errors;
 #pragma omp parallel for schedule(static) if (n >= 256)
   for (Eigen::Index p = 0; p < n; ++p) {
-    const Eigen::Vector3d x = points.col(p);
-    int best = -1;
-    double best_min = -std::numeric_limits<double>::infinity();
-    Eigen::Vector4d best_weight = Eigen::Vector4d::Zero();
-    if ((x.array() >= grid.lo.array()).all() && (x.array() <= grid.hi.array()).all()) {
-      const std::size_t g = grid.index(grid.cell_of(x, 0), grid.cell_of(x, 1), grid.cell_of(x, 2));
-      // The tet whose smallest coordinate is largest (the first such in tet order); a tet the point is
-      // outside of counts only if the point is within tol of it, with its coordinates clamped.
-      for (std::int64_t b = grid.start[g]; b < grid.start[g + 1]; ++b) {
-        const int c = grid.bin[static_cast<std::size_t>(b)];
-        const std::array<Eigen::Vector3d, 4> corner = {tets.vertices.col(tets.cells(0, c)), tets.vertices.col(tets.cells(1, c)),
-                                                       tets.vertices.col(tets.cells(2, c)), tets.vertices.col(tets.cells(3, c))};
-        const std::optional<Eigen::Vector4d> l = barycentric(corner, x);
-        if (!l) continue;
-        const double m = l->minCoeff();
-        if (!(m > best_min)) continue;
-        Eigen::Vector4d w = *l;
-        if (m < 0.0) {
-          w = w.cwiseMax(0.0);
-          w /= w.sum();
-          const Eigen::Vector3d q = w[0] * corner[0] + w[1] * corner[1] + w[2] * corner[2] + w[3] * corner[3];
-          if (!((q - x).norm() <= tol)) continue;
+    errors.run(p, [&] {
+      const Eigen::Vector3d x = points.col(p);
+      int best = -1;
+      double best_min = -std::numeric_limits<double>::infinity();
+      Eigen::Vector4d best_weight = Eigen::Vector4d::Zero();
+      if ((x.array() >= grid.lo.array()).all() && (x.array() <= grid.hi.array()).all()) {
+        const std::size_t g = grid.index(grid.cell_of(x, 0), grid.cell_of(x, 1), grid.cell_of(x, 2));
+        // The tet whose smallest coordinate is largest (the first such in tet order); a tet the point is
+        // outside of counts only if the point is within tol of it, with its coordinates clamped.
+        for (std::int64_t b = grid.start[g]; b < grid.start[g + 1]; ++b) {
+          const int c = grid.bin[static_cast<std::size_t>(b)];
+          const std::array<Eigen::Vector3d, 4> corner = {tets.vertices.col(tets.cells(0, c)), tets.vertices.col(tets.cells(1, c)),
+                                                         tets.vertices.col(tets.cells(2, c)), tets.vertices.col(tets.cells(3, c))};
+          const std::optional<Eigen::Vector4d> l = barycentric(corner, x);
+          if (!l) continue;
+          const double m = l->minCoeff();
+          if (!(m > best_min)) continue;
+          Eigen::Vector4d w = *l;
+          if (m < 0.0) {
+            w = w.cwiseMax(0.0);
+            w /= w.sum();
+            const Eigen::Vector3d q = w[0] * corner[0] + w[1] * corner[1] + w[2] * corner[2] + w[3] * corner[3];
+            if (!((q - x).norm() <= tol)) continue;
+          }
+          best = c;
+          best_min = m;
+          best_weight = w;
         }
-        best = c;
-        best_min = m;
-        best_weight = w;
       }
-    }
-    if (best < 0) {
-      failed[static_cast<std::size_t>(p)] = 1;
-      e.vertex.col(p).setZero();
-      e.weight.col(p).setZero();
-      continue;
-    }
-    e.cell[static_cast<std::size_t>(p)] = best;
-    for (int a = 0; a < 4; ++a) {  // element by element: GCC 12 warns (falsely) of a 512-bit load of the 4-vector
-      e.vertex(a, p) = tets.cells(a, best);
-      e.weight(a, p) = best_weight[a];
-    }
+      if (best < 0) {
+        failed[static_cast<std::size_t>(p)] = 1;
+        e.vertex.col(p).setZero();
+        e.weight.col(p).setZero();
+        return;
+      }
+      e.cell[static_cast<std::size_t>(p)] = best;
+      for (int a = 0; a < 4; ++a) {  // element by element: GCC 12 warns (falsely) of a 512-bit load of the 4-vector
+        e.vertex(a, p) = tets.cells(a, best);
+        e.weight(a, p) = best_weight[a];
+      }
+    });
   }
+  errors.rethrow();
   throw_first_failure(failed, points, "outside every tet of the mesh");
   return e;
 }

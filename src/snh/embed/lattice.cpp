@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "snh/embed/winding_number.hpp"
+#include "snh/math/parallel.hpp"
 
 namespace snh {
 namespace {
@@ -88,30 +89,34 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
   const auto cube_range = [&](double x, int a) {
     return std::clamp(static_cast<int>(std::floor(std::clamp(x, -1.0, dims[a] + 1.0))), 0, dims[a] - 1);
   };
+  ParallelErrors overlap_errors;
 #pragma omp parallel for schedule(dynamic, 64) if (F.cols() >= 256)
   for (Eigen::Index f = 0; f < F.cols(); ++f) {
-    const std::array<Eigen::Vector3d, 3> q = {Q.col(F(0, f)), Q.col(F(1, f)), Q.col(F(2, f))};
-    const Eigen::Vector3d qlo = q[0].cwiseMin(q[1]).cwiseMin(q[2]), qhi = q[0].cwiseMax(q[1]).cwiseMax(q[2]);
-    std::array<int, 3> first{}, last{};
-    for (int a = 0; a < 3; ++a) {
-      first[a] = cube_range(qlo[a] - 2.0 * delta, a);
-      last[a] = cube_range(qhi[a] + 2.0 * delta, a);
-    }
-    for (int k = first[2]; k <= last[2]; ++k)
-      for (int j = first[1]; j <= last[1]; ++j)
-        for (int i = first[0]; i <= last[0]; ++i) {
-          const std::size_t c = static_cast<std::size_t>(L.cube_index(i, j, k));
-          unsigned char seen;
+    overlap_errors.run(f, [&] {
+      const std::array<Eigen::Vector3d, 3> q = {Q.col(F(0, f)), Q.col(F(1, f)), Q.col(F(2, f))};
+      const Eigen::Vector3d qlo = q[0].cwiseMin(q[1]).cwiseMin(q[2]), qhi = q[0].cwiseMax(q[1]).cwiseMax(q[2]);
+      std::array<int, 3> first{}, last{};
+      for (int a = 0; a < 3; ++a) {
+        first[a] = cube_range(qlo[a] - 2.0 * delta, a);
+        last[a] = cube_range(qhi[a] + 2.0 * delta, a);
+      }
+      for (int k = first[2]; k <= last[2]; ++k)
+        for (int j = first[1]; j <= last[1]; ++j)
+          for (int i = first[0]; i <= last[0]; ++i) {
+            const std::size_t c = static_cast<std::size_t>(L.cube_index(i, j, k));
+            unsigned char seen;
 #pragma omp atomic read
-          seen = touched[c];
-          if (seen) continue;
-          const Eigen::Vector3d centre(i + 0.5, j + 0.5, k + 0.5);
-          if (triangle_overlaps_cube({q[0] - centre, q[1] - centre, q[2] - centre}, 0.5 + delta)) {
+            seen = touched[c];
+            if (seen) continue;
+            const Eigen::Vector3d centre(i + 0.5, j + 0.5, k + 0.5);
+            if (triangle_overlaps_cube({q[0] - centre, q[1] - centre, q[2] - centre}, 0.5 + delta)) {
 #pragma omp atomic write
-            touched[c] = 1;
+              touched[c] = 1;
+            }
           }
-        }
+    });
   }
+  overlap_errors.rethrow();
 
   // (b) Untouched cubes, grouped by face neighbours into regions the surface does not cross; each region is
   // inside or outside as a whole (the winding number is constant off the surface), asked at its first cube.
@@ -143,20 +148,17 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
   }
   const int regions = static_cast<int>(seed.size());
   std::vector<unsigned char> inside(seed.size(), 0);
-  std::vector<std::exception_ptr> error(seed.size());
+  ParallelErrors errors;
 #pragma omp parallel for schedule(dynamic, 1) if (regions > 1)
   for (int r = 0; r < regions; ++r) {
-    try {
+    errors.run(r, [&] {
       const int c = seed[static_cast<std::size_t>(r)];
       const int i = c % dims.x(), j = (c / dims.x()) % dims.y(), k = c / (dims.x() * dims.y());
       const Eigen::Vector3d centre = L.origin + L.spacing * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
       inside[static_cast<std::size_t>(r)] = winding_number(V, F, centre) > 0.5 ? 1 : 0;
-    } catch (...) {
-      error[static_cast<std::size_t>(r)] = std::current_exception();
-    }
+    });
   }
-  for (const auto& e : error)
-    if (e) std::rethrow_exception(e);
+  errors.rethrow();
 
   // The hex mesh of the kept cubes: cells in grid order, and the grid nodes they use, numbered in grid order.
   L.cell_at.assign(n_cubes, -1);

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "snh/fem/buckets.hpp"
+#include "snh/math/parallel.hpp"
 
 namespace snh {
 namespace {
@@ -217,16 +218,20 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
         if (values) stiff.resize(static_cast<std::size_t>(cells) * ld * ld);
         for_each_material([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
           if constexpr (std::is_same_v<std::decay_t<decltype(rest)>, std::decay_t<decltype(rest_all)>>) {
+            ParallelErrors errors;
 #pragma omp parallel for schedule(static) if (count * R::points >= parallel_threshold_)
             for (Eigen::Index i = 0; i < count; ++i) {
-              const Eigen::Index c = list ? list[i] : i;
-              Eigen::Matrix<double, ld, ld> K;
-              Eigen::Matrix<double, 3, N> gc;
-              per[c] = element_terms(m, rest[c], gather_nodes<N>(mesh_, c, x), gradient ? &gc : nullptr,
-                                     values ? &K : nullptr, projection);
-              if (gradient) Eigen::Map<Eigen::Matrix<double, 3, N>>(grads.data() + static_cast<std::size_t>(c) * ld) = gc;
-              if (values) Eigen::Map<Eigen::Matrix<double, ld, ld>>(stiff.data() + static_cast<std::size_t>(c) * ld * ld) = K;
+              errors.run(i, [&] {
+                const Eigen::Index c = list ? list[i] : i;
+                Eigen::Matrix<double, ld, ld> K;
+                Eigen::Matrix<double, 3, N> gc;
+                per[c] = element_terms(m, rest[c], gather_nodes<N>(mesh_, c, x), gradient ? &gc : nullptr,
+                                       values ? &K : nullptr, projection);
+                if (gradient) Eigen::Map<Eigen::Matrix<double, 3, N>>(grads.data() + static_cast<std::size_t>(c) * ld) = gc;
+                if (values) Eigen::Map<Eigen::Matrix<double, ld, ld>>(stiff.data() + static_cast<std::size_t>(c) * ld * ld) = K;
+              });
             }
+            errors.rethrow();
           }
         });
         // 2. Scatter, colour by colour: elements of one colour share no vertex, so no two threads touch
@@ -234,21 +239,25 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
         if (!gradient && !values) return;
         for (int k = 0; k + 1 < static_cast<int>(colour_start_.size()); ++k) {
           const int begin = colour_start_[k], end = colour_start_[k + 1];
+          ParallelErrors errors;
 #pragma omp parallel for schedule(static) if ((end - begin) * N >= parallel_threshold_)
           for (int i = begin; i < end; ++i) {
-            const int c = colour_order_[i];
-            if (gradient) {
-              const double* g = grads.data() + static_cast<std::size_t>(c) * ld;
-              for (int a = 0; a < N; ++a)
-                gradient->segment<3>(3 * mesh_.cells(a, c)) += Eigen::Map<const Eigen::Vector3d>(g + 3 * a);
-            }
-            if (values) {
-              const int* map = scatter->data() + static_cast<std::size_t>(c) * ld * ld;
-              const double* K = stiff.data() + static_cast<std::size_t>(c) * ld * ld;  // same layout as map
-              for (int e = 0; e < ld * ld; ++e)
-                if (map[e] >= 0) values[map[e]] += K[e];
-            }
+            errors.run(i, [&] {
+              const int c = colour_order_[i];
+              if (gradient) {
+                const double* g = grads.data() + static_cast<std::size_t>(c) * ld;
+                for (int a = 0; a < N; ++a)
+                  gradient->segment<3>(3 * mesh_.cells(a, c)) += Eigen::Map<const Eigen::Vector3d>(g + 3 * a);
+              }
+              if (values) {
+                const int* map = scatter->data() + static_cast<std::size_t>(c) * ld * ld;
+                const double* K = stiff.data() + static_cast<std::size_t>(c) * ld * ld;  // same layout as map
+                for (int e = 0; e < ld * ld; ++e)
+                  if (map[e] >= 0) values[map[e]] += K[e];
+              }
+            });
           }
+          errors.rethrow();
         }
       },
       rest_);

@@ -87,4 +87,8 @@ void Problem::on_accepted(const Eigen::VectorXd& x) {
   for (Term* t : terms_) t->on_accepted(x);
 }
 
+void Problem::at_time(double t) {
+  for (Term* term : terms_) term->at_time(t);
+}
+
 }  // namespace snh

@@ -40,6 +40,8 @@ class Problem {
   [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx_free) const;
   /// Tells every term that Newton accepted x.
   void on_accepted(const Eigen::VectorXd& x);
+  /// Tells every term the time of the next solve.
+  void at_time(double t);
   /// Layouts built so far (1 after the first evaluation; more when varying stencils grew it).
   [[nodiscard]] int layouts_built() const { return layouts_built_; }
 

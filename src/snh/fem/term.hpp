@@ -3,8 +3,8 @@
 // attachment springs, contact barriers. Terms see every DOF (x is 3 #V: free and kinematic), add their
 // gradient to a full DOF vector and their Hessian entries to a shared layout (HessianValues), declare which
 // vertices their Hessian couples (stencil), may bound a Newton step (max_step: the largest safe fraction,
-// as continuous collision detection does for contact) and may update lagged state when an iterate is
-// accepted. A Problem (problem.hpp) sums them. PolyFEM's summed forms are the model.
+// as continuous collision detection does for contact), may update lagged state when an iterate is
+// accepted, and may follow a script in time (at_time). A Problem (problem.hpp) sums them. PolyFEM's summed forms are the model.
 #include <string_view>
 
 #include <Eigen/Core>
@@ -41,6 +41,9 @@ class Term {
   [[nodiscard]] virtual double max_step(const Eigen::VectorXd& /*x*/, const Eigen::VectorXd& /*dx*/) const { return 1.0; }
   /// Called with every iterate Newton accepts.
   virtual void on_accepted(const Eigen::VectorXd& /*x*/) {}
+  /// Called before each solve with the time it solves for: a term whose data follow a script (a soft
+  /// binding's targets carried by bones, a moving collider) updates them here.
+  virtual void at_time(double /*t*/) {}
 };
 
 }  // namespace snh

@@ -208,7 +208,7 @@ void read_ascii_elements(Lexer& lx, MeshBuilder& b, bool v2) {
 }  // namespace
 
 MeshFile read_gmsh(const std::filesystem::path& path) {
-  Lexer lx(path, detail::read_all(path, detail::text_head(path, '\0', "$MeshFormat", "a Gmsh file")));
+  Lexer lx = Lexer::open(path, detail::text_head(path, '\0', "$MeshFormat", "a Gmsh file"));
   if (lx.word("$MeshFormat") != "$MeshFormat") lx.fail("not a Gmsh file: it must start with $MeshFormat");
   const std::string_view version = lx.word("the format version");
   const long long file_type = lx.integer("the file type");

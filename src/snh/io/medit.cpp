@@ -17,7 +17,7 @@
 namespace snh {
 
 MeshFile read_medit(const std::filesystem::path& path) {
-  detail::Lexer lx(path, detail::read_all(path, detail::text_head(path, '#')), '#');
+  detail::Lexer lx = detail::Lexer::open(path, detail::text_head(path, '#'), '#');
   detail::MeshBuilder b;
   bool dimension_seen = false;
   // The sections read past (everything but vertices, tets and hexes), with the values of each item.

@@ -56,13 +56,11 @@ void read_counted_faces(Lexer& lx, Collect& c, long long count, bool rest_of_lin
 }
 
 SurfaceMesh read_obj_surface(const fs::path& path) {
-  const std::string text = read_all(path, detail::text_head(path, '#'));
+  Lexer file = Lexer::open(path, detail::text_head(path, '#'));
   Lexer err(path, "");
   Collect c;
-  std::istringstream in(text);
   int line_no = 0;
-  for (std::string line; std::getline(in, line);) {
-    ++line_no;
+  for (std::string line; file.rest_of_line(line, line_no);) {
     Lexer lx(path, line, '#');
     const std::string_view tag = lx.next();
     if (tag == "v") {
@@ -90,7 +88,7 @@ SurfaceMesh read_obj_surface(const fs::path& path) {
 }
 
 SurfaceMesh read_off(const fs::path& path) {
-  Lexer lx(path, read_all(path, detail::text_head(path, '#')), '#');
+  Lexer lx = Lexer::open(path, detail::text_head(path, '#'), '#');
   const std::string_view magic = lx.word("OFF");
   Collect c;
   long long nv = 0;
@@ -110,7 +108,7 @@ SurfaceMesh read_off(const fs::path& path) {
 }
 
 SurfaceMesh read_ply(const fs::path& path) {
-  Lexer lx(path, read_all(path, detail::text_head(path, '\0')));
+  Lexer lx = Lexer::open(path, detail::text_head(path, '\0'));
   if (lx.word("ply") != "ply") lx.fail("not a PLY file: it must start with 'ply'");
   long long nv = -1, nf = -1;
   std::vector<std::string> vertex_props;
@@ -167,7 +165,6 @@ SurfaceMesh read_ply(const fs::path& path) {
 }
 
 SurfaceMesh read_stl(const fs::path& path) {
-  const std::string bytes = read_all(path);
   Collect c;
   std::map<std::array<double, 3>, int> index;  // STL repeats corners: merge identical ones
   auto corner = [&](const std::array<double, 3>& p) {
@@ -176,27 +173,44 @@ SurfaceMesh read_stl(const fs::path& path) {
     return static_cast<long long>(it->second);
   };
   Lexer err(path, "");
-  // Binary: an 80-byte header, a count, 50 bytes per triangle; the size must match exactly.
-  if (bytes.size() >= 84) {
-    std::uint32_t n = 0;
-    std::memcpy(&n, bytes.data() + 80, 4);
-    if (bytes.size() == 84 + 50ULL * n) {
-      for (std::uint32_t t = 0; t < n; ++t) {
-        std::vector<long long> v;
-        for (int k = 0; k < 3; ++k) {
-          float p[3];
-          std::memcpy(p, bytes.data() + 84 + 50ULL * t + 12 + 12 * k, 12);
-          if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-            err.fail(fmt::format("triangle {} has a non-finite coordinate", t), 0);
-          v.push_back(corner({p[0], p[1], p[2]}));
-        }
-        c.polygon(err, v, 0);
+  // Binary: an 80-byte header, a count, 50 bytes per triangle; the size must match exactly. Which of the
+  // two it is follows from the first 84 bytes and the size, before the rest is read.
+  std::uintmax_t size = 0;
+  if (const std::string problem = input_file_problem(path, "mesh file", &size); !problem.empty()) throw MeshError(problem);
+  const std::string head = read_head(path, 84);
+  std::uint32_t n = 0;
+  if (head.size() == 84) std::memcpy(&n, head.data() + 80, 4);
+  if (head.size() == 84 && size == 84 + 50ULL * n) {
+    const std::string bytes = read_all(path);
+    if (bytes.size() != size) err.fail("the file changed while it was read", 0);
+    for (std::uint32_t t = 0; t < n; ++t) {
+      std::vector<long long> v;
+      for (int k = 0; k < 3; ++k) {
+        float p[3];
+        std::memcpy(p, bytes.data() + 84 + 50ULL * t + 12 + 12 * k, 12);
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+          err.fail(fmt::format("triangle {} has a non-finite coordinate", t), 0);
+        v.push_back(corner({p[0], p[1], p[2]}));
       }
-      return c.finish(err);
+      c.polygon(err, v, 0);
     }
+    return c.finish(err);
   }
-  Lexer lx(path, bytes);
-  if (lx.word("solid") != "solid") lx.fail("not an STL file (neither binary of the right size nor ASCII 'solid')");
+  // ASCII: its first word is "solid", else it is neither.
+  Lexer lx = Lexer::open(path, [&](const std::string& first) {
+    const std::size_t at = first.find_first_not_of(" \t\r\n");
+    if (at != std::string::npos && first.compare(at, 5, "solid") == 0 &&
+        (first.size() == at + 5 || std::isspace(static_cast<unsigned char>(first[at + 5]))))
+      return;
+    const Lexer h(path, "");
+    if (first.size() < 84)
+      h.fail(fmt::format("not an STL file: it does not start with 'solid' (ASCII) and its {} bytes are fewer than a binary STL's 84", size), 1);
+    h.fail(fmt::format("not an STL file: it does not start with 'solid' (ASCII), and as binary STL its count of {} triangles needs "
+                       "84 + 50 x {} = {} bytes, not {}",
+                       n, n, 84 + 50ULL * n, size),
+           1);
+  });
+  (void)lx.word("solid");
   lx.skip_line();
   for (;;) {
     const std::string_view t = lx.word("facet or endsolid");

@@ -11,7 +11,7 @@ namespace snh {
 
 MeshFile read_tetgen(const std::filesystem::path& node_path, const std::filesystem::path& ele_path) {
   detail::MeshBuilder b;
-  detail::Lexer nodes(node_path, detail::read_all(node_path, detail::text_head(node_path, '#')), '#');
+  detail::Lexer nodes = detail::Lexer::open(node_path, detail::text_head(node_path, '#'), '#');
   const long long n = nodes.count("the number of vertices");
   const long long dim = nodes.integer("the dimension");
   if (dim != 3) nodes.fail(fmt::format("only 3D .node files are supported, got dimension {}", dim));
@@ -25,7 +25,7 @@ MeshFile read_tetgen(const std::filesystem::path& node_path, const std::filesyst
   }
   if (!nodes.at_end()) nodes.fail(fmt::format("more data than the {} vertices the header announces", n), nodes.line() + 1);
 
-  detail::Lexer ele(ele_path, detail::read_all(ele_path, detail::text_head(ele_path, '#')), '#');
+  detail::Lexer ele = detail::Lexer::open(ele_path, detail::text_head(ele_path, '#'), '#');
   const long long m = ele.count("the number of tetrahedra");
   const long long per = ele.integer("the nodes per tetrahedron");
   if (per != 4) ele.fail(fmt::format("only linear tetrahedra (4 nodes) are supported, got {} nodes", per));

@@ -139,15 +139,23 @@ std::size_t vtk_type_size(std::string_view type) {
 MeshFile read_vtu_file(const std::filesystem::path& path, VtuData* data) {
   const std::string file = path.string();
   // A file that does not name VTKFile in its first 64 KiB fails before the rest is read.
-  const std::string text = detail::read_all(path, [&](const std::string& head) {
-    if (head.find("<VTKFile") == std::string::npos) throw MeshError(fmt::format("{}:1: not a VTK UnstructuredGrid (.vtu) file", file));
-  });
+  // The XML is text up to any appended data: the read stops at a NUL byte there (NUL padding).
+  const std::string text = detail::read_all(
+      path,
+      [&](const std::string& head) {
+        if (head.find("<VTKFile") == std::string::npos) throw MeshError(fmt::format("{}:1: not a VTK UnstructuredGrid (.vtu) file", file));
+      },
+      "<AppendedData");
   auto line_of = [&](std::size_t pos) {
     return 1 + static_cast<int>(std::count(text.begin(), text.begin() + std::min(pos, text.size()), '\n'));
   };
   auto fail = [&](std::size_t pos, const std::string& what) -> void {
     throw MeshError(fmt::format("{}:{}: {}", file, line_of(pos), what));
   };
+  if (const std::size_t nul = text.find('\0'); nul < text.find("<AppendedData")) {
+    const std::size_t close = text.rfind("</VTKFile>", nul);
+    fail(nul, close == std::string::npos ? "binary data (a NUL byte) where XML text was expected" : "data after </VTKFile>");
+  }
   const std::size_t root = text.find("<VTKFile");
   if (root == std::string::npos || text.find("UnstructuredGrid") == std::string::npos)
     fail(0, "not a VTK UnstructuredGrid (.vtu) file");

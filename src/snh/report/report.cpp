@@ -13,6 +13,7 @@
 
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/base64.hpp"
+#include "snh/io/input_file.hpp"
 #include "snh/io/mesh_read.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/io/vtu.hpp"
@@ -28,7 +29,10 @@ using json = nlohmann::json;
 /// data.js is this, the JSON, then ";\n": a classic script the page loads from file://.
 constexpr std::string_view kDataPrefix = "window.SNH_REPORT = ";
 
+/// The JSON file at path, checked first as every input is (io/input_file: a directory, a FIFO, a device or
+/// a file over 1 GiB fails at once with one line).
 json read_json(const fs::path& path) {
+  if (const std::string problem = input_file_problem(path, "JSON file"); !problem.empty()) throw ReportError(problem);
   std::ifstream in(path);
   if (!in) throw ReportError(fmt::format("{}: cannot be opened", path.string()));
   try {
@@ -637,6 +641,9 @@ void check_run_directory(const fs::path& dir) {
 
 json read_report_data(const fs::path& dir) {
   const fs::path path = dir / "report" / "data.js";
+  std::error_code ec;
+  if (fs::exists(fs::symlink_status(path, ec)))
+    if (const std::string problem = input_file_problem(path, "report data file"); !problem.empty()) throw ReportError(problem);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ReportError(fmt::format("{}: cannot be opened: run snh report {}", path.string(), dir.string()));
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -70,4 +70,75 @@ Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X)
   return out;
 }
 
+JointSplit split_at_joints(const Binding& binding, const std::vector<Bone>& bones, const Eigen::MatrixXi& cells,
+                           Eigen::Index vertices) {
+  std::vector<int> joint(static_cast<std::size_t>(vertices), -1);  // the joint each bound vertex moves with
+  for (std::size_t i = 0; i < binding.vertex.size(); ++i) joint[static_cast<std::size_t>(binding.vertex[i])] = bones[binding.bone[i]].joint;
+  std::vector<bool> release(static_cast<std::size_t>(vertices), false);
+  for (Eigen::Index c = 0; c < cells.cols(); ++c) {
+    int first = -1;
+    bool mixed = false;
+    for (Eigen::Index k = 0; k < cells.rows(); ++k) {
+      const int j = joint[static_cast<std::size_t>(cells(k, c))];
+      if (j < 0) continue;
+      if (first < 0) first = j;
+      else mixed = mixed || j != first;
+    }
+    if (mixed)
+      for (Eigen::Index k = 0; k < cells.rows(); ++k)
+        if (joint[static_cast<std::size_t>(cells(k, c))] >= 0) release[static_cast<std::size_t>(cells(k, c))] = true;
+  }
+  JointSplit out;
+  for (std::size_t i = 0; i < binding.vertex.size(); ++i) {
+    Binding& to = release[static_cast<std::size_t>(binding.vertex[i])] ? out.released : out.kept;
+    to.vertex.push_back(binding.vertex[i]);
+    to.bone.push_back(binding.bone[i]);
+  }
+  return out;
+}
+
+SoftBinding soft_bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X, double shell,
+                               const Binding& hard) {
+  SoftBinding out;
+  if (!(shell > 0.0)) return out;
+  std::vector<bool> held(static_cast<std::size_t>(X.cols()), false);
+  for (int v : hard.vertex) held[static_cast<std::size_t>(v)] = true;
+  for (Eigen::Index v = 0; v < X.cols(); ++v) {
+    if (held[static_cast<std::size_t>(v)]) continue;
+    int best = -1;
+    double gap = 0.0;  // distance − radius: > 0 outside the capsule; ties go to the first bone
+    for (int b = 0; b < static_cast<int>(bones.size()); ++b) {
+      const double d = segment_distance(bones[b].a, bones[b].b, X.col(v)) - bones[b].radius;
+      if (best < 0 || d < gap) best = b, gap = d;
+    }
+    if (best >= 0 && gap < shell) {
+      out.vertex.push_back(static_cast<int>(v));
+      out.bone.push_back(best);
+      out.weight.push_back(1.0 - std::max(gap, 0.0) / shell);
+    }
+  }
+  return out;
+}
+
+SoftBinding merge_soft(const SoftBinding& soft, const Binding& more, double w) {
+  SoftBinding out;
+  std::size_t a = 0, b = 0;
+  while (a < soft.vertex.size() || b < more.vertex.size()) {
+    const bool take_soft = b >= more.vertex.size() || (a < soft.vertex.size() && soft.vertex[a] <= more.vertex[b]);
+    if (take_soft) {
+      if (b < more.vertex.size() && more.vertex[b] == soft.vertex[a]) ++b;
+      out.vertex.push_back(soft.vertex[a]);
+      out.bone.push_back(soft.bone[a]);
+      out.weight.push_back(soft.weight[a]);
+      ++a;
+    } else {
+      out.vertex.push_back(more.vertex[b]);
+      out.bone.push_back(more.bone[b]);
+      out.weight.push_back(w);
+      ++b;
+    }
+  }
+  return out;
+}
+
 }  // namespace snh

@@ -1,7 +1,8 @@
 #pragma once
 // Bones and the flesh they hold (DESIGN.md rig/): a bone is the segment from a joint to each of its child
 // joints (a leaf joint with no child is a point), moving rigidly with the joint; the volume vertices inside
-// a bone's capsule are bound to it and follow it exactly (hard constraints, as HOBAK binds them).
+// a bone's capsule are bound to it and follow it exactly (hard constraints, as HOBAK binds them); those in a
+// shell around the capsule may be bound softly, by springs toward where the bone carries them.
 #include <string>
 #include <vector>
 
@@ -42,5 +43,27 @@ struct Binding {
 };
 ///   X  3 by #V volume rest positions
 [[nodiscard]] Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X);
+
+/// A binding split at the joints: `released` holds the bound vertices that share a cell with a vertex bound to
+/// a bone of another joint (such a cell spans a joint, and two rigid motions at once crush or tear it as the
+/// joint bends: Newton stalls next to it), `kept` the rest, so that no cell is held by two joints.
+struct JointSplit {
+  Binding kept, released;
+};
+///   cells  the volume's cells (vertex indices per column); vertices  the volume's vertex count
+[[nodiscard]] JointSplit split_at_joints(const Binding& binding, const std::vector<Bone>& bones, const Eigen::MatrixXi& cells,
+                                         Eigen::Index vertices);
+
+/// Volume vertices bound softly (pulled toward where their bone carries them by a spring, not held): those
+/// outside every capsule but within `shell` of one (0 < distance − radius < shell) and not in `hard`, each
+/// to the bone whose capsule is nearest, with a weight falling linearly from 1 at the capsule to 0 at the
+/// shell's outer edge, so the flesh's hold on the bone fades out smoothly. Lists are in vertex order.
+struct SoftBinding : Binding {
+  std::vector<double> weight;  ///< per vertex, in (0, 1]
+};
+[[nodiscard]] SoftBinding soft_bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X, double shell,
+                                             const Binding& hard);
+/// `soft` with `more` added at weight w, in vertex order (a vertex in both keeps its entry in `soft`).
+[[nodiscard]] SoftBinding merge_soft(const SoftBinding& soft, const Binding& more, double w);
 
 }  // namespace snh

@@ -1,5 +1,6 @@
 #include "snh/sim/checkpoint.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -11,6 +12,7 @@
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/checksum.hpp"
 #include "snh/io/input_file.hpp"
+#include "snh/material/printable.hpp"
 
 namespace snh {
 namespace {
@@ -65,6 +67,7 @@ std::optional<Checkpoint> read_checkpoint(const std::filesystem::path& dir) {
   std::size_t limit = bytes.size();
   auto take = [&](void* out, std::size_t n) {
     if (limit - pos < n) fail("it ends early");
+    if (n == 0) return;  // an empty vector's data() is null: no memcpy to it (fuzz_checkpoint, UBSan)
     std::memcpy(out, bytes.data() + pos, n);
     pos += n;
   };
@@ -89,6 +92,7 @@ std::optional<Checkpoint> read_checkpoint(const std::filesystem::path& dir) {
   if (step < 0 || step > 100000000) fail("bad step");
   c.step = static_cast<int>(step);
   take(&c.time, sizeof(c.time));
+  if (!std::isfinite(c.time) || c.time < 0) fail("bad time");
   for (Eigen::VectorXd* v : {&c.x, &c.aux}) {
     take(&n, sizeof(n));
     if (n > bytes.size() / sizeof(double)) fail("bad vector length");
@@ -134,7 +138,7 @@ Checkpoint checkpoint_for_resume(const std::filesystem::path& dir, const std::st
   if (!c) throw std::invalid_argument(fmt::format("cannot resume: {} has no checkpoint.bin (no step was completed there)", dir.string()));
   if (c->fingerprint != fingerprint)
     throw std::invalid_argument(fmt::format("cannot resume: the run in {} used other settings ({}; now {})", dir.string(),
-                                            c->fingerprint, fingerprint));
+                                            printable(c->fingerprint), printable(fingerprint)));
   if (c->x.size() != dofs || c->aux.size() != dofs)
     throw std::invalid_argument(fmt::format("cannot resume: the checkpoint in {} is for another mesh", dir.string()));
   return *c;

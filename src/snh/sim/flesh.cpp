@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "snh/embed/lattice.hpp"
+#include "snh/fem/attachment_term.hpp"
 #include "snh/embed/winding_number.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/mesh/surface.hpp"
@@ -46,20 +47,20 @@ Clip choose_clip(const FleshSpec& spec, const RiggedModel& model, const std::str
                              model.source.string()));
 }
 
-/// The bound vertices' positions in their joints' rest frames; targets are the joints' current frames of them.
-class BoneMotion final : public KinematicProvider {
+/// Vertices carried rigidly by their bones' joints: their rest positions in the joints' rest frames, and
+/// the joints' current frames of them.
+class BoneCarried {
  public:
-  explicit BoneMotion(std::shared_ptr<const Flesh> flesh) : flesh_(std::move(flesh)) {
-    const Binding& b = flesh_->binding;
-    joint_.resize(b.vertex.size());
-    local_.resize(3, static_cast<Eigen::Index>(b.vertex.size()));
-    for (std::size_t i = 0; i < b.vertex.size(); ++i) {
-      const int j = flesh_->bones[b.bone[i]].joint;
+  BoneCarried(std::shared_ptr<const Flesh> flesh, const Binding& binding) : flesh_(std::move(flesh)) {
+    joint_.resize(binding.vertex.size());
+    local_.resize(3, static_cast<Eigen::Index>(binding.vertex.size()));
+    for (std::size_t i = 0; i < binding.vertex.size(); ++i) {
+      const int j = flesh_->bones[binding.bone[i]].joint;
       joint_[i] = j;
-      local_.col(static_cast<Eigen::Index>(i)) = flesh_->rest_world[j].inverse() * flesh_->volume.vertices.col(b.vertex[i]);
+      local_.col(static_cast<Eigen::Index>(i)) = flesh_->rest_world[j].inverse() * flesh_->volume.vertices.col(binding.vertex[i]);
     }
   }
-  void targets(double t, Eigen::Matrix3Xd& out) const override {
+  void at(double t, Eigen::Matrix3Xd& out) const {
     const std::vector<Eigen::Affine3d> world = joint_world(*flesh_, t);
     out.resize(3, local_.cols());
     for (Eigen::Index i = 0; i < local_.cols(); ++i) out.col(i) = world[joint_[i]] * local_.col(i);
@@ -69,6 +70,16 @@ class BoneMotion final : public KinematicProvider {
   std::shared_ptr<const Flesh> flesh_;
   std::vector<int> joint_;
   Eigen::Matrix3Xd local_;
+};
+
+/// The hard-bound vertices' targets.
+class BoneMotion final : public KinematicProvider {
+ public:
+  explicit BoneMotion(const std::shared_ptr<const Flesh>& flesh) : carried_(flesh, flesh->binding) {}
+  void targets(double t, Eigen::Matrix3Xd& out) const override { carried_.at(t, out); }
+
+ private:
+  BoneCarried carried_;
 };
 
 }  // namespace
@@ -129,6 +140,18 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     throw std::invalid_argument(fmt::format("{}: no volume vertex lies inside a bone's capsule (cells are {:.3g} wide): raise the "
                                             "resolution or set bone radii",
                                             where, f.cell_size));
+  if (spec.soft_shell > 0.0) f.soft = soft_bind_to_bones(f.bones, f.volume.vertices, spec.soft_shell, f.binding);
+  if (spec.joint_cells != JointCells::hard) {
+    JointSplit split = split_at_joints(f.binding, f.bones, f.volume.cells, f.volume.vertex_count());
+    f.binding = std::move(split.kept);
+    f.released = std::move(split.released);
+    if (spec.joint_cells == JointCells::soft) f.soft = merge_soft(f.soft, f.released, 1.0);
+    f.bound_per_bone = f.binding.count_per_bone(static_cast<int>(f.bones.size()));
+    if (f.binding.vertex.empty() && f.soft.vertex.empty())
+      throw std::invalid_argument(fmt::format("{}: every bound vertex lies in a cell spanning a joint, and joint cells are free: "
+                                              "nothing holds the flesh (raise the resolution, or bind joint cells soft or hard)",
+                                              where));
+  }
   return f;
 }
 
@@ -136,8 +159,18 @@ KinematicSet bone_kinematics(std::shared_ptr<const Flesh> flesh) {
   KinematicSet set;
   set.name = "bones";
   set.vertices = flesh->binding.vertex;
-  set.provider = std::make_shared<BoneMotion>(std::move(flesh));
+  set.provider = std::make_shared<BoneMotion>(flesh);
   return set;
+}
+
+std::shared_ptr<Term> soft_binding_term(std::shared_ptr<const Flesh> flesh, double soft_stiffness, double youngs) {
+  const SoftBinding& soft = flesh->soft;
+  if (soft.vertex.empty()) return nullptr;
+  const double k = soft_stiffness * youngs * flesh->cell_size;
+  const Eigen::VectorXd stiffness = k * Eigen::Map<const Eigen::VectorXd>(soft.weight.data(), static_cast<Eigen::Index>(soft.weight.size()));
+  auto carried = std::make_shared<BoneCarried>(flesh, soft);
+  return std::make_shared<AttachmentTerm>(soft.vertex, stiffness,
+                                          [carried](double t, Eigen::Matrix3Xd& out) { carried->at(t, out); });
 }
 
 std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t) {

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "snh/embed/embedding.hpp"
+#include "snh/fem/term.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 #include "snh/rig/animation.hpp"
 #include "snh/rig/bones.hpp"
@@ -21,6 +22,15 @@
 namespace snh {
 
 enum class FleshVolume { lattice, tets };
+
+/// What becomes of bound vertices in cells that span a joint (a cell holding vertices of two joints' bones):
+/// `soft` (the default) releases them from the hard binding and binds them softly (weight 1) to their
+/// bones; `free` releases them; `hard` keeps them bound (HOBAK's binding: the cell is then forced by two
+/// rigid motions, and a sharply bent joint can stall Newton next to it).
+enum class JointCells { soft, free, hard };
+[[nodiscard]] inline const char* to_string(JointCells j) {
+  return j == JointCells::soft ? "soft" : j == JointCells::free ? "free" : "hard";
+}
 
 /// Keyframed rotations shared by one or more joints: at each time a rotation relative to the joint's rest
 /// rotation, about the joint's own axes (animation.hpp JointKeys), slerped between keys.
@@ -44,6 +54,13 @@ struct FleshSpec {
   FleshVolume volume = FleshVolume::lattice;
   int resolution = 16;                       ///< lattice cubes (tets: cube-sized tets) along the longest side
   std::vector<BoneRadius> radii;
+  /// Soft binding: the volume vertices within `soft_shell` (model units; 0: none) outside a capsule are
+  /// pulled toward where their bone carries them by springs of stiffness soft_stiffness × E × h × weight
+  /// (E Young's modulus, h the cell size: 1 is about as stiff as one cell of flesh; weight fading from 1 at
+  /// the capsule to 0 at the shell's edge).
+  double soft_shell = 0.0;
+  double soft_stiffness = 1.0;
+  JointCells joint_cells = JointCells::soft;
   // Defaults of a flesh run (the paper's: nu = 0.488) where the scene or command gives none:
   static constexpr double youngs = 1e5, poisson = 0.488;  ///< Pa; with quasi-static bones only nu matters
   static constexpr double density = 1000.0;               ///< kg/m³ (dynamics)
@@ -63,6 +80,9 @@ struct Flesh {
   std::vector<Bone> bones;                   ///< with their capsule radii
   Binding binding;                           ///< volume vertices that follow bones
   std::vector<int> bound_per_bone;
+  Binding released;                          ///< vertices in a capsule released at the joints (joint_cells)
+  SoftBinding soft;                          ///< volume vertices pulled toward bones: the shell's, and the
+                                             ///< released ones when joint_cells is soft
 };
 
 /// Reads the model and builds its flesh. Throws RigError (bad model, a surface that is not closed: the open
@@ -73,6 +93,11 @@ struct Flesh {
 
 /// The bones' kinematic set: the bound vertices, moved rigidly with their bones' joints by the clip.
 [[nodiscard]] KinematicSet bone_kinematics(std::shared_ptr<const Flesh> flesh);
+
+/// The soft binding's springs (null without softly bound vertices): stiffness soft_stiffness × youngs ×
+/// cell size × weight per vertex, toward the vertex's rest position carried rigidly by its bone's joint.
+[[nodiscard]] std::shared_ptr<Term> soft_binding_term(std::shared_ptr<const Flesh> flesh, double soft_stiffness,
+                                                      double youngs);
 
 /// The joints' world transforms at time t of the clip.
 [[nodiscard]] std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t);

@@ -13,6 +13,7 @@
 #include "snh/material/material.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/material/stability.hpp"
+#include "snh/math/parallel.hpp"
 #include "snh/sim/scene.hpp"
 #include "snh/sim/stretch.hpp"
 
@@ -67,17 +68,10 @@ template <class T, class Body>
 std::vector<T> per_energy(const LabOptions& o, Body&& body) {
   const std::vector<std::string> energies = energies_of(o);
   std::vector<std::vector<T>> parts(energies.size());
-  std::exception_ptr error;
+  ParallelErrors errors;
 #pragma omp parallel for schedule(dynamic, 1)
-  for (int i = 0; i < static_cast<int>(energies.size()); ++i) {
-    try {
-      body(energies[i], parts[i]);
-    } catch (...) {
-#pragma omp critical(snh_lab_error)
-      if (!error) error = std::current_exception();
-    }
-  }
-  if (error) std::rethrow_exception(error);
+  for (int i = 0; i < static_cast<int>(energies.size()); ++i) errors.run(i, [&] { body(energies[i], parts[i]); });
+  errors.rethrow();
   std::vector<T> all;
   for (auto& part : parts) all.insert(all.end(), part.begin(), part.end());
   return all;

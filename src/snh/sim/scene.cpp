@@ -188,10 +188,17 @@ Scene load_scene(const std::filesystem::path& file) {
   if (const std::string problem = input_file_problem(file, "scene file"); !problem.empty()) throw SceneError(problem);
   std::ifstream in(file, std::ios::binary);
   if (!in) throw SceneError(fmt::format("{}: cannot open the scene file", file.string()));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw SceneError(fmt::format("{}: cannot read the scene file", file.string()));
-  return parse_scene(read_scene_json(text.str(), file.string()), file);
+  // Read up to the first NUL byte, which JSON text never holds: a NUL-padded file fails having read about
+  // as much as its text.
+  std::string text;
+  for (std::size_t old = 0;; old = text.size()) {
+    text.resize(old + (1 << 20));
+    in.read(text.data() + old, 1 << 20);
+    text.resize(old + static_cast<std::size_t>(in.gcount()));
+    if (in.bad()) throw SceneError(fmt::format("{}: cannot read the scene file", file.string()));
+    if (text.size() == old || text.find('\0', old) != std::string::npos) break;
+  }
+  return parse_scene(read_scene_json(text, file.string()), file);
 }
 
 std::shared_ptr<const SceneMesh> scene_mesh(const Scene& s) {
@@ -310,6 +317,10 @@ void add_flesh_output(const Flesh& flesh, const Scene& s, const Simulation& sim,
   plan.settings["volume_of_cells"] = flesh.volume_of_cells;
   plan.settings["surface_volume"] = flesh.surface_volume;
   plan.settings["bones"] = bones;
+  plan.settings["joint_cells"] = to_string(spec.joint_cells);
+  plan.settings["released_vertices"] = flesh.released.vertex.size();
+  if (spec.soft_shell > 0.0)
+    plan.settings["soft_binding"] = {{"shell", spec.soft_shell}, {"stiffness", spec.soft_stiffness}, {"vertices", flesh.soft.vertex.size()}};
   const double rest_surface = surface_volume(flesh, m.vertices);
 
   const auto base_header = plan.header;
@@ -329,6 +340,13 @@ void add_flesh_output(const Flesh& flesh, const Scene& s, const Simulation& sim,
     for (std::size_t b = 0; b < flesh.bones.size(); ++b)
       counts += fmt::format("{}{} {}", b ? ", " : "", flesh.bones[b].name, flesh.bound_per_bone[b]);
     o << fmt::format("bones: {} binding {} volume vertices ({})\n", flesh.bones.size(), flesh.binding.vertex.size(), counts);
+    if (!flesh.released.vertex.empty())
+      o << fmt::format("joints: {} vertices of capsules in cells spanning two joints {} (joint cells {})\n", flesh.released.vertex.size(),
+                       spec.joint_cells == JointCells::soft ? "bound softly instead" : "released", to_string(spec.joint_cells));
+    if (spec.soft_shell > 0.0)
+      o << fmt::format("soft binding: {} more volume vertices within {:.4g} of the capsules, pulled by springs of {:g} x E x h "
+                       "(fading to 0 at the shell's edge)\n",
+                       flesh.soft.vertex.size(), spec.soft_shell, spec.soft_stiffness);
     for (std::size_t b = 0; b < flesh.bones.size(); ++b)
       if (flesh.bound_per_bone[b] == 0)
         o << fmt::format("warning: bone {} binds no volume vertex (capsule radius {:.4g}; cells {:.4g} wide)\n", flesh.bones[b].name,
@@ -399,6 +417,9 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   setup.mass_damping = s.forces.mass_damping;
   setup.stiffness_damping = s.forces.stiffness_damping;
   setup.kinematic = scene_kinematics(s, mesh, x0);
+  if (loaded->flesh)
+    if (std::shared_ptr<Term> soft = soft_binding_term(loaded->flesh, s.flesh->soft_stiffness, youngs_modulus(s.material.params)))
+      setup.terms.push_back(std::move(soft));
   setup.initial = x0;
   setup.linear.name = s.solver.linear;
   setup.linear.reuse_factor = !s.solver.refactorize;

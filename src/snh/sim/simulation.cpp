@@ -22,10 +22,16 @@ std::vector<std::uint8_t> kinematic_dof_flags(const std::vector<KinematicSet>& s
       for (int a = 0; a < 3; ++a) {
         if (!s.axes[a]) continue;
         const std::size_t d = 3 * static_cast<std::size_t>(v) + a;
-        if (owner[d] >= 0 && owner[d] != static_cast<int>(i))
+        if (owner[d] >= 0 && owner[d] != static_cast<int>(i)) {
+          // Two sets of one file ("s.json: pins[0]", "s.json: pins[1]") name the file once.
+          std::string other = sets[owner[d]].name;
+          const std::size_t file_end = s.name.rfind(": ");
+          if (file_end != std::string::npos && other.compare(0, file_end + 2, s.name, 0, file_end + 2) == 0)
+            other.erase(0, file_end + 2);
           throw std::invalid_argument(fmt::format("{} holds the {} coordinate of vertex {}, which {} already holds: give each "
                                                   "coordinate one motion",
-                                                  s.name, char('x' + a), v, sets[owner[d]].name));
+                                                  s.name, char('x' + a), v, other));
+        }
         owner[d] = static_cast<int>(i);
         flags[d] = 1;
       }
@@ -50,6 +56,10 @@ Simulation::Simulation(SimulationSetup setup)
   // Inertia, damping and gravity: only where there is something to add (a quasi-static run without
   // gravity minimises the elastic energy alone).
   if (dynamic() || setup_.gravity != Eigen::Vector3d::Zero()) problem_.add(inertia_);
+  for (const std::shared_ptr<Term>& term : setup_.terms) {
+    if (!term) throw std::invalid_argument("simulation: an energy term is missing (null)");
+    problem_.add(*term);
+  }
   solver_ = make_linear_solver(setup_.linear, {.mesh = &elastic_.mesh(), .free_index = &dofs_.free_index()});
   const Eigen::Index n = 3 * elastic_.mesh().vertex_count();
   if (setup_.initial.size() == 0) x_ = Eigen::Map<const Eigen::VectorXd>(elastic_.mesh().vertices.data(), n);
@@ -90,6 +100,7 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
   else if (steps_ >= 1) guess = 2.0 * x_ - previous_;
   else guess = setup_.first_guess ? setup_.first_guess(x_, t) : x_;
   place_kinematic(guess, t);
+  problem_.at_time(t);
   inertia_.begin_step(x_n, v_);
   if (!std::isfinite(problem_.energy(guess))) {  // the prediction leaves an energy's domain
     guess = setup_.fallback_guess ? setup_.fallback_guess(x_n, t) : x_n;

@@ -36,6 +36,9 @@ struct SimulationSetup {
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
   double mass_damping = 0.0, stiffness_damping = 0.0;
   std::vector<KinematicSet> kinematic;
+  /// Further energy terms (soft bone bindings; contact next), summed after elasticity and inertia in this
+  /// order; each is told the time of every solve (Term::at_time) before it starts.
+  std::vector<std::shared_ptr<Term>> terms;
   Eigen::VectorXd initial;                ///< 3 #V starting positions (empty: the rest positions)
   LinearSolverOptions linear;
   NewtonOptions newton;

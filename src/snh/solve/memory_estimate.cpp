@@ -21,11 +21,16 @@ constexpr double kBaseResident = 16.0 * kMiB;     // the program, its libraries,
 constexpr double kPerVertex = 10.0 * 1024.0;      // positions, DOF vectors, frames, surface, stats (bytes)
 constexpr double kPerCellNodePair = 80.0;         // per cell and (node, node) pair: element Hessians, scatter map
 constexpr double kFactorPerN43 = 260.0;           // CHOLMOD's L and workspace, bytes per n^{4/3}
-// Address space reserved beyond the resident set: thread stacks, malloc arenas (64 MiB per thread),
-// OpenBLAS buffers (a direct solver only), per hardware thread on top of a fixed part.
-constexpr double kReservedFixed = 120.0 * kMiB;
-constexpr double kReservedPerThread = 50.0 * kMiB;
-constexpr double kReservedPerThreadBlas = 80.0 * kMiB;
+// Address space reserved beyond the resident set (VmPeak minus the peak resident set, `snh stretch` on this
+// VM; README "Memory"): 47 MiB with PCG on one CPU (taskset -c 0); each further CPU adds 137 MiB, an
+// OpenBLAS worker thread, which reserves its 128 MiB buffer and an 8 MiB stack when the library starts,
+// with PCG too (184-190 MiB on two CPUs, with 1 or 2 OpenMP threads); a direct solver adds 150 MiB, the
+// main thread's OpenBLAS buffer in the factorization (197 MiB on one CPU, 330-334 on two). Rounded up.
+// (Before, 120 MiB + 50 MiB per thread for PCG: 2.9 times the measurement on one CPU, and below what
+// OpenBLAS reserves from four CPUs on.)
+constexpr double kReservedFixed = 60.0 * kMiB;
+constexpr double kReservedPerExtraThread = 150.0 * kMiB;
+constexpr double kReservedDirect = 170.0 * kMiB;
 
 // Multigrid (mg): the Newton matrix in 3×3 nodal blocks, both triangles (27 blocks of 72 bytes per
 // lattice vertex), and the coarse levels (an eighth more each); measured 58 MiB over PCG at hex res 30.
@@ -46,15 +51,14 @@ ProblemSize lattice_size(int resolution, CellType type) {
           .nodes_per_cell = nodes_per_cell(type)};
 }
 
-MemoryEstimate estimate_memory(const ProblemSize& size, std::string_view solver) {
+MemoryEstimate estimate_memory(const ProblemSize& size, std::string_view solver, unsigned threads) {
   const double v = static_cast<double>(size.vertices), c = static_cast<double>(size.cells);
   const double npc = size.nodes_per_cell;
   double resident = kBaseResident + kPerVertex * v + kPerCellNodePair * c * npc * npc;
   if (is_direct(solver)) resident += kFactorPerN43 * std::pow(3.0 * v, 4.0 / 3.0);
   if (solver == "mg") resident += kMultigridPerVertex * v;
-  const double threads = std::max(1u, std::thread::hardware_concurrency());
-  const double reserved =
-      kReservedFixed + threads * (kReservedPerThread + (is_direct(solver) ? kReservedPerThreadBlas : 0.0));
+  const double t = std::max(1u, threads ? threads : std::thread::hardware_concurrency());
+  const double reserved = kReservedFixed + (t - 1.0) * kReservedPerExtraThread + (is_direct(solver) ? kReservedDirect : 0.0);
   return {.resident_bytes = resident, .address_space_bytes = resident + reserved};
 }
 

@@ -6,8 +6,10 @@
 //   resident  = base + per_vertex · #V + per_cell · #C (nodes_per_cell² scaled) + 8 · 2 · nnz(H)
 //               + for a direct solver, the factor: fill · n^{4/3} nonzeros of L (n = 3 #V, the 3D
 //                 nested-dissection growth) at 8 bytes each, times the factorization's workspace ratio
-//   address space = resident + the libraries' reserved but untouched space (OpenMP / OpenBLAS thread
-//               stacks and buffers, malloc arenas), larger with a direct solver (OpenBLAS).
+//   address space = resident + the libraries' reserved but untouched space: a fixed part, per hardware
+//               thread after the first an OpenBLAS worker (its 128 MiB buffer and its stack, reserved when
+//               the library starts, whatever the solver) and an OpenMP worker's stack, and with a direct
+//               solver the main thread's OpenBLAS buffer (measured with 1 and 2 threads).
 // Conservative: a run needing more than the estimate has not been measured; the demos need a few tenths.
 //
 // A run is refused before any work when its estimate exceeds the limit: MemAvailable from /proc/meminfo
@@ -54,8 +56,9 @@ struct MemoryEstimate {
 };
 
 /// The estimated peak memory of a run of `size` with the linear solver `solver` (cholmod, ldlt: a factor;
-/// pcg: none; mg: the matrix in nodal blocks and its coarse levels).
-[[nodiscard]] MemoryEstimate estimate_memory(const ProblemSize& size, std::string_view solver);
+/// pcg: none; mg: the matrix in nodal blocks and its coarse levels) on a machine of `threads` hardware
+/// threads (0: this one's).
+[[nodiscard]] MemoryEstimate estimate_memory(const ProblemSize& size, std::string_view solver, unsigned threads = 0);
 
 /// What this process may still use: the smaller of MemAvailable (against resident memory) and RLIMIT_AS
 /// (against address space) where set. Absent fields: no such limit known.

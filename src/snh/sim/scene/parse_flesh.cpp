@@ -91,6 +91,14 @@ std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& sou
       b.finish();
     }
   }
+  const std::string joints = k.choice("joint_cells", "soft", {"soft", "free", "hard"});
+  s.joint_cells = joints == "soft" ? JointCells::soft : joints == "free" ? JointCells::free : JointCells::hard;
+  if (const json* soft = k.get("soft_binding")) {
+    Keys b(*soft, "flesh.soft_binding", top.file());
+    if (b.has("shell")) s.soft_shell = b.positive("shell", 0.0);
+    s.soft_stiffness = b.positive("stiffness", s.soft_stiffness);
+    b.finish();
+  }
   k.finish();
   return s;
 }

@@ -106,6 +106,11 @@ class StrictReader {
 }  // namespace
 
 nlohmann::json read_scene_json(std::string_view text, const std::string& file) {
+  // JSON text holds no NUL byte (nlohmann's lexer took one for the end of the input: a scene followed by
+  // NUL padding was read as if the padding were not there).
+  if (const std::size_t nul = text.find('\0'); nul != std::string_view::npos)
+    throw SceneError(fmt::format("{}: line {}: binary data (a NUL byte) where JSON text was expected", file,
+                                 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(nul), '\n')));
   json j;
   StrictReader reader(j, text, file);
   (void)json::sax_parse(text, &reader);

@@ -1,0 +1,68 @@
+#pragma once
+// What the binding files share: NumPy arrays in and out with their checks (shape, dtype, finite values),
+// each failure one line raised as ValueError; and the functions that add each part to the module.
+#include <string>
+#include <string_view>
+
+#include <Eigen/Core>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include "snh/material/psd_projection.hpp"
+#include "snh/material/registry.hpp"
+#include "snh/math/types.hpp"
+#include "snh/mesh/volume_mesh.hpp"
+
+namespace snh::py {
+
+namespace pyb = pybind11;
+
+/// A C-contiguous float64 array.
+using Doubles = pyb::array_t<double, pyb::array::c_style>;
+
+/// Raises ValueError with this message.
+[[noreturn]] void value_error(const std::string& message);
+
+/// `obj` as float64 (C order): any array-like of real numbers (float or integer dtype), copied only where
+/// needed. ValueError naming `what` for anything else (complex, strings, objects, booleans).
+[[nodiscard]] Doubles real_array(const pyb::handle& obj, std::string_view what);
+
+/// The same, with an exact shape (-1: any length along that axis), and every entry finite.
+[[nodiscard]] Doubles real_array(const pyb::handle& obj, std::string_view what, std::initializer_list<pyb::ssize_t> shape);
+
+/// "(3, 3)" or "(n, 3)".
+[[nodiscard]] std::string shape_text(const pyb::array& a);
+
+/// A 3x3 matrix or a batch (n, 3, 3) of them, checked: real, finite, and (when `entry_range`) every entry 0
+/// or of magnitude in [1e-20, 1e20] (snh material's --F range). `batch` tells which of the two it was.
+struct Matrices {
+  Doubles data;
+  pyb::ssize_t count = 0;
+  bool batch = false;
+  [[nodiscard]] Mat3 at(pyb::ssize_t k) const;
+};
+[[nodiscard]] Matrices matrices(const pyb::handle& obj, std::string_view what, bool entry_range);
+
+/// parse_projection, or ValueError.
+[[nodiscard]] PsdProjection projection(const std::string& name);
+
+/// A new float64 array of this shape.
+[[nodiscard]] Doubles new_array(std::initializer_list<pyb::ssize_t> shape);
+
+/// 3 #V positions as an (n, 3) array (the same memory order), and back (checked: shape, finite).
+[[nodiscard]] Doubles positions_array(const Eigen::VectorXd& x);
+[[nodiscard]] Eigen::VectorXd positions_vector(const pyb::handle& obj, std::string_view what, Eigen::Index vertices);
+
+/// A mesh as (vertices (n, 3), cells (m, 4 or 8) int32, kind), and a mesh from such arrays (checked: shapes,
+/// dtypes, finite coordinates, indices in range).
+[[nodiscard]] pyb::tuple mesh_tuple(const VolumeMesh& mesh);
+[[nodiscard]] VolumeMesh mesh_of(const pyb::handle& vertices, const pyb::handle& cells);
+
+/// The energy inside an snh.Material.
+[[nodiscard]] const AnyMaterial& any_material(const pyb::handle& obj);
+
+void add_materials(pyb::module_& m);
+void add_meshes(pyb::module_& m);
+void add_simulation(pyb::module_& m);
+
+}  // namespace snh::py
