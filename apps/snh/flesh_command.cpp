@@ -49,8 +49,9 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                   "Stiffness of the soft binding's springs (the shell's and the joint cells'), in Young's modulus x cell size "
                   "(default 1: about one cell of flesh)");
   cmd->add_option("--joint-cells", o->joint_cells,
-                  "Vertices of the bones' capsules in cells spanning two joints: soft (default: bound by springs of "
-                  "--soft-stiffness instead, so the joint's cells can give), free, or hard (bound, as HOBAK)")
+                  "Vertices of the bones' capsules in cells spanning two joints: hard (default: bound, as HOBAK), free "
+                  "(released to the solve, so the joint's cells can give: a sharply bent fine lattice then converges), or "
+                  "soft (released, and bound by springs of --soft-stiffness instead)")
       ->check(CLI::IsMember({"soft", "free", "hard"}));
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params);

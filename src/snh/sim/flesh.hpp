@@ -24,9 +24,9 @@ namespace snh {
 enum class FleshVolume { lattice, tets };
 
 /// What becomes of bound vertices in cells that span a joint (a cell holding vertices of two joints' bones):
-/// `soft` (the default) releases them from the hard binding and binds them softly (weight 1) to their
-/// bones; `free` releases them; `hard` keeps them bound (HOBAK's binding: the cell is then forced by two
-/// rigid motions, and a sharply bent joint can stall Newton next to it).
+/// `hard` (the default) keeps them bound (HOBAK's binding: the cell is then forced by two rigid motions, and
+/// a sharply bent joint can stall Newton next to it); `free` releases them to the solve; `soft` releases
+/// them from the hard binding and binds them softly (weight 1) to their bones.
 enum class JointCells { soft, free, hard };
 [[nodiscard]] inline const char* to_string(JointCells j) {
   return j == JointCells::soft ? "soft" : j == JointCells::free ? "free" : "hard";
@@ -60,7 +60,7 @@ struct FleshSpec {
   /// the capsule to 0 at the shell's edge).
   double soft_shell = 0.0;
   double soft_stiffness = 1.0;
-  JointCells joint_cells = JointCells::soft;
+  JointCells joint_cells = JointCells::hard;
   // Defaults of a flesh run (the paper's: nu = 0.488) where the scene or command gives none:
   static constexpr double youngs = 1e5, poisson = 0.488;  ///< Pa; with quasi-static bones only nu matters
   static constexpr double density = 1000.0;               ///< kg/m³ (dynamics)

@@ -91,7 +91,7 @@ std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& sou
       b.finish();
     }
   }
-  const std::string joints = k.choice("joint_cells", "soft", {"soft", "free", "hard"});
+  const std::string joints = k.choice("joint_cells", to_string(s.joint_cells), {"soft", "free", "hard"});
   s.joint_cells = joints == "soft" ? JointCells::soft : joints == "free" ? JointCells::free : JointCells::hard;
   if (const json* soft = k.get("soft_binding")) {
     Keys b(*soft, "flesh.soft_binding", top.file());
