@@ -341,7 +341,7 @@ void add_simulation(pyb::module_& m) {
            "projection"_a = "clamp", "first_guess"_a = pyb::none(),
            "vertices (n, 3), cells (m, 4) tets or (m, 8) hexes (checked as a mesh file is), an snh.Material, pinned "
            "vertex indices (k,). integrator quasi_static or backward_euler (time step dt); density, gravity (3,), "
-           "Rayleigh mass/stiffness damping; initial positions (n, 3); the linear solver (cholmod, ldlt, pcg); Newton's "
+           "Rayleigh mass/stiffness damping; initial positions (n, 3); the linear solver (cholmod, ldlt, pcg, or mg for hex lattices); Newton's "
            "stopping rule: ||g|| < tolerance (the paper programs' 1e-3), or the Newton step below step_tolerance (a "
            "length) or below relative_step_tolerance of the solve's own motion; first_guess(x, t) -> (n, 3): the first "
            "quasi-static step's starting positions (later ones extrapolate).")

@@ -7,8 +7,11 @@ void JacobiPreconditioner::compute(const SparseLower& A) {
   inverse_diagonal_ = d.unaryExpr([](double v) { return v > 0.0 ? 1.0 / v : 1.0; });
 }
 
-CgResult conjugate_gradients(const SparseLower& A, const Eigen::VectorXd& b, const Preconditioner& M, double stop,
-                             int max_iterations, Eigen::VectorXd& x) {
+namespace {
+
+template <class Product>
+CgResult cg(const Product& product, const Eigen::VectorXd& b, const Preconditioner& M, double stop, int max_iterations,
+            Eigen::VectorXd& x) {
   const Eigen::Index n = b.size();
   CgResult result;
   x = Eigen::VectorXd::Zero(n);
@@ -22,7 +25,7 @@ CgResult conjugate_gradients(const SparseLower& A, const Eigen::VectorXd& b, con
       return result;
     }
     ++result.iterations;
-    Ap.noalias() = A.selfadjointView<Eigen::Lower>() * p;
+    product(p, Ap);
     const double pAp = p.dot(Ap);
     if (!(pAp > 0.0)) {
       result.status = CgStatus::indefinite;
@@ -37,6 +40,19 @@ CgResult conjugate_gradients(const SparseLower& A, const Eigen::VectorXd& b, con
     rz = rz_next;
   }
   return result;
+}
+
+}  // namespace
+
+CgResult conjugate_gradients(const SparseLower& A, const Eigen::VectorXd& b, const Preconditioner& M, double stop,
+                             int max_iterations, Eigen::VectorXd& x) {
+  const auto product = [&A](const Eigen::VectorXd& p, Eigen::VectorXd& Ap) { Ap.noalias() = A.selfadjointView<Eigen::Lower>() * p; };
+  return cg(product, b, M, stop, max_iterations, x);
+}
+
+CgResult conjugate_gradients(const MatrixProduct& A, const Eigen::VectorXd& b, const Preconditioner& M, double stop,
+                             int max_iterations, Eigen::VectorXd& x) {
+  return cg(A, b, M, stop, max_iterations, x);
 }
 
 }  // namespace snh

@@ -3,6 +3,8 @@
 // written out (rather than Eigen's) to detect non-positive curvature pᵀAp ≤ 0, which proves that the
 // matrix is not positive definite: Newton then falls back to the projected Hessian. The preconditioner is
 // an interface so that a direct factor (factor reuse), Jacobi, and later multigrid plug in the same way.
+#include <functional>
+
 #include <Eigen/Core>
 
 #include "snh/math/sparse.hpp"
@@ -49,6 +51,12 @@ struct CgResult {
 ///   max_iterations  iterations allowed
 ///   x               overwritten with the last iterate (n)
 [[nodiscard]] CgResult conjugate_gradients(const SparseLower& A, const Eigen::VectorXd& b, const Preconditioner& M,
+                                           double stop, int max_iterations, Eigen::VectorXd& x);
+
+/// Ap = A p for a symmetric matrix held in another form (multigrid: 3×3 nodal blocks).
+using MatrixProduct = std::function<void(const Eigen::VectorXd& p, Eigen::VectorXd& Ap)>;
+/// The same with A given by its product.
+[[nodiscard]] CgResult conjugate_gradients(const MatrixProduct& A, const Eigen::VectorXd& b, const Preconditioner& M,
                                            double stop, int max_iterations, Eigen::VectorXd& x);
 
 }  // namespace snh

@@ -8,6 +8,7 @@
 #include <fmt/ranges.h>
 
 #include "snh/solve/direct_solver.hpp"
+#include "snh/solve/multigrid.hpp"
 #include "snh/solve/pcg_solver.hpp"
 
 namespace snh {
@@ -29,6 +30,8 @@ const std::vector<LinearSolverInfo>& linear_solvers() {
        [](const LinearSolverOptions& o, const SolverGeometry&) { return direct(make_ldlt_solver(), o); }},
       {"pcg", "conjugate gradients with a Jacobi preconditioner",
        [](const LinearSolverOptions& o, const SolverGeometry&) { return make_pcg_solver(o.tolerance); }},
+      {"mg", "conjugate gradients with a geometric multigrid V-cycle (hexahedral lattices only)",
+       [](const LinearSolverOptions& o, const SolverGeometry& g) { return make_multigrid_solver(o, g); }},
   };
   return registry;
 }

@@ -4,9 +4,10 @@
 //   cholmod  CHOLMOD supernodal Cholesky (default; symbolic analysis reused while the pattern is unchanged)
 //   ldlt     Eigen's simplicial LDLᵀ
 //   pcg      conjugate gradients with a Jacobi preconditioner
-// A new solver (multigrid-preconditioned CG, say) is one more registry entry; the public conjugate
-// gradients (conjugate_gradient.hpp) take any Preconditioner, and SolverGeometry carries what a
-// geometric preconditioner needs to know about the mesh behind the matrix.
+//   mg       conjugate gradients with a geometric multigrid V-cycle, for hex lattices (multigrid.hpp)
+// A new solver is one more registry entry; the public conjugate gradients (conjugate_gradient.hpp) take
+// any Preconditioner, and SolverGeometry carries what a geometric preconditioner (mg) needs to know about
+// the mesh behind the matrix.
 //
 // Factor reuse (direct solvers, on by default): once a factorization exists, a later matrix with the
 // same pattern is first solved by conjugate gradients preconditioned with that factor. Consecutive

@@ -56,7 +56,8 @@ struct MemoryEstimate {
 };
 
 /// The estimated peak memory of a run of `size` with the linear solver `solver` (cholmod, ldlt: a factor;
-/// pcg: none) on a machine of `threads` hardware threads (0: this one's).
+/// pcg: none; mg: the matrix in nodal blocks and its coarse levels) on a machine of `threads` hardware
+/// threads (0: this one's).
 [[nodiscard]] MemoryEstimate estimate_memory(const ProblemSize& size, std::string_view solver, unsigned threads = 0);
 
 /// What this process may still use: the smaller of MemAvailable (against resident memory) and RLIMIT_AS
