@@ -113,5 +113,14 @@ out="$("$SNH" stretch --element tet --res 3 --mu 1 --lambda 10 --out "$d" --resu
 out="$("$SNH" stretch --element tet --res 3 --material neo_hookean --out "$d" --resume 2>&1)"; code=$?
 [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "used other settings" && ok || bad "resume with another material (exit $code): $out"
 
+# 6. A run refused after its directory was made (the multigrid solver on tets is refused when the solver is
+# built) leaves no directory behind; one that existed stays.
+out="$("$SNH" stretch --res 3 --solver mg --out "$work/mg_tets" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "needs a hexahedral lattice" && [ ! -e "$work/mg_tets" ] && ok \
+  || bad "mg on tets (exit $code, directory $( [ -e "$work/mg_tets" ] && echo left || echo gone)): $out"
+mkdir "$work/mg_given"
+"$SNH" stretch --res 3 --solver mg --out "$work/mg_given" > /dev/null 2>&1
+[ -d "$work/mg_given" ] && ok || bad "an output directory that was there before a refused run is gone"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -54,6 +54,21 @@ TEST(RunDirectory, ALockedDirectoryRefusesASecondRunUntilReleased) {
   fs::remove_all(d);
 }
 
+TEST(RunDirectory, ADirectoryTheLockMadeAndNothingWroteIsRemovedWithIt) {
+  const fs::path d = fresh_dir("unused");
+  { const RunDirectoryLock lock(d / "new"); }  // a run refused before its first file
+  EXPECT_FALSE(fs::exists(d / "new"));
+  {
+    const RunDirectoryLock lock(d / "used");
+    std::ofstream(d / "used" / "000.obj") << "v 0 0 0\n";
+  }
+  EXPECT_TRUE(fs::exists(d / "used" / "000.obj")) << "a directory with a file of the run stays";
+  fs::create_directories(d / "given");
+  { const RunDirectoryLock lock(d / "given"); }
+  EXPECT_TRUE(fs::is_directory(d / "given")) << "a directory that was there stays";
+  fs::remove_all(d);
+}
+
 TEST(RunDirectory, ClearingRemovesOnlyWhatARunOfOursWrites) {
   const fs::path d = fresh_dir("clear");
   for (const char* f : {"000.obj", "012.vtu", "1234.obj", "stats.json", "stats.csv", "index.html",

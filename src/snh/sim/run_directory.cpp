@@ -20,11 +20,12 @@
 namespace snh {
 namespace fs = std::filesystem;
 
-RunDirectoryLock::RunDirectoryLock(const fs::path& dir, bool force) : forced_(force) {
+RunDirectoryLock::RunDirectoryLock(const fs::path& dir, bool force) : dir_(dir), forced_(force) {
   if (!force) refuse_foreign_directory(dir, "choose an empty or new output directory, or pass --force to write there anyway");
+  std::error_code ec;
+  created_ = !fs::exists(fs::symlink_status(dir, ec));
   ensure_writable_directory(dir);
   const fs::path path = dir / ".snh-lock";
-  std::error_code ec;
   found_ = fs::exists(path, ec);
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0) throw WriteError(fmt::format("cannot create {}: {}", path.string(), std::strerror(errno)));
@@ -48,6 +49,18 @@ RunDirectoryLock::RunDirectoryLock(const fs::path& dir, bool force) : forced_(fo
 }
 
 RunDirectoryLock::~RunDirectoryLock() {
+  // A directory this lock created that holds only the lock file: the run never wrote anything, so nothing
+  // is left (removed while the lock is held; a second run refused meanwhile never waits for it).
+  if (created_ && fd_ >= 0) {
+    std::error_code ec;
+    bool only_lock = true;
+    for (const fs::directory_entry& e : fs::directory_iterator(dir_, ec))
+      if (e.path().filename() != ".snh-lock") only_lock = false;
+    if (!ec && only_lock) {
+      fs::remove(dir_ / ".snh-lock", ec);
+      fs::remove(dir_, ec);
+    }
+  }
   if (fd_ >= 0) ::close(fd_);  // releases the lock; the file stays (removing it would race a waiting run)
 }
 

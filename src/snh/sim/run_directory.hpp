@@ -9,7 +9,9 @@
 namespace snh {
 
 /// The lock on an output directory, held while this object lives (flock on DIR/.snh-lock: released by the
-/// kernel when the process ends, however it ends).
+/// kernel when the process ends, however it ends). A directory the lock created and that holds nothing
+/// but the lock file when the lock is released (a run refused or failed before its first file) is
+/// removed, so that a failed start leaves nothing behind.
 class RunDirectoryLock {
  public:
   /// Creates the directory if needed and takes the lock. Throws OutputRefused (one line: exit 2) if the
@@ -25,8 +27,9 @@ class RunDirectoryLock {
   [[nodiscard]] bool forced() const { return forced_; }
 
  private:
+  std::filesystem::path dir_;
   int fd_ = -1;
-  bool found_ = false, forced_ = false;
+  bool found_ = false, forced_ = false, created_ = false;
 };
 
 /// True if dir shows a run of ours: the lock file .snh-lock, a checkpoint.bin, a frames.pvd, or a

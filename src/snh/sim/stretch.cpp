@@ -57,7 +57,11 @@ void validate(const StretchConfig& c) {
   // The lattice's memory estimate, before building it (a mesh file's is checked by the driver).
   if (c.mesh_file.empty())
     check_memory(lattice_size(c.resolution, c.element), c.solver, fmt::format("{} res {}", to_string(c.element), c.resolution));
-  ensure_writable_directory(c.out);
+  // The directory itself is made and checked by the run's lock (RunDirectoryLock), which removes it again if
+  // the run is refused before writing anything; here only what would stop the lock at once.
+  std::error_code ec;
+  if (std::filesystem::exists(c.out, ec) && !std::filesystem::is_directory(c.out, ec))
+    throw WriteError(fmt::format("output directory {} exists and is not a directory", c.out.string()));
 }
 
 StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
