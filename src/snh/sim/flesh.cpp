@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 
 #include "snh/embed/lattice.hpp"
-#include "snh/fem/attachment_term.hpp"
 #include "snh/embed/winding_number.hpp"
+#include "snh/fem/attachment_term.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/rig/skinning.hpp"
