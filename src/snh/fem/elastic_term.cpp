@@ -1,6 +1,7 @@
 #include "snh/fem/elastic_term.hpp"
 
 #include <algorithm>
+#include <array>
 #include <limits>
 #include <stdexcept>
 
@@ -20,36 +21,49 @@ VolumeMesh checked(VolumeMesh mesh) {
     for (Eigen::Index a = 0; a < mesh.cells.rows(); ++a)
       if (mesh.cells(a, c) < 0 || mesh.cells(a, c) >= n)
         throw std::invalid_argument(fmt::format("cell {} refers to vertex {} (mesh has {})", c, mesh.cells(a, c), n));
+  // The packed stiffness holds each pair of a cell's DOFs once: a vertex twice in a cell would need two.
+  for (Eigen::Index c = 0; c < mesh.cell_count(); ++c)
+    for (Eigen::Index a = 0; a < mesh.cells.rows(); ++a)
+      for (Eigen::Index b = 0; b < a; ++b)
+        if (mesh.cells(a, c) == mesh.cells(b, c))
+          throw std::invalid_argument(fmt::format("cell {}: vertex {} appears twice", c, mesh.cells(a, c)));
   return mesh;
 }
 
-/// Energy, gradient (3 by N) and stiffness (3N by 3N, DOF 3a+i) of one element at node positions X.
+/// The stiffness of an element with N nodes is kept as six N by N matrices K_ik, i >= k (it is symmetric):
+/// K_ik(a, b) is the entry of the DOFs 3a+i and 3b+k, at N² packed_pair(i, k) + N b + a. Each holds whole
+/// columns over the nodes, so that the products below run on vectors of N doubles.
+template <int N>
+constexpr int packed_size = 6 * N * N;
+constexpr int packed_pair(int i, int k) { return i * (i + 1) / 2 + k; }
+
+/// Energy, gradient (3 by N) and packed stiffness (packed_size<N> values) of one element at node positions X.
 template <class M, int N, int Q>
 double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix<double, 3, N>& X,
-                     Eigen::Matrix<double, 3, N>* grad, Eigen::Matrix<double, 3 * N, 3 * N>* K, PsdProjection p) {
+                     Eigen::Matrix<double, 3, N>* grad, double* K, PsdProjection p) {
+  using NxN = Eigen::Matrix<double, N, N>;
   double psi = 0.0;
   if (grad) grad->setZero();
-  if (K) K->setZero();
+  if (K) std::fill(K, K + packed_size<N>, 0.0);
   for (int q = 0; q < Q; ++q) {
     const Eigen::Matrix<double, N, 3>& G = r.G[q];
     const double w = r.weight[q];
     const Mat3 F = X * G;
-    const PointTerms t = point_terms(m, F, grad != nullptr, K != nullptr, p);  // one SVD at most
+    PointTerms t = point_terms(m, F, grad != nullptr, K != nullptr, p);  // one SVD at most
     psi += w * t.psi;
     if (grad) grad->noalias() += (w * t.P) * G.transpose();
     if (K) {
-      // With vec(F)_{3j+i} = Σ_a x_{a,i} G_{a,j}: K_{(a,i),(b,k)} = w Σ_{j,l} G_{a,j} H_{3j+i,3l+k} G_{b,l}.
-      const Mat9 H = w * t.H;
-      Eigen::Matrix<double, 9, 3 * N> HB;
-      for (int b = 0; b < N; ++b)
-        for (int k = 0; k < 3; ++k)
-          HB.col(3 * b + k) = G(b, 0) * H.col(k) + G(b, 1) * H.col(3 + k) + G(b, 2) * H.col(6 + k);
-      // Column c of K, read as a 3 by N matrix (i, a), is M_c Gᵀ with M_c the 3x3 matrix whose vec is
-      // column c of HB: small dense products, contiguous in memory (measured faster than row blocks).
-      const Eigen::Matrix<double, 3, N> Gt = G.transpose();
-      for (int c = 0; c < 3 * N; ++c)
-        Eigen::Map<Eigen::Matrix<double, 3, N>>(K->col(c).data()).noalias() +=
-            Eigen::Map<const Mat3>(HB.col(c).data()) * Gt;
+      // With vec(F)_{3j+i} = Σ_a x_{a,i} G_{a,j}: K_ik(a, b) = w Σ_{j,l} G_{a,j} H_{3j+i,3l+k} G_{b,l}, that is
+      // K_ik = G H_ik Gᵀ with H_ik the 3x3 matrix (j, l) ↦ w H_{3j+i,3l+k}.
+      t.H *= w;
+      for (int i = 0; i < 3; ++i)
+        for (int k = 0; k <= i; ++k) {
+          Eigen::Matrix<double, N, 3> GH;
+          for (int l = 0; l < 3; ++l)
+            GH.col(l) = G.col(0) * t.H(i, 3 * l + k) + G.col(1) * t.H(3 + i, 3 * l + k) + G.col(2) * t.H(6 + i, 3 * l + k);
+          Eigen::Map<NxN> Kik(K + N * N * packed_pair(i, k));
+          for (int b = 0; b < N; ++b) Kik.col(b) += GH.col(0) * G(b, 0) + GH.col(1) * G(b, 1) + GH.col(2) * G(b, 2);
+        }
     }
   }
   return psi;
@@ -62,16 +76,13 @@ Eigen::Matrix<double, 3, N> gather_nodes(const VolumeMesh& mesh, Eigen::Index c,
   return X;
 }
 
-/// The cells of each material (every cell's index is below `materials`).
-std::vector<std::vector<int>> cells_by_material(const std::vector<int>& material_of, std::size_t materials) {
-  std::vector<std::vector<int>> out(materials);
+/// Checks that every cell's material index is below `materials`.
+void check_material_indices(const std::vector<int>& material_of, std::size_t materials) {
   for (std::size_t c = 0; c < material_of.size(); ++c) {
     const int m = material_of[c];
     if (m < 0 || static_cast<std::size_t>(m) >= materials)
       throw std::invalid_argument(fmt::format("cell {}: material index {} (there are {} materials)", c, m, materials));
-    out[m].push_back(static_cast<int>(c));
   }
-  return out;
 }
 
 /// The rest state with each cell's quadrature weights multiplied by its scale.
@@ -107,7 +118,7 @@ ElasticTerm::ElasticTerm(VolumeMesh mesh, std::vector<AnyMaterial> materials, st
   if (!material_of_.empty()) {
     if (static_cast<Eigen::Index>(material_of_.size()) != mesh_.cell_count())
       throw std::invalid_argument(fmt::format("materials per cell: expected {}, got {}", mesh_.cell_count(), material_of_.size()));
-    cells_of_ = cells_by_material(material_of_, materials_.size());
+    check_material_indices(material_of_, materials_.size());
   } else if (materials_.size() > 1) {
     throw std::invalid_argument("several materials need a material index per cell");
   }
@@ -141,19 +152,24 @@ ElasticTerm::ElasticTerm(VolumeMesh mesh, std::vector<AnyMaterial> materials, st
     colour[c] = pick;
     colours = std::max(colours, pick + 1);
   }
-  Buckets by_colour = bucket(colours, [&](auto&& emit) {
-    for (std::size_t c = 0; c < colour.size(); ++c) emit(colour[c], static_cast<int>(c));
+  // Groups of cells of one colour and one material, colour-major: group k M + m.
+  const int M = static_cast<int>(materials_.size());
+  Buckets groups = bucket(colours * M, [&](auto&& emit) {
+    for (std::size_t c = 0; c < colour.size(); ++c)
+      emit(colour[c] * M + (material_of_.empty() ? 0 : material_of_[c]), static_cast<int>(c));
   });
-  colour_start_ = std::move(by_colour.start);
-  colour_order_ = std::move(by_colour.items);
+  group_start_ = std::move(groups.start);
+  group_cells_ = std::move(groups.items);
 }
 
 template <class Body>
-void ElasticTerm::for_each_material(Body&& body) const {
-  for (std::size_t k = 0; k < materials_.size(); ++k) {
-    const int* list = cells_of_.empty() ? nullptr : cells_of_[k].data();
-    const Eigen::Index count = cells_of_.empty() ? mesh_.cell_count() : static_cast<Eigen::Index>(cells_of_[k].size());
-    std::visit([&](const auto& m, const auto& rest) { body(m, rest, list, count); }, materials_[k], rest_);
+void ElasticTerm::for_each_group(Body&& body) const {
+  const std::size_t M = materials_.size();
+  for (std::size_t g = 0; g + 1 < group_start_.size(); ++g) {
+    const int begin = group_start_[g], end = group_start_[g + 1];
+    if (begin == end) continue;
+    std::visit([&](const auto& m, const auto& rest) { body(m, rest, group_cells_.data() + begin, Eigen::Index{end - begin}); },
+               materials_[g % M], rest_);
   }
 }
 
@@ -163,25 +179,30 @@ void ElasticTerm::stencil(const Eigen::VectorXd&, Stencil& out) const {
 }
 
 std::vector<int> ElasticTerm::scatter_map(const HessianLayout& layout) const {
-  // For each element and local pair (A, B), at B·ld + A (the column-major layout of the element
-  // stiffness), the value index of (num(A), num(B)) when both are numbered and num(A) >= num(B);
-  // −1 otherwise (the symmetric partner is stored instead).
-  const int ld = 3 * nodes_per_cell(mesh_.type);
-  const std::vector<int>& num = layout.numbering();
-  std::vector<int> scatter(static_cast<std::size_t>(mesh_.cell_count()) * ld * ld, -1);
-  for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
-    for (int A = 0; A < ld; ++A) {
-      const int rA = num[3 * mesh_.cells(A / 3, c) + A % 3];
-      if (rA < 0) continue;
-      for (int B = 0; B < ld; ++B) {
-        const int rB = num[3 * mesh_.cells(B / 3, c) + B % 3];
-        if (rB < 0 || rA < rB) continue;
-        const int e = layout.entry(rA, rB);
-        if (e < 0) throw std::logic_error("elastic term: the layout does not hold an element's entries");
-        scatter[(static_cast<std::size_t>(c) * ld + B) * ld + A] = e;
-      }
-    }
-  return scatter;
+  // For each element and packed entry K_ik(a, b) (the DOFs A = 3a+i and B = 3b+k, i >= k), the value index
+  // of (max(num(A), num(B)), min(...)) when both are numbered; −1 otherwise, and for a < b in K_ii (the
+  // same pair as K_ii(b, a)).
+  return std::visit(
+      [&](const auto& rest) {
+        constexpr int N = std::decay_t<decltype(rest)>::value_type::nodes;
+        const std::vector<int>& num = layout.numbering();
+        std::vector<int> scatter(static_cast<std::size_t>(mesh_.cell_count()) * packed_size<N>, -1);
+        for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c) {
+          int* map = scatter.data() + static_cast<std::size_t>(c) * packed_size<N>;
+          for (int i = 0; i < 3; ++i)
+            for (int k = 0; k <= i; ++k)
+              for (int b = 0; b < N; ++b)
+                for (int a = i == k ? b : 0; a < N; ++a) {
+                  const int rA = num[3 * mesh_.cells(a, c) + i], rB = num[3 * mesh_.cells(b, c) + k];
+                  if (rA < 0 || rB < 0) continue;
+                  const int e = layout.entry(std::max(rA, rB), std::min(rA, rB));
+                  if (e < 0) throw std::logic_error("elastic term: the layout does not hold an element's entries");
+                  map[N * N * packed_pair(i, k) + N * b + a] = e;
+                }
+        }
+        return scatter;
+      },
+      rest_);
 }
 
 double ElasticTerm::energy(const Eigen::VectorXd& x) const {
@@ -202,65 +223,34 @@ void ElasticTerm::add_hessian(const Eigen::VectorXd& x, const std::vector<int>& 
 
 double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const std::vector<int>* scatter,
                              double* values, PsdProjection projection) const {
-  const Eigen::Index cells = mesh_.cell_count();
-  std::vector<double> per(cells);
+  std::vector<double> per(static_cast<std::size_t>(mesh_.cell_count()));
   if (!scatter) values = nullptr;
-  std::visit(
-      [&](const auto& rest_all) {
-        using R = typename std::decay_t<decltype(rest_all)>::value_type;
-        constexpr int N = R::nodes;
-        constexpr int ld = 3 * N;
-        // 1. Element terms, in one parallel loop per material, into per-element buffers (kept between
-        //    calls: a fresh allocation of this size costs page faults every time).
-        std::vector<double>& grads = grad_buffer_;
-        std::vector<double>& stiff = stiffness_buffer_;
-        if (gradient) grads.resize(static_cast<std::size_t>(cells) * ld);
-        if (values) stiff.resize(static_cast<std::size_t>(cells) * ld * ld);
-        for_each_material([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
-          if constexpr (std::is_same_v<std::decay_t<decltype(rest)>, std::decay_t<decltype(rest_all)>>) {
-            ParallelErrors errors;
+  // Group by group (colour-major): the cells of a group share no vertex, so each element adds its terms
+  // straight into the gradient and the values without two threads touching the same entry, and each entry
+  // receives its terms in group order for any thread count.
+  for_each_group([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
+    using R = typename std::decay_t<decltype(rest)>::value_type;
+    constexpr int N = R::nodes;
+    ParallelErrors errors;
 #pragma omp parallel for schedule(static) if (count * R::points >= parallel_threshold_)
-            for (Eigen::Index i = 0; i < count; ++i) {
-              errors.run(i, [&] {
-                const Eigen::Index c = list ? list[i] : i;
-                Eigen::Matrix<double, ld, ld> K;
-                Eigen::Matrix<double, 3, N> gc;
-                per[c] = element_terms(m, rest[c], gather_nodes<N>(mesh_, c, x), gradient ? &gc : nullptr,
-                                       values ? &K : nullptr, projection);
-                if (gradient) Eigen::Map<Eigen::Matrix<double, 3, N>>(grads.data() + static_cast<std::size_t>(c) * ld) = gc;
-                if (values) Eigen::Map<Eigen::Matrix<double, ld, ld>>(stiff.data() + static_cast<std::size_t>(c) * ld * ld) = K;
-              });
-            }
-            errors.rethrow();
-          }
-        });
-        // 2. Scatter, colour by colour: elements of one colour share no vertex, so no two threads touch
-        //    the same entry, and each entry receives its terms in colour order for any thread count.
-        if (!gradient && !values) return;
-        for (int k = 0; k + 1 < static_cast<int>(colour_start_.size()); ++k) {
-          const int begin = colour_start_[k], end = colour_start_[k + 1];
-          ParallelErrors errors;
-#pragma omp parallel for schedule(static) if ((end - begin) * N >= parallel_threshold_)
-          for (int i = begin; i < end; ++i) {
-            errors.run(i, [&] {
-              const int c = colour_order_[i];
-              if (gradient) {
-                const double* g = grads.data() + static_cast<std::size_t>(c) * ld;
-                for (int a = 0; a < N; ++a)
-                  gradient->segment<3>(3 * mesh_.cells(a, c)) += Eigen::Map<const Eigen::Vector3d>(g + 3 * a);
-              }
-              if (values) {
-                const int* map = scatter->data() + static_cast<std::size_t>(c) * ld * ld;
-                const double* K = stiff.data() + static_cast<std::size_t>(c) * ld * ld;  // same layout as map
-                for (int e = 0; e < ld * ld; ++e)
-                  if (map[e] >= 0) values[map[e]] += K[e];
-              }
-            });
-          }
-          errors.rethrow();
+    for (Eigen::Index i = 0; i < count; ++i) {
+      errors.run(i, [&] {
+        const int c = list[i];
+        Eigen::Matrix<double, 3, N> gc;
+        std::array<double, packed_size<N>> K;
+        per[static_cast<std::size_t>(c)] = element_terms(m, rest[static_cast<std::size_t>(c)], gather_nodes<N>(mesh_, c, x),
+                                                         gradient ? &gc : nullptr, values ? K.data() : nullptr, projection);
+        if (gradient)
+          for (int a = 0; a < N; ++a) gradient->segment<3>(3 * mesh_.cells(a, c)) += gc.col(a);
+        if (values) {
+          const int* map = scatter->data() + static_cast<std::size_t>(c) * packed_size<N>;
+          for (int e = 0; e < packed_size<N>; ++e)
+            if (map[e] >= 0) values[map[e]] += K[static_cast<std::size_t>(e)];
         }
-      },
-      rest_);
+      });
+    }
+    errors.rethrow();
+  });
   double total = 0.0;
   for (double e : per) total += e;  // fixed order: deterministic
   return total;
@@ -270,24 +260,28 @@ ElasticTerm::Deformation ElasticTerm::deformation(const Eigen::VectorXd& x) cons
   Deformation out;
   out.min_J.resize(mesh_.cell_count());
   out.energy_density.resize(mesh_.cell_count());
-  for_each_material([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
+  Eigen::VectorXd volume(mesh_.cell_count());
+  for_each_group([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
     using R = typename std::decay_t<decltype(rest)>::value_type;
+#pragma omp parallel for schedule(static) if (count * R::points >= parallel_threshold_)
     for (Eigen::Index i = 0; i < count; ++i) {
-      const Eigen::Index c = list ? list[i] : i;
+      const int c = list[i];
       const auto X = gather_nodes<R::nodes>(mesh_, c, x);
-      double lo = std::numeric_limits<double>::infinity(), psi = 0.0, weight = 0.0;
+      double lo = std::numeric_limits<double>::infinity(), psi = 0.0, weight = 0.0, vol = 0.0;
       for (int q = 0; q < R::points; ++q) {
-        const Mat3 F = X * rest[c].G[q];
+        const Mat3 F = X * rest[static_cast<std::size_t>(c)].G[q];
         const double J = F.determinant();
         lo = std::min(lo, J);
-        out.volume += rest[c].weight[q] * J;
-        psi += rest[c].weight[q] * m.psi(F);
-        weight += rest[c].weight[q];
+        vol += rest[static_cast<std::size_t>(c)].weight[q] * J;
+        psi += rest[static_cast<std::size_t>(c)].weight[q] * m.psi(F);
+        weight += rest[static_cast<std::size_t>(c)].weight[q];
       }
       out.min_J[c] = lo;
       out.energy_density[c] = psi / weight;
+      volume[c] = vol;
     }
   });
+  out.volume = volume.sum();  // a fixed order for any thread count
   return out;
 }
 

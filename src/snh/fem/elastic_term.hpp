@@ -1,9 +1,10 @@
 #pragma once
 // The elastic energy of a mesh as a Term (DESIGN.md fem/): Σ_e Σ_q w_q ψ(F_q), its gradient, and its
 // (per-element PSD-projected) Hessian, assembled in parallel through a scatter map precomputed for each
-// Hessian layout. Elements are coloured so that no two elements of a colour share a vertex: the colours
-// run in sequence and each colour in parallel, so every sum is taken in the same order for any thread
-// count (bit-identical results). Each cell may have its own material (the runtime choice is one std::visit
+// Hessian layout (an element's stiffness is computed and scattered once per pair of DOFs: it is symmetric).
+// Elements are coloured so that no two elements of a colour share a vertex: the colours run in sequence
+// and each colour in parallel, each element adding its terms straight into the results, so every sum is
+// taken in the same order for any thread count (bit-identical results). Each cell may have its own material (the runtime choice is one std::visit
 // per material, outside the element loop) and its own weight scale (the fraction of an embedding lattice's
 // cell that the solid fills).
 #include <vector>
@@ -31,15 +32,15 @@ class ElasticTerm final : public Term {
   [[nodiscard]] std::string_view name() const override { return "elastic"; }
   /// Σ_e Σ_q w_q ψ(F_q); +∞ if any element is outside its energy's domain.
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
-  /// Uses internal buffers: do not evaluate the same term concurrently.
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                   PsdProjection projection) const override;
   /// The cells.
   void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
   void bind(const HessianLayout& layout) override { scatter_ = scatter_map(layout); }
 
-  /// Per element, (3N)² value indices into `layout`'s values (column-major element matrix order), −1 to
-  /// skip (a DOF the layout leaves out, or the upper triangle).
+  /// Per element, 6 N² value indices into `layout`'s values, one per entry of the element stiffness's N by N
+  /// blocks K_ik (the DOFs 3a+i and 3b+k, i >= k); −1 to skip (a DOF the layout leaves out, or a pair that
+  /// K_ii holds twice).
   [[nodiscard]] std::vector<int> scatter_map(const HessianLayout& layout) const;
   /// Adds the Hessian at x to `values` through a scatter map of scatter_map() (another layout than the
   /// bound one: a damping matrix over every DOF).
@@ -52,10 +53,11 @@ class ElasticTerm final : public Term {
   [[nodiscard]] const AnyMaterial& material(Eigen::Index c) const {
     return materials_[material_of_.empty() ? 0 : material_of_[static_cast<std::size_t>(c)]];
   }
-  [[nodiscard]] int colour_count() const { return static_cast<int>(colour_start_.size()) - 1; }
+  [[nodiscard]] int colour_count() const {
+    return static_cast<int>((group_start_.size() - 1) / materials_.size());
+  }
 
-  /// Loops with less work than this many quadrature points (element loops; scatters count one per
-  /// node) run on one thread: for small meshes waking threads (and, when other processes compete for
+  /// Loops over fewer quadrature points than this (a group of cells) run on one thread: for small meshes waking threads (and, when other processes compete for
   /// the cores, waiting at barriers) costs more than the work. Default 2048; 0 makes every loop parallel.
   void set_parallel_threshold(Eigen::Index t) { parallel_threshold_ = t; }
 
@@ -72,21 +74,19 @@ class ElasticTerm final : public Term {
   /// Energy, and when asked the gradient (added to *gradient) and the Hessian (added through scatter).
   double assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const std::vector<int>* scatter, double* values,
                   PsdProjection projection) const;
-  /// Calls body(material, rest, cells) once per material, with the cells that use it.
+  /// Calls body(material, rest, cells, count) for each group of cells of one colour and one material, in
+  /// group order.
   template <class Body>
-  void for_each_material(Body&& body) const;
+  void for_each_group(Body&& body) const;
 
   VolumeMesh mesh_;
   std::vector<AnyMaterial> materials_;
   std::vector<int> material_of_;                  ///< per cell (empty: all materials_[0])
-  std::vector<std::vector<int>> cells_of_;        ///< per material, its cells (only with several materials)
   RestState rest_;
   std::vector<int> scatter_;        ///< for the bound layout
-  std::vector<int> colour_order_;   ///< element ids grouped by colour
-  std::vector<int> colour_start_;   ///< colour c owns colour_order_[colour_start_[c] .. colour_start_[c+1])
+  std::vector<int> group_cells_;  ///< cells grouped by colour, then material
+  std::vector<int> group_start_;  ///< group k M + m (colour k, material m) owns group_cells_[group_start_[g] .. [g+1])
   Eigen::Index parallel_threshold_ = 2048;
-  // Per-element gradient and stiffness buffers reused by evaluate() (not thread-safe across calls).
-  mutable std::vector<double> grad_buffer_, stiffness_buffer_;
 };
 
 }  // namespace snh
