@@ -318,19 +318,25 @@ Progress progress_of(const fs::path& dir) {
   return p;
 }
 
+/// A 4-step tet run at res 2 into dir, its progress written every `interval` seconds.
+StretchConfig small_run(const fs::path& dir, double interval) {
+  StretchConfig c;
+  c.element = CellType::tet4;
+  c.resolution = 2;
+  c.steps = 4;
+  c.stretch = 1.5;
+  c.out = dir;
+  c.progress_interval = interval;
+  return c;
+}
+
 // The progress (stats.json, stats.csv, frames.pvd, checkpoint.bin) is written after the first step, then
 // once progress_interval has passed, and at the end; with an interval of 0, after every step. Seen from
 // Newton's first iteration of every step: what the run has left on disk by then.
 TEST(StretchProgress, WrittenAfterTheFirstStepThenByTimeAndAtTheEnd) {
   for (const double interval : {0.0, 1e9}) {
     const fs::path dir = fresh_dir("progress");
-    StretchConfig c;
-    c.element = CellType::tet4;
-    c.resolution = 2;
-    c.steps = 4;
-    c.stretch = 1.5;
-    c.out = dir;
-    c.progress_interval = interval;
+    StretchConfig c = small_run(dir, interval);
     std::vector<Progress> seen;  // at the start of steps 1 … 4
     c.newton.on_iteration = [&](int iteration, double) {
       if (iteration == 0) seen.push_back(progress_of(dir));
@@ -360,13 +366,7 @@ TEST(StretchProgress, WrittenAfterTheFirstStepThenByTimeAndAtTheEnd) {
 // are in the stats, the series and the checkpoint, and --resume continues from step 2.
 TEST(StretchProgress, AnExceptionWritesTheProgressNotYetWritten) {
   const fs::path dir = fresh_dir("progress_throw");
-  StretchConfig c;
-  c.element = CellType::tet4;
-  c.resolution = 2;
-  c.steps = 4;
-  c.stretch = 1.5;
-  c.out = dir;
-  c.progress_interval = 1e9;
+  StretchConfig c = small_run(dir, 1e9);
   int step = 0;
   c.newton.on_iteration = [&](int iteration, double) {
     if (iteration == 0 && ++step == 3) throw std::runtime_error("boom");

@@ -108,9 +108,9 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
   // and the checkpoint of the last converged frame. Each is a file replaced as a whole (a rename over the
   // last one, which ext4 follows with a flush of the new file: about 0.5 ms each, and the stats grow with
   // the run), so it is written after the first frame of this process, then once plan.progress_interval has
-  // passed since the last time, and whenever the run ends, however it ends (below, and the catch around
-  // the frames). A run killed outright loses at most that interval: its later frames stay on disk and a
-  // resume from the checkpoint writes them again.
+  // passed since the last time, and whenever the run ends, however it ends (finish, the out-of-memory
+  // path, and the guard below for any exception). A run killed outright loses at most that interval: its
+  // later frames stay on disk and a resume from the checkpoint writes them again.
   std::optional<Checkpoint> pending;  // the last converged frame's, not yet on disk
   bool unsaved = false;               // frames or records since the progress was last written
   auto last_progress = Clock::now();
