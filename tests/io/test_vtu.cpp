@@ -1,12 +1,18 @@
-// VTU frames: counts, VTK's hexahedron corner order (positive volume in VTK's convention), the data
-// arrays, the .pvd series; and atomic writes leave no temporary files.
+// VTU frames: the binary layout (appended raw data) decoded by the format's rules, counts, VTK's
+// hexahedron corner order (positive volume in VTK's convention), the data arrays read back bit for bit,
+// the .pvd series; and atomic writes leave no temporary files.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -22,22 +28,79 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
+  std::ifstream in(p, std::ios::binary);
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
 }
 
-/// The whitespace-separated numbers of the DataArray whose opening tag contains `name`.
-std::vector<double> array_of(const std::string& xml, const std::string& name) {
-  const auto tag = xml.find(name);
-  if (tag == std::string::npos) return {};
-  const auto start = xml.find('>', tag) + 1;
-  const auto end = xml.find("</DataArray>", start);
-  std::istringstream in(xml.substr(start, end - start));
-  std::vector<double> out;
-  for (double v; in >> v;) out.push_back(v);
-  return out;
+/// The value of attribute `name` in `tag`, "" if it has none.
+std::string attribute(const std::string& tag, const std::string& name) {
+  const auto at = tag.find(" " + name + "=\"");
+  if (at == std::string::npos) return "";
+  const auto start = at + name.size() + 3;
+  return tag.substr(start, tag.find('"', start) - start);
+}
+
+/// A .vtu frame decoded by the VTK XML format's rules, independently of read_vtu: the XML, then
+/// <AppendedData encoding="raw">, '_', and each array at its offset as a UInt64 byte count and its values.
+/// Checks the layout as it goes (EXPECT): every array appended, the arrays back to back from offset 0 in
+/// the order of their tags, the byte counts those of NumberOfPoints / NumberOfCells values, and the file
+/// ending right after the last array.
+struct Decoded {
+  std::string xml;                                     // the text before <AppendedData>
+  std::map<std::string, std::vector<double>> arrays;   // by Name (the points: "Points"), as doubles
+  std::map<std::string, std::string> types;            // VTK type by Name
+};
+Decoded decode(const fs::path& path) {
+  Decoded d;
+  const std::string file = slurp(path);
+  const auto ad = file.find("<AppendedData encoding=\"raw\">\n_");
+  if (ad == std::string::npos) {
+    ADD_FAILURE() << "no raw appended data";
+    return d;
+  }
+  d.xml = file.substr(0, ad);
+  const std::size_t data = ad + std::string("<AppendedData encoding=\"raw\">\n_").size();
+  const std::string root = d.xml.substr(d.xml.find("<VTKFile"), d.xml.find('>', d.xml.find("<VTKFile")) - d.xml.find("<VTKFile"));
+  EXPECT_EQ(attribute(root, "type"), "UnstructuredGrid");
+  EXPECT_EQ(attribute(root, "byte_order"), "LittleEndian");
+  EXPECT_EQ(attribute(root, "header_type"), "UInt64");
+  EXPECT_EQ(attribute(root, "version"), "1.0");  // VTK reads UInt64 headers from version 1.0 on
+  const std::string piece = d.xml.substr(d.xml.find("<Piece"), d.xml.find('>', d.xml.find("<Piece")) - d.xml.find("<Piece"));
+  const std::size_t points = std::stoul(attribute(piece, "NumberOfPoints")), cells = std::stoul(attribute(piece, "NumberOfCells"));
+  std::uint64_t expected_offset = 0;
+  for (auto at = d.xml.find("<DataArray"); at != std::string::npos; at = d.xml.find("<DataArray", at + 1)) {
+    const std::string tag = d.xml.substr(at, d.xml.find('>', at) - at);
+    const std::string name = attribute(tag, "Name").empty() ? "Points" : attribute(tag, "Name");
+    EXPECT_EQ(attribute(tag, "format"), "appended") << name;
+    EXPECT_EQ(tag.back(), '/') << name << ": an appended DataArray is an empty element";
+    const std::uint64_t offset = std::stoull(attribute(tag, "offset"));
+    EXPECT_EQ(offset, expected_offset) << name;
+    std::uint64_t bytes = 0;
+    std::memcpy(&bytes, file.data() + data + offset, 8);
+    const std::string type = attribute(tag, "type");
+    const std::size_t size = type == "UInt8" ? 1 : 8;
+    const std::size_t components = attribute(tag, "NumberOfComponents").empty() ? 1 : std::stoul(attribute(tag, "NumberOfComponents"));
+    const bool in_cells = d.xml.rfind("<CellData>", at) != std::string::npos;
+    if (name != "connectivity") {
+      EXPECT_EQ(bytes, size * components * (name == "offsets" || name == "types" || in_cells ? cells : points)) << name;
+    }
+    std::vector<double>& values = d.arrays[name];
+    for (std::uint64_t i = 0; i < bytes / size; ++i) {
+      const char* p = file.data() + data + offset + 8 + i * size;
+      double f = 0.0;
+      std::int64_t i64 = 0;
+      if (type == "Float64") values.push_back((std::memcpy(&f, p, 8), f));
+      else if (type == "Int64") values.push_back(static_cast<double>((std::memcpy(&i64, p, 8), i64)));
+      else if (type == "UInt8") values.push_back(static_cast<unsigned char>(*p));
+      else ADD_FAILURE() << name << ": unexpected type " << type;
+    }
+    d.types[name] = type;
+    expected_offset = offset + 8 + bytes;
+  }
+  EXPECT_EQ(file.substr(data + expected_offset), "\n</AppendedData>\n</VTKFile>\n");
+  return d;
 }
 
 fs::path temp_dir(const std::string& name) {
@@ -53,15 +116,18 @@ TEST(Vtu, HexFrameUsesVtkOrderAndCarriesData) {
   const Eigen::Matrix3Xd X = m.vertices * 1.5;
   Eigen::VectorXd J = Eigen::VectorXd::Constant(m.cell_count(), 3.375);
   write_vtu(dir / "f.vtu", m, X, {{"displacement", X - m.vertices}}, {{"J", J}});
-  const std::string xml = slurp(dir / "f.vtu");
-  EXPECT_NE(xml.find("NumberOfPoints=\"27\" NumberOfCells=\"8\""), std::string::npos);
-  const auto pts = array_of(xml, "NumberOfComponents=\"3\" format");
+  const Decoded d = decode(dir / "f.vtu");
+  EXPECT_NE(d.xml.find("NumberOfPoints=\"27\" NumberOfCells=\"8\""), std::string::npos);
+  const auto& pts = d.arrays.at("Points");
   ASSERT_EQ(pts.size(), 81u);
-  const auto conn = array_of(xml, "Name=\"connectivity\"");
+  const auto& conn = d.arrays.at("connectivity");
   ASSERT_EQ(conn.size(), 64u);
-  EXPECT_EQ(array_of(xml, "Name=\"offsets\"").back(), 64);
-  for (double t : array_of(xml, "Name=\"types\"")) EXPECT_EQ(t, 12);  // VTK_HEXAHEDRON
+  EXPECT_EQ(d.types.at("connectivity"), "Int64");
+  EXPECT_EQ(d.arrays.at("offsets").back(), 64);
+  EXPECT_EQ(d.types.at("types"), "UInt8");
+  for (double t : d.arrays.at("types")) EXPECT_EQ(t, 12);  // VTK_HEXAHEDRON
   for (int c = 0; c < 8; ++c) {
+    EXPECT_EQ(d.arrays.at("offsets")[c], 8 * (c + 1));
     auto p = [&](int a) {
       const int v = static_cast<int>(conn[8 * c + a]);
       return Eigen::Vector3d(pts[3 * v], pts[3 * v + 1], pts[3 * v + 2]);
@@ -70,8 +136,9 @@ TEST(Vtu, HexFrameUsesVtkOrderAndCarriesData) {
     EXPECT_GT((p(1) - p(0)).cross(p(3) - p(0)).dot(p(4) - p(0)), 0.0) << "cell " << c;
     EXPECT_NEAR((p(2) - p(0)).norm(), std::sqrt(2.0) * 1.5, 1e-12);  // p2 is diagonal from p0
   }
-  EXPECT_EQ(array_of(xml, "Name=\"J\"").size(), 8u);
-  EXPECT_EQ(array_of(xml, "Name=\"displacement\"").size(), 81u);
+  EXPECT_EQ(d.arrays.at("J"), std::vector<double>(8, 3.375));
+  EXPECT_EQ(d.arrays.at("displacement").size(), 81u);
+  EXPECT_EQ(d.arrays.at("displacement")[3 * 26], 0.5);  // the corner (1, 1, 1) moved to 1.5
   write_pvd(dir / "s.pvd", {{0.0, "f.vtu"}, {1.0, "g.vtu"}});
   const std::string pvd = slurp(dir / "s.pvd");
   EXPECT_NE(pvd.find("<DataSet timestep=\"1\" group=\"\" part=\"0\" file=\"g.vtu\"/>"), std::string::npos);
@@ -84,10 +151,74 @@ TEST(Vtu, TetFrameTypes) {
   const fs::path dir = temp_dir("vtu_tet");
   const VolumeMesh m = box_tets(1);
   write_vtu(dir / "t.vtu", m, m.vertices, {}, {});
-  const std::string xml = slurp(dir / "t.vtu");
-  const auto types = array_of(xml, "Name=\"types\"");
+  const Decoded d = decode(dir / "t.vtu");
+  const auto& types = d.arrays.at("types");
   ASSERT_EQ(types.size(), 6u);
   for (double t : types) EXPECT_EQ(t, 10);  // VTK_TETRA
+  EXPECT_EQ(d.arrays.at("connectivity").size(), 24u);
+  fs::remove_all(dir);
+}
+
+// Every value comes back bit for bit through read_vtu_data: awkward doubles in the points and fields,
+// non-finite ones in a cell field. One writer writes two frames (its cell arrays are made once) and a
+// frame it writes is byte for byte write_vtu's.
+TEST(Vtu, FramesReadBackBitForBit) {
+  const fs::path dir = temp_dir("vtu_bits");
+  const VolumeMesh m = box_hexes(2);
+  Eigen::Matrix3Xd X = m.vertices + 0.01 * m.vertices.array().sin().matrix();
+  X(0, 1) = 1.0 / 3.0;
+  X(1, 2) = -0.0;
+  X(2, 3) = 4.9e-324;  // the smallest subnormal
+  X(0, 4) = 1e300;
+  const double special[] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                            -std::numeric_limits<double>::infinity(), -0.0, 2.2250738585072014e-308, 0.1, -1e-17, 123456789.123456789};
+  Eigen::VectorXd psi = Eigen::Map<const Eigen::VectorXd>(special, 8), pinned = Eigen::VectorXd::Zero(m.vertex_count());
+  pinned[5] = 1.0;
+  const VtuWriter writer(m);
+  for (int frame = 0; frame < 2; ++frame) {
+    const Eigen::Matrix3Xd Y = X * (1.0 + frame / 7.0);
+    const fs::path path = dir / ("f" + std::to_string(frame) + ".vtu");
+    writer.write(path, Y, {{"displacement", Y - m.vertices}}, {{"psi", psi}}, {{"pinned", pinned}});
+    const VtuData back = read_vtu_data(path);
+    auto same_bits = [](const double* a, const double* b, std::size_t n) { return std::memcmp(a, b, n * sizeof(double)) == 0; };
+    ASSERT_EQ(back.mesh.mesh.vertices.cols(), Y.cols());
+    EXPECT_TRUE(same_bits(back.mesh.mesh.vertices.data(), Y.data(), Y.size())) << "frame " << frame;
+    EXPECT_EQ(back.mesh.mesh.cells, m.cells);
+    const Eigen::Matrix3Xd u = Y - m.vertices;
+    ASSERT_EQ(back.point_data.at("displacement").size(), static_cast<std::size_t>(u.size()));
+    EXPECT_TRUE(same_bits(back.point_data.at("displacement").data(), u.data(), u.size()));
+    EXPECT_TRUE(same_bits(back.point_data.at("pinned").data(), pinned.data(), pinned.size()));
+    ASSERT_EQ(back.cell_data.at("psi").size(), 8u);
+    EXPECT_TRUE(same_bits(back.cell_data.at("psi").data(), psi.data(), 8));
+    if (frame == 1) {
+      write_vtu(dir / "once.vtu", m, Y, {{"displacement", Y - m.vertices}}, {{"psi", psi}}, {{"pinned", pinned}});
+      EXPECT_EQ(slurp(path), slurp(dir / "once.vtu"));
+    }
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Vtu, AnArrayOfTheWrongSizeIsRefused) {
+  const fs::path dir = temp_dir("vtu_size");
+  const VolumeMesh m = box_tets(1);
+  auto error_of = [&](auto&& write) {
+    try {
+      write();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const VtuWriter w(m);
+  EXPECT_EQ(error_of([&] { w.write(dir / "a.vtu", Eigen::Matrix3Xd::Zero(3, 7), {}, {}); }),
+            (dir / "a.vtu").string() + ": the .vtu array Points has 7 values, expected 8");
+  EXPECT_EQ(error_of([&] { w.write(dir / "b.vtu", m.vertices, {}, {{"J", Eigen::VectorXd::Zero(5)}}); }),
+            (dir / "b.vtu").string() + ": the .vtu array J has 5 values, expected 6");
+  EXPECT_EQ(error_of([&] { w.write(dir / "c.vtu", m.vertices, {{"u", Eigen::Matrix3Xd::Zero(3, 9)}}, {}); }),
+            (dir / "c.vtu").string() + ": the .vtu array u has 9 values, expected 8");
+  EXPECT_EQ(error_of([&] { w.write(dir / "d.vtu", m.vertices, {}, {}, {{"pinned", Eigen::VectorXd::Zero(1)}}); }),
+            (dir / "d.vtu").string() + ": the .vtu array pinned has 1 values, expected 8");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 0) << "nothing written";
   fs::remove_all(dir);
 }
 

@@ -5,7 +5,7 @@
   regression.py check  BIN_DIR GOLDEN_DIR   runs every case and compares it with its record
 
 A record holds, for every file a run writes (frames NNN.obj / NNN.vtu, frames.pvd, stats.csv), its
-SHA-256 and a digest of the numbers in it, and the run's stats.json (or lab.json) without the fields
+SHA-256 and a digest of the numbers in it (of a .vtu frame: the values of its data arrays, binary or text), and the run's stats.json (or lab.json) without the fields
 that vary from run to run (times, memory, paths). On a machine like the one that recorded it (same CPU
 model and flags, same compiler: the "signature"), a run must be bit-identical: every file's SHA-256 and
 every stats value equal. Elsewhere floating-point results may differ in the last bits (-march=native,
@@ -20,6 +20,7 @@ import math
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 import tempfile
@@ -69,11 +70,41 @@ def signature():
     return f"{model} | {hashlib.sha256(flags.encode()).hexdigest()[:16]} | {cxx}"
 
 
-def digest(data):
-    """Count, sum, sum of magnitudes and a position-weighted sum of the numbers in a text file."""
+# VTK's value types as struct format characters (little-endian).
+VTK_TYPES = {"Float64": "d", "Float32": "f", "Int64": "q", "UInt64": "Q", "Int32": "i", "UInt32": "I", "Int16": "h",
+             "UInt16": "H", "Int8": "b", "UInt8": "B"}
+
+
+def vtu_arrays(data):
+    """(tag, values) of every DataArray of a .vtu file in document order: ASCII, or appended raw (as snh
+    writes its frames: little-endian, uncompressed, UInt32 or UInt64 length headers)."""
+    ad = data.find(b"<AppendedData")
+    xml = data if ad < 0 else data[:ad]
+    if ad >= 0 and b'encoding="raw"' not in data[ad:data.index(b">", ad)]:
+        raise ValueError("appended data that is not raw")
+    appended = ad + data[ad:].index(b"_") + 1 if ad >= 0 else -1
+    header = "Q" if b'header_type="UInt64"' in xml else "I"
+    out = []
+    for m in re.finditer(rb"<DataArray\b[^>]*>", xml):
+        tag = m.group().decode()
+        if 'format="appended"' in tag:
+            at = appended + int(re.search(r'offset="(\d+)"', tag).group(1))
+            (length,) = struct.unpack_from("<" + header, data, at)
+            kind = VTK_TYPES[re.search(r'type="(\w+)"', tag).group(1)]
+            count = length // struct.calcsize(kind)
+            values = struct.unpack_from(f"<{count}{kind}", data, at + struct.calcsize(header))
+        else:
+            end = xml.index(b"</DataArray>", m.end())
+            values = [float(v) for v in NUMBER.findall(xml[m.end():end])]
+        out.append((tag, [float(v) for v in values]))
+    return out
+
+
+def digest(data, values=None):
+    """Count, sum, sum of magnitudes and a position-weighted sum of the numbers in a text file (or of
+    `values`)."""
     n, s, a, w = 0, 0.0, 0.0, 0.0
-    for m in NUMBER.finditer(data):
-        v = float(m.group())
+    for v in values if values is not None else (float(m.group()) for m in NUMBER.finditer(data)):
         if not math.isfinite(v):
             continue
         n += 1
@@ -114,7 +145,8 @@ def run_case(name, argv, bins, out):
             continue
         if re.fullmatch(r"\d+\.(obj|vtu)|frames\.pvd", f):
             data = open(p, "rb").read()
-            record["files"][f] = {"sha256": hashlib.sha256(data).hexdigest(), **digest(data)}
+            values = [v for _, a in vtu_arrays(data) for v in a] if f.endswith(".vtu") else None
+            record["files"][f] = {"sha256": hashlib.sha256(data).hexdigest(), **digest(data, values)}
         elif f == "stats.csv":
             data = csv_without_times(open(p).read()).encode()
             record["files"][f] = {"sha256": hashlib.sha256(data).hexdigest(), **digest(data)}

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@
 
 #include "snh/io/mesh_write.hpp"
 #include "snh/mesh/box.hpp"
+#include "snh/sim/checkpoint.hpp"
 #include "snh/sim/interrupt.hpp"
 #include "snh/sim/stretch.hpp"
 
@@ -294,6 +296,94 @@ TEST(StretchInterrupt, ResumeContinuesFromTheLastCompletedStep) {
   EXPECT_NE(series.find("000.vtu"), std::string::npos) << "the series lists the frames from before the stop";
   EXPECT_NE(series.find("010.vtu"), std::string::npos);
   fs::remove_all(full_dir);
+  fs::remove_all(dir);
+}
+
+/// What a run's progress on disk says while it goes on: the step records in stats.json, its status, the checkpoint's step (-1: none) and the frames frames.pvd lists.
+struct Progress {
+  std::size_t records = 0;
+  std::string status;
+  int checkpoint = -1;
+  int listed = 0;
+};
+Progress progress_of(const fs::path& dir) {
+  Progress p;
+  std::ifstream stats(dir / "stats.json");
+  const nlohmann::json j = nlohmann::json::parse(stats);
+  p.records = j.at("steps").size();
+  p.status = j.at("status");
+  if (const auto c = read_checkpoint(dir)) p.checkpoint = c->step;
+  std::ifstream pvd(dir / "frames.pvd");
+  for (std::string line; std::getline(pvd, line);) p.listed += line.find("<DataSet") != std::string::npos;
+  return p;
+}
+
+/// A 4-step tet run at res 2 into dir, its progress written every `interval` seconds.
+StretchConfig small_run(const fs::path& dir, double interval) {
+  StretchConfig c;
+  c.element = CellType::tet4;
+  c.resolution = 2;
+  c.steps = 4;
+  c.stretch = 1.5;
+  c.out = dir;
+  c.progress_interval = interval;
+  return c;
+}
+
+// The progress (stats.json, stats.csv, frames.pvd, checkpoint.bin) is written after the first step, then
+// once progress_interval has passed, and at the end; with an interval of 0, after every step. Seen from
+// Newton's first iteration of every step: what the run has left on disk by then.
+TEST(StretchProgress, WrittenAfterTheFirstStepThenByTimeAndAtTheEnd) {
+  for (const double interval : {0.0, 1e9}) {
+    const fs::path dir = fresh_dir("progress");
+    StretchConfig c = small_run(dir, interval);
+    std::vector<Progress> seen;  // at the start of steps 1 … 4
+    c.newton.on_iteration = [&](int iteration, double) {
+      if (iteration == 0) seen.push_back(progress_of(dir));
+    };
+    std::ostringstream log;
+    ASSERT_TRUE(run_stretch(c, log).all_converged) << log.str();
+    ASSERT_EQ(seen.size(), 4u);
+    for (int step = 1; step <= 4; ++step) {
+      const Progress& p = seen[step - 1];
+      const int saved = step == 1 ? 0 : interval == 0.0 ? step - 1 : 1;  // the last step whose progress is on disk
+      EXPECT_EQ(p.status, "running") << "interval " << interval << ", step " << step;
+      EXPECT_EQ(p.records, static_cast<std::size_t>(saved)) << "interval " << interval << ", step " << step;
+      EXPECT_EQ(p.checkpoint, step == 1 ? -1 : saved) << "interval " << interval << ", step " << step;
+      EXPECT_EQ(p.listed, step == 1 ? 0 : saved + 1) << "interval " << interval << ", step " << step;
+    }
+    const Progress end = progress_of(dir);
+    EXPECT_EQ(end.status, "finished");
+    EXPECT_EQ(end.records, 4u);
+    EXPECT_EQ(end.checkpoint, 4);
+    EXPECT_EQ(end.listed, 5);
+    fs::remove_all(dir);
+  }
+}
+
+// A run ended by an exception (here one thrown from Newton's callback in step 3, as a solver's error or
+// a frame that cannot be written would be) first writes the progress it had not written: steps 1 and 2
+// are in the stats, the series and the checkpoint, and --resume continues from step 2.
+TEST(StretchProgress, AnExceptionWritesTheProgressNotYetWritten) {
+  const fs::path dir = fresh_dir("progress_throw");
+  StretchConfig c = small_run(dir, 1e9);
+  int step = 0;
+  c.newton.on_iteration = [&](int iteration, double) {
+    if (iteration == 0 && ++step == 3) throw std::runtime_error("boom");
+  };
+  std::ostringstream log;
+  EXPECT_THROW((void)run_stretch(c, log), std::runtime_error);
+  const Progress p = progress_of(dir);
+  EXPECT_EQ(p.status, "running");
+  EXPECT_EQ(p.records, 2u);
+  EXPECT_EQ(p.checkpoint, 2);
+  EXPECT_EQ(p.listed, 3);
+  c.newton.on_iteration = nullptr;
+  c.resume = true;
+  log.str("");
+  EXPECT_TRUE(run_stretch(c, log).all_converged);
+  EXPECT_NE(log.str().find("resuming after step 2"), std::string::npos) << log.str();
+  EXPECT_EQ(progress_of(dir).records, 4u);
   fs::remove_all(dir);
 }
 

@@ -25,16 +25,26 @@ const frames = [...pvd.matchAll(/<DataSet\b[^>]*>/g)].map(([tag]) => ({
   time: Number(/timestep="([^"]*)"/.exec(tag)[1]),
   file: /file="([^"]*)"/.exec(tag)[1],
 }));
-/** The numbers of the DataArray in `xml` whose opening tag matches `re`. */
-function array(xml, re) {
+/**
+ * The numbers of the DataArray whose opening tag matches `re` in a .vtu file's bytes: ASCII, or appended
+ * raw (UInt64 length header, Float64 values), as snh writes its frames.
+ */
+function array(bytes, re) {
+  const ad = bytes.indexOf('<AppendedData');
+  const xml = bytes.toString('latin1', 0, ad < 0 ? bytes.length : ad);
   const m = re.exec(xml);
   if (!m) return null;
-  const start = xml.indexOf('>', m.index + m[0].length) + 1;
-  return xml.slice(start, xml.indexOf('</DataArray>', start)).trim().split(/\s+/).map(Number);
+  const tagEnd = xml.indexOf('>', m.index + m[0].length);
+  const tag = xml.slice(m.index, tagEnd);
+  if (!/format="appended"/.test(tag)) return xml.slice(tagEnd + 1, xml.indexOf('</DataArray>', tagEnd)).trim().split(/\s+/).map(Number);
+  if (!/type="Float64"/.test(tag) || !/header_type="UInt64"/.test(xml)) throw new Error(`unexpected DataArray: ${tag}`);
+  const at = bytes.indexOf('_', ad) + 1 + Number(/offset="(\d+)"/.exec(tag)[1]);
+  const length = Number(bytes.readBigUInt64LE(at));
+  return Array.from({ length: length / 8 }, (_, i) => bytes.readDoubleLE(at + 8 + 8 * i));
 }
 const volume = frames.map((f) => {
-  const xml = readFileSync(join(dir, f.file), 'utf8');
-  return { x: array(xml, /<Points>\s*<DataArray/), u: array(xml, /<DataArray[^>]*Name="displacement"/) };
+  const bytes = readFileSync(join(dir, f.file));
+  return { x: array(bytes, /<Points>\s*<DataArray/), u: array(bytes, /<DataArray[^>]*Name="displacement"/) };
 });
 const nv = volume[0].x.length / 3;
 const rest = volume[0].x.map((v, i) => v - (volume[0].u ? volume[0].u[i] : 0));

@@ -2,6 +2,8 @@
 // Wavefront OBJ frames in the paper programs' format (PAPER_CODE.md): `v x y z` for every vertex in
 // index order, then `f a b c` (1-based) for every boundary triangle.
 #include <filesystem>
+#include <string>
+#include <string_view>
 
 #include <Eigen/Core>
 
@@ -12,5 +14,11 @@ namespace snh {
 ///   positions  3 by #V
 ///   triangles  3 by #F, 0-based vertex indices (written 1-based)
 void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, const Eigen::Matrix3Xi& triangles);
+
+/// The `f a b c` lines of write_obj for triangles (3 by #F, 0-based), made once for frames that share them.
+[[nodiscard]] std::string obj_faces(const Eigen::Matrix3Xi& triangles);
+
+/// write_obj with the face lines made by obj_faces.
+void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, std::string_view faces);
 
 }  // namespace snh

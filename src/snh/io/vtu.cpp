@@ -1,11 +1,13 @@
 #include "snh/io/vtu.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <iterator>
 #include <optional>
+#include <stdexcept>
 #include <string_view>
 
 #include <fmt/format.h>
@@ -18,52 +20,80 @@
 
 namespace snh {
 
+static_assert(std::endian::native == std::endian::little, "the .vtu writer writes the machine's bytes as little-endian");
+
+VtuWriter::VtuWriter(const VolumeMesh& mesh) : vertices_(mesh.vertex_count()) {
+  const int npc = nodes_per_cell(mesh.type);
+  connectivity_.reserve(static_cast<std::size_t>(mesh.cell_count() * npc));
+  for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
+    for (int a = 0; a < npc; ++a) connectivity_.push_back(mesh.cells(detail::file_corner(mesh.type, a), c));
+    offsets_.push_back(static_cast<std::int64_t>(connectivity_.size()));
+  }
+  types_.assign(static_cast<std::size_t>(mesh.cell_count()), mesh.type == CellType::tet4 ? 10 : 12);  // VTK_TETRA, VTK_HEXAHEDRON
+}
+
+void VtuWriter::write(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions,
+                      const std::vector<std::pair<std::string, Eigen::Matrix3Xd>>& point_data,
+                      const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data,
+                      const std::vector<std::pair<std::string, Eigen::VectorXd>>& point_scalars) const {
+  const auto cells = static_cast<Eigen::Index>(types_.size());
+  auto check = [&](const std::string& name, Eigen::Index count, Eigen::Index expected) {
+    if (count != expected)
+      throw std::invalid_argument(fmt::format("{}: the .vtu array {} has {} values, expected {}", path.string(), name, count, expected));
+  };
+  check("Points", positions.cols(), vertices_);
+  // The XML, each DataArray with its offset into the appended data; the arrays themselves, in that order.
+  struct Block {
+    const void* data;
+    std::uint64_t bytes;
+  };
+  std::vector<Block> blocks;
+  std::uint64_t offset = 0;
+  fmt::memory_buffer b;
+  auto o = std::back_inserter(b);
+  auto array = [&](std::string_view attributes, const void* data, std::size_t bytes) {
+    fmt::format_to(o, "<DataArray {} format=\"appended\" offset=\"{}\"/>\n", attributes, offset);
+    blocks.push_back({data, bytes});
+    offset += sizeof(std::uint64_t) + bytes;
+  };
+  fmt::format_to(o, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+                    "header_type=\"UInt64\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n<Points>\n",
+                 vertices_, cells);
+  array("type=\"Float64\" NumberOfComponents=\"3\"", positions.data(), sizeof(double) * 3 * vertices_);
+  fmt::format_to(o, "</Points>\n<Cells>\n");
+  array("type=\"Int64\" Name=\"connectivity\"", connectivity_.data(), sizeof(std::int64_t) * connectivity_.size());
+  array("type=\"Int64\" Name=\"offsets\"", offsets_.data(), sizeof(std::int64_t) * offsets_.size());
+  array("type=\"UInt8\" Name=\"types\"", types_.data(), types_.size());
+  fmt::format_to(o, "</Cells>\n<PointData>\n");
+  for (const auto& [name, field] : point_data) {
+    check(name, field.cols(), vertices_);
+    array(fmt::format("type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\"", name), field.data(), sizeof(double) * 3 * vertices_);
+  }
+  for (const auto& [name, field] : point_scalars) {
+    check(name, field.size(), vertices_);
+    array(fmt::format("type=\"Float64\" Name=\"{}\"", name), field.data(), sizeof(double) * vertices_);
+  }
+  fmt::format_to(o, "</PointData>\n<CellData>\n");
+  for (const auto& [name, field] : cell_data) {
+    check(name, field.size(), cells);
+    array(fmt::format("type=\"Float64\" Name=\"{}\"", name), field.data(), sizeof(double) * cells);
+  }
+  fmt::format_to(o, "</CellData>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_");
+  write_atomically(path, [&](std::ostream& out) {
+    out.write(b.data(), static_cast<std::streamsize>(b.size()));
+    for (const Block& block : blocks) {
+      out.write(reinterpret_cast<const char*>(&block.bytes), sizeof(block.bytes));
+      out.write(static_cast<const char*>(block.data), static_cast<std::streamsize>(block.bytes));
+    }
+    out << "\n</AppendedData>\n</VTKFile>\n";
+  });
+}
+
 void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const Eigen::Matrix3Xd& positions,
                const std::vector<std::pair<std::string, Eigen::Matrix3Xd>>& point_data,
                const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data,
                const std::vector<std::pair<std::string, Eigen::VectorXd>>& point_scalars) {
-  const int npc = nodes_per_cell(mesh.type);
-  const int vtk_type = mesh.type == CellType::tet4 ? 10 : 12;
-  write_atomically(path, [&](std::ostream& out) {
-    fmt::memory_buffer b;
-    auto o = std::back_inserter(b);
-    fmt::format_to(o, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-                      "<UnstructuredGrid>\n<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
-                   positions.cols(), mesh.cell_count());
-    fmt::format_to(o, "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for (Eigen::Index v = 0; v < positions.cols(); ++v)
-      fmt::format_to(o, "{:.10g} {:.10g} {:.10g}\n", positions(0, v), positions(1, v), positions(2, v));
-    fmt::format_to(o, "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
-    for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
-      for (int a = 0; a < npc; ++a)
-        fmt::format_to(o, "{}{}", a ? " " : "", mesh.cells(detail::file_corner(mesh.type, a), c));
-      fmt::format_to(o, "\n");
-    }
-    fmt::format_to(o, "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
-    for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) fmt::format_to(o, "{}\n", (c + 1) * npc);
-    fmt::format_to(o, "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
-    for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) fmt::format_to(o, "{}\n", vtk_type);
-    fmt::format_to(o, "</DataArray>\n</Cells>\n<PointData>\n");
-    for (const auto& [name, field] : point_data) {
-      fmt::format_to(o, "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">\n", name);
-      for (Eigen::Index v = 0; v < field.cols(); ++v)
-        fmt::format_to(o, "{:.10g} {:.10g} {:.10g}\n", field(0, v), field(1, v), field(2, v));
-      fmt::format_to(o, "</DataArray>\n");
-    }
-    for (const auto& [name, field] : point_scalars) {
-      fmt::format_to(o, "<DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">\n", name);
-      for (Eigen::Index v = 0; v < field.size(); ++v) fmt::format_to(o, "{:.10g}\n", field[v]);
-      fmt::format_to(o, "</DataArray>\n");
-    }
-    fmt::format_to(o, "</PointData>\n<CellData>\n");
-    for (const auto& [name, field] : cell_data) {
-      fmt::format_to(o, "<DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">\n", name);
-      for (Eigen::Index c = 0; c < field.size(); ++c) fmt::format_to(o, "{:.10g}\n", field[c]);
-      fmt::format_to(o, "</DataArray>\n");
-    }
-    fmt::format_to(o, "</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
-    out.write(b.data(), static_cast<std::streamsize>(b.size()));
-  });
+  VtuWriter(mesh).write(path, positions, point_data, cell_data, point_scalars);
 }
 
 void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& frames) {

@@ -1,7 +1,9 @@
 #pragma once
 // VTK XML unstructured grids (.vtu) and ParaView series (.pvd) (DESIGN.md io/): frames of a volume mesh
-// written (ASCII data), and .vtu meshes read back with their data arrays (ASCII, inline base64, or
-// appended raw or base64 data; uncompressed, little-endian).
+// written (binary: the arrays appended raw after the XML, full double precision), and .vtu meshes read
+// back with their data arrays (ASCII, inline base64, or appended raw or base64 data; uncompressed,
+// little-endian).
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -15,13 +17,35 @@
 
 namespace snh {
 
-/// Writes one frame atomically.
-///   path         output file (.vtu)
-///   mesh         cells (tet4 or hex8, VolumeMesh corner order; written in VTK's order)
-///   positions    3 by #V deformed positions
-///   point_data   named 3-vector fields, each 3 by #V (e.g. "displacement")
-///   cell_data    named scalar fields, each #C (e.g. "J"); non-finite values are written as inf / nan
-///   point_scalars named scalar fields, each #V (e.g. "pinned")
+/// Writes the .vtu frames of one mesh: VTK XML (version 1.0, UInt64 length headers, little-endian), every
+/// DataArray format="appended" with its offset into one <AppendedData encoding="raw"> block (each array:
+/// its length in bytes as a UInt64, then its values). Points and fields are Float64, written bit for bit;
+/// connectivity and offsets Int64, types UInt8. The cell arrays are made once, by the constructor; a frame
+/// writes its header, then its arrays straight from the matrices.
+class VtuWriter {
+ public:
+  /// mesh: cells (tet4 or hex8, VolumeMesh corner order; written in VTK's order).
+  explicit VtuWriter(const VolumeMesh& mesh);
+  /// Writes one frame atomically.
+  ///   path          output file (.vtu)
+  ///   positions     3 by #V deformed positions
+  ///   point_data    named 3-vector fields, each 3 by #V (e.g. "displacement")
+  ///   cell_data     named scalar fields, each #C (e.g. "J"); non-finite values are kept (IEEE inf / nan)
+  ///   point_scalars named scalar fields, each #V (e.g. "pinned")
+  /// Throws std::invalid_argument (naming the array) for an array of the wrong size, WriteError /
+  /// OutputRefused as write_atomically.
+  void write(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions,
+             const std::vector<std::pair<std::string, Eigen::Matrix3Xd>>& point_data,
+             const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data,
+             const std::vector<std::pair<std::string, Eigen::VectorXd>>& point_scalars = {}) const;
+
+ private:
+  Eigen::Index vertices_ = 0;
+  std::vector<std::int64_t> connectivity_, offsets_;
+  std::vector<std::uint8_t> types_;
+};
+
+/// Writes one frame atomically: VtuWriter(mesh).write(path, positions, point_data, cell_data, point_scalars).
 void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const Eigen::Matrix3Xd& positions,
                const std::vector<std::pair<std::string, Eigen::Matrix3Xd>>& point_data,
                const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data,

@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <exception>
+#include <functional>
 #include <optional>
 
 #include <fmt/format.h>
@@ -102,6 +104,38 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
     log.flush();
   }
 
+  // The run's progress on disk, what a report and a resume read: frames.pvd, stats.json and stats.csv,
+  // and the checkpoint of the last converged frame. Each is a file replaced as a whole (a rename over the
+  // last one, which ext4 follows with a flush of the new file: about 0.5 ms each, and the stats grow with
+  // the run), so it is written after the first frame of this process, then once plan.progress_interval has
+  // passed since the last time, and whenever the run ends, however it ends (finish, the out-of-memory
+  // path, and the guard below for any exception). A run killed outright loses at most that interval: its
+  // later frames stay on disk and a resume from the checkpoint writes them again.
+  std::optional<Checkpoint> pending;  // the last converged frame's, not yet on disk
+  bool unsaved = false;               // frames or records since the progress was last written
+  auto last_progress = Clock::now();
+  auto write_progress = [&](const std::string& status, const json* extra) {
+    frames.write_series();
+    write_stats(plan, result, status, extra);
+    if (pending) write_checkpoint(plan.out, *pending);
+    pending.reset();
+    unsaved = false;
+    last_progress = Clock::now();
+  };
+  // However the run leaves by an exception (a frame that cannot be written, out of memory, a solver's
+  // error), the progress not yet on disk is written first, as far as it can be.
+  struct WriteOnException {
+    std::function<void()> write;
+    int uncaught = std::uncaught_exceptions();
+    ~WriteOnException() {
+      if (std::uncaught_exceptions() > uncaught) try {
+          write();
+        } catch (const std::exception&) {  // the exception on its way matters more
+        }
+    }
+  } write_on_exception{[&] {
+    if (unsaved) write_progress("running", nullptr);
+  }};
   auto frame_failure = [&](int index, const char* what) {
     return fmt::format("{} {}: {} ({}stats.json and checkpoint.bin are kept: --resume continues once the output can be "
                        "written)",
@@ -110,6 +144,7 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
   auto write_frame = [&](int index, const ElasticTerm::Deformation& d) {
     try {
       frames.write(index, index * plan.frame_duration, sim.x(), d);
+      unsaved = true;
       if (plan.write_frame) plan.write_frame(index, index * plan.frame_duration, sim.x());
     } catch (const WriteError& e) {
       throw WriteError(frame_failure(index, e.what()));
@@ -122,7 +157,7 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
     result.peak_memory_mib = peak_memory_mib();
     json extra = json::object();
     if (plan.finish) plan.finish(extra);
-    write_stats(plan, result, status, &extra);
+    write_progress(status, &extra);
     if (plan.summary) log << plan.summary(result) << "\n";
     log.flush();
     return result;
@@ -182,7 +217,7 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
       result.total_seconds = since(t_start);
       result.peak_memory_mib = peak_memory_mib();
       try {
-        write_stats(plan, result, "stopped");
+        write_progress("stopped", nullptr);
       } catch (const std::exception&) {  // the message matters more than the stats
       }
       throw OutOfMemoryError(message);
@@ -243,9 +278,10 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
     }
     // Everything needed to resume after this frame: the stats so far and the exact state.
     result.total_seconds = since(t_start);
-    write_stats(plan, result, "running");
-    const SimulationState s = sim.state();
-    write_checkpoint(plan.out, {.fingerprint = plan.fingerprint, .step = frame, .time = r.time, .x = s.x, .aux = s.aux});
+    SimulationState s = sim.state();
+    pending = Checkpoint{.fingerprint = plan.fingerprint, .step = frame, .time = r.time, .x = std::move(s.x), .aux = std::move(s.aux)};
+    unsaved = true;
+    if (frame == first || since(last_progress) >= plan.progress_interval) write_progress("running", nullptr);
   }
   if (stopped) {
     result.interrupted_by = stop_signal();

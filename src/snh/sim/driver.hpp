@@ -2,9 +2,11 @@
 // The one loop that runs a Simulation frame by frame and keeps its output directory trustworthy
 // (DESIGN.md sim/): it locks the directory, clears a previous run's files (or, for --resume, checks the
 // checkpoint, the kept frames and the history), writes stats.json with status "running" before any work,
-// then every frame (NNN.obj, NNN.vtu and frames.pvd), its stats record, the stats so far and a checkpoint
-// after each completed frame, and last the final stats with status "finished", "stopped" (a frame failed)
-// or "interrupted" (a signal). A run killed without warning leaves status "running": unfinished. What
+// then every frame (NNN.obj, NNN.vtu) and its stats record; the progress (frames.pvd, the stats so far and
+// the last converged frame's checkpoint) after the first completed frame, then at most every
+// progress_interval seconds and at the end, with the final stats' status "finished", "stopped" (a frame
+// failed) or "interrupted" (a signal), or "running" when an exception ends the run. A run killed without
+// warning leaves status "running": unfinished, its last progress_interval of frames not in the stats. What
 // differs between the stretch test and a scene (the records' table, the log lines, the record's own
 // fields, run-level results) comes in through the RunPlan.
 #include <filesystem>
@@ -41,6 +43,9 @@ struct RunPlan {
   int substeps = 1;               ///< solves per frame, at (i − 1) · frame_duration + k · substep
   double substep = 1.0;
   bool write_vtu = true;
+  /// Seconds between two writes of the progress (frames.pvd, stats.json, stats.csv, checkpoint.bin) while
+  /// the run goes on: a run killed outright loses at most that much; 0: after every frame.
+  double progress_interval = 1.0;
   bool resume = false;            ///< continue from DIR/checkpoint.bin
   std::string fingerprint;        ///< the settings that decide the result (a resume must match)
   nlohmann::json settings;        ///< stats.json's fields that describe the run

@@ -28,28 +28,31 @@ std::string worst_element(const Eigen::VectorXd& min_J) {
 
 FrameWriter::FrameWriter(std::filesystem::path out, const VolumeMesh& mesh, bool write_vtu, const std::vector<bool>& pinned)
     : out_(std::move(out)),
-      mesh_(mesh),
+      rest_(mesh.vertices),
       surface_(boundary_triangles(mesh)),
-      write_vtu_(write_vtu),
+      faces_(obj_faces(surface_)),
       pinned_(Eigen::VectorXd::Zero(mesh.vertex_count())) {
+  if (write_vtu) vtu_.emplace(mesh);
   for (std::size_t v = 0; v < pinned.size() && static_cast<Eigen::Index>(v) < pinned_.size(); ++v) pinned_[v] = pinned[v];
 }
 
 void FrameWriter::adopt_written(int last, const std::function<double(int)>& time) {
   series_.clear();
-  if (!write_vtu_) return;
+  if (!vtu_) return;
   for (int i = 0; i <= last; ++i) series_.emplace_back(time(i), fmt::format("{:03d}.vtu", i));
 }
 
 void FrameWriter::write(int index, double time, const Eigen::VectorXd& x, const ElasticTerm::Deformation& d) {
   const Eigen::Matrix3Xd X = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3);
-  write_obj(out_ / fmt::format("{:03d}.obj", index), X, surface_);
-  if (!write_vtu_) return;
+  write_obj(out_ / fmt::format("{:03d}.obj", index), X, faces_);
+  if (!vtu_) return;
   const std::string vtu = fmt::format("{:03d}.vtu", index);
-  write_vtu(out_ / vtu, mesh_, X, {{"displacement", X - mesh_.vertices}}, {{"J", d.min_J}, {"psi", d.energy_density}},
-            {{"pinned", pinned_}});
+  vtu_->write(out_ / vtu, X, {{"displacement", X - rest_}}, {{"J", d.min_J}, {"psi", d.energy_density}}, {{"pinned", pinned_}});
   series_.emplace_back(time, vtu);
-  write_pvd(out_ / "frames.pvd", series_);
+}
+
+void FrameWriter::write_series() const {
+  if (vtu_) write_pvd(out_ / "frames.pvd", series_);
 }
 
 }  // namespace snh

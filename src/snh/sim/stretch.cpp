@@ -147,6 +147,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   plan.table = &stretch_table();
   plan.frames = c.steps;
   plan.write_vtu = c.write_vtu;
+  plan.progress_interval = c.progress_interval;
   plan.resume = c.resume;
   plan.fingerprint = fingerprint(c);
   plan.settings = std::move(settings);

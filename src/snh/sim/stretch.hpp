@@ -38,6 +38,7 @@ struct StretchConfig {
   std::string program = "snh stretch";    ///< for the header and stats.json
   std::string command_line;               ///< as the user typed it, for stats.json and the report
   bool write_vtu = true;                  ///< also NNN.vtu frames and frames.pvd for ParaView
+  double progress_interval = 1.0;         ///< seconds between writes of the stats and checkpoint (RunPlan)
   bool live_progress = false;             ///< log is a terminal: update the step's line at every Newton iteration
   /// Continue the run in `out` from its checkpoint (the last completed step); the settings must match.
   bool resume = false;
