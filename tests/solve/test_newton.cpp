@@ -1,12 +1,13 @@
 // Projected Newton on toy problems: trials outside an energy's domain (+∞) shorten the step and never
 // enter the state, a term's step bound starts the line search, accepted iterates reach the terms, and the
-// step-size stopping rule.
+// step-size stopping rule, and the looser linear solves an inexact solver is allowed.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
 #include "snh/fem/problem.hpp"
+#include "snh/solve/linear_solver.hpp"
 #include "snh/solve/newton.hpp"
 
 namespace snh {
@@ -155,6 +156,42 @@ TEST(Newton, StopsOnTheStepSizeWhenAsked) {
   ASSERT_TRUE(p.converged) << p.failure;
   EXPECT_TRUE(p.converged_by_step);
   EXPECT_LE((z.array() - 1.0).abs().maxCoeff(), 1e-8);
+}
+
+/// A direct solver that says it may be inexact, and records the residual each solve was allowed.
+class Recording final : public LinearSolver {
+ public:
+  explicit Recording(bool inexact) : inner_(make_linear_solver({.name = "ldlt"})), inexact_(inexact) {}
+  double factorize(const SparseLower& A) override { return inner_->factorize(A); }
+  bool try_factorize(const SparseLower& A) override { return inner_->try_factorize(A); }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b, double enough) override {
+    allowed.push_back(enough / b.norm());
+    return inner_->solve(b, enough);
+  }
+  std::string_view name() const override { return "recording"; }
+  bool inexact() const override { return inexact_; }
+  std::vector<double> allowed;  ///< per solve, the allowed residual relative to ‖b‖ = ‖g‖
+
+ private:
+  std::unique_ptr<LinearSolver> inner_;
+  bool inexact_;
+};
+
+TEST(Newton, AnInexactSolverIsAllowedATenthOfTheResidualAtFirstAndLessAsItFalls) {
+  Toy toy(true), again(true);
+  Eigen::VectorXd x = kStart, y = kStart;
+  Recording inexact(true), exact(false);
+  const NewtonReport r = newton_solve(toy.problem, x, inexact, options(200, 1e-10));
+  const NewtonReport q = newton_solve(again.problem, y, exact, options(200, 1e-10));
+  ASSERT_TRUE(r.converged && q.converged);
+  ASSERT_GE(inexact.allowed.size(), 3u);
+  // η = min(0.1, √(‖g‖/‖g₀‖)): a tenth while ‖g‖ is near its first value, then shrinking with √‖g‖.
+  EXPECT_DOUBLE_EQ(inexact.allowed.front(), 0.1);
+  EXPECT_LT(inexact.allowed.back(), 0.01);
+  for (std::size_t k = 1; k < inexact.allowed.size(); ++k) EXPECT_LE(inexact.allowed[k], 0.1 * (1 + 1e-12));
+  // A solver that is not inexact gets only the absolute bound (a tenth of the Newton tolerance).
+  for (std::size_t k = 0; k < exact.allowed.size(); ++k) EXPECT_LT(exact.allowed[k], inexact.allowed[std::min(k, inexact.allowed.size() - 1)]);
+  EXPECT_NEAR((x - y).lpNorm<Eigen::Infinity>(), 0.0, 1e-8);
 }
 
 }  // namespace

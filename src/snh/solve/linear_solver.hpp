@@ -70,6 +70,9 @@ class LinearSolver {
   [[nodiscard]] virtual int factorizations() const { return 0; }
   /// The registry name it was made under.
   [[nodiscard]] virtual std::string_view name() const = 0;
+  /// True for a solver whose Newton steps may be inexact (inexact Newton: the first steps, far from the
+  /// answer, are solved only to a fraction of the residual; see newton_iterations).
+  [[nodiscard]] virtual bool inexact() const { return false; }
 };
 
 /// One entry of the registry.

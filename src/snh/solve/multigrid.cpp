@@ -685,6 +685,7 @@ class MultigridSolver final : public LinearSolver {
   }
   int last_iterations() const override { return iterations_; }
   std::string_view name() const override { return "mg"; }
+  bool inexact() const override { return true; }
 
  private:
   static const VolumeMesh& mesh_of(const SolverGeometry& g) {

@@ -45,8 +45,10 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
                                    : "the starting state is outside the energy's domain (an element has J <= 0)";
     return report;
   }
+  double r0 = 0.0;
   for (;;) {
     const double r = g.norm();
+    if (report.iterations == 0) r0 = r;
     report.residuals.push_back(r);
     report.residual = r;
     if (options.on_iteration) options.on_iteration(report.iterations, r);
@@ -71,8 +73,12 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     // no non-positive curvature) and gives a descent direction; otherwise the projected Hessian.
     Eigen::VectorXd d;
     bool have_step = false;
+    // Inexact Newton (Eisenstat and Walker's forcing terms, in the form η = min(0.1, √(‖g‖/‖g₀‖))): an
+    // iterative solver stops at a residual η‖g‖, loose while ‖g‖ is far above its first value and ever
+    // tighter as it falls, so that convergence stays superlinear; the stopping rule above is unchanged.
+    const double enough = solver.inexact() && r0 > 0.0 ? std::max(linear_enough, std::min(0.1, std::sqrt(r / r0)) * r) : linear_enough;
     if (try_true && solver.try_factorize(H.matrix)) {
-      d = solver.solve(-g, linear_enough);
+      d = solver.solve(-g, enough);
       report.linear_iterations += solver.last_iterations();
       have_step = d.allFinite() && g.dot(d) < 0.0;
       if (have_step) ++report.true_hessian_steps;
@@ -87,7 +93,7 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
         t = Clock::now();
       }
       solver.factorize(H.matrix);
-      d = solver.solve(-g, linear_enough);
+      d = solver.solve(-g, enough);
       report.linear_iterations += solver.last_iterations();
     }
     report.solve_seconds += seconds_since(t);
