@@ -21,6 +21,7 @@ void add_run_command(CLI::App& app, int& exit_code) {
     bool resume = false;
     bool no_report = false;
     bool force = false;
+    bool check = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -34,10 +35,15 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
   cmd->add_flag("--force", o->force, "Write into the output directory even if it is not empty and holds no snh run (files with the names of ours are replaced)");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
+  cmd->add_flag("--check", o->check,
+                "Check the scene and build its mesh (a flesh scene: the volume and the binding): print the sizes and exit "
+                "without running or writing anything")
+      ->excludes("--resume");
   cmd->callback([o, &exit_code]() {
     Scene scene = load_scene(o->scene);
     if (!o->out.empty()) scene.output.dir = o->out;
     scene.run.resume = o->resume;
+    scene.run.check_only = o->check;
     exit_code = run_scene_command(scene, o->threads, o->no_report, o->force);
   });
 }
@@ -46,6 +52,7 @@ int run_scene_command(Scene& scene, int threads, bool no_report, bool force) {
   scene.run.command_line = invocation();
   scene.run.live_progress = ::isatty(STDOUT_FILENO) != 0;
   if (threads > 0) omp_set_num_threads(threads);
+  if (scene.run.check_only) return run_scene(scene, std::cout).all_converged ? 0 : 1;
   install_stop_handlers();
   // The directory stays locked until the report is written: no other run can start there meanwhile.
   scene.run.lock = std::make_shared<RunDirectoryLock>(scene.output.dir, force);

@@ -31,6 +31,14 @@ out="$("$SNH" run "$work/inv.json" --out "$work/inv" 2>&1)"; code=$?
 [ "$code" -eq 1 ] && printf '%s' "$out" | grep -q "initial state is outside the domain of neo_hookean" && [ -f "$work/inv/000.obj" ] \
   && ok || bad "inverted start (exit $code): $out"
 
+# --check: the flesh scene's volume and sizes printed, exit 0, nothing written; a bad scene still exit 2.
+out="$("$SNH" run "$SCENES/hand_fist.json" --check --out "$work/checked" 2>&1)"; code=$?
+[ "$code" -eq 0 ] && printf '%s' "$out" | grep -q "^volume: hexahedral lattice at resolution 24 .*: [0-9]* cells" &&
+  printf '%s' "$out" | grep -Eq "^checked: [0-9]+ hexes, [0-9]+ vertices, [0-9]+ free DOFs; no frame run" && [ ! -e "$work/checked" ] \
+  && ok || bad "--check (exit $code): $out"
+out="$("$SNH" run "$work/typo.json" --check 2>&1)"; code=$?
+[ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "gravty: unknown key" && ok || bad "--check of a bad scene (exit $code): $out"
+
 # snh lab: tables by default, JSON with --json, lab.json and the runs' frames written.
 out="$("$SNH" lab --quick --energy stable_neo_hookean --out "$work/lab" 2>/dev/null)"; code=$?
 [ "$code" -eq 0 ] && printf '%s' "$out" | grep -q "^stable_neo_hookean .*stays at rest" && [ -f "$work/lab/lab.json" ] \

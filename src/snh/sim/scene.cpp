@@ -515,6 +515,13 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   };
 
   if (const std::shared_ptr<const Flesh> flesh = loaded->flesh) add_flesh_output(*flesh, s, sim, plan);
+  if (s.run.check_only) {
+    plan.header(log);
+    log << fmt::format("checked: {} {}, {} vertices, {} free DOFs; no frame run\n", mesh.cell_count(), cells, mesh.vertex_count(),
+                       sim.problem().dofs().free_count());
+    result.all_converged = true;
+    return result;
+  }
 
   RunResult run = run_simulation(sim, plan, log);
   result.frames = std::move(run.records);

@@ -143,6 +143,9 @@ struct RunControl {
   bool resume = false;         ///< continue the run in output.dir from its checkpoint (the last completed frame)
   std::string command_line;    ///< as the user typed it, for stats.json and the report
   bool live_progress = false;  ///< the log is a terminal: update a line per Newton iteration
+  /// Build the mesh (a flesh scene: its volume and binding) and the problem, print the run's header, and
+  /// stop before any frame: nothing is written.
+  bool check_only = false;
   /// The lock on the output directory if the caller holds it (run_directory.hpp); null: the run takes it.
   std::shared_ptr<RunDirectoryLock> lock;
 };
