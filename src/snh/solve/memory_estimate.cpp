@@ -36,7 +36,7 @@ constexpr double kReservedDirect = 170.0 * kMiB;
 // lattice vertex), and the coarse levels (an eighth more each); measured 58 MiB over PCG at hex res 30.
 constexpr double kMultigridPerVertex = 3.0 * 1024.0;
 
-bool is_direct(std::string_view solver) { return solver != "pcg" && solver != "mg"; }
+bool is_direct(std::string_view solver) { return solver != "pcg" && solver != "mg" && solver != "amg"; }
 
 }  // namespace
 
