@@ -183,6 +183,31 @@ TEST(AlgebraicMultigrid, WorksOnAPartialHexLatticeWithHolesAndTwoPiecesToo) {
   check_vcycle(partial_lattice(), 3, 40, Coarsening::aggregation);
 }
 
+// amg keeps its coarse levels from an earlier Newton matrix while they serve: the V-cycle with old coarse
+// levels and a new finest level is still symmetric positive definite, and CG with it converges.
+TEST(AlgebraicMultigrid, OldCoarseLevelsKeepTheVCycleSymmetricPositive) {
+  const VolumeMesh mesh = box_tets(10);
+  System first(mesh, pins(mesh), 7), second(mesh, pins(mesh), 8);
+  const SparseLower& A = second.H.matrix;
+  MultigridPreconditioner M(mesh, first.problem.dofs().free_index(), Coarsening::aggregation);
+  ASSERT_TRUE(M.compute(first.H.matrix));
+  ASSERT_TRUE(M.compute(A, 0.0, false));
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> n;
+  for (int trial = 0; trial < 5; ++trial) {
+    Eigen::VectorXd x(A.rows()), y(A.rows()), Mx, My;
+    for (Eigen::Index i = 0; i < A.rows(); ++i) x[i] = n(rng), y[i] = n(rng);
+    M.apply(x, Mx);
+    M.apply(y, My);
+    EXPECT_NEAR(y.dot(Mx), x.dot(My), 1e-12 * Mx.norm() * y.norm());
+    EXPECT_GT(x.dot(Mx), 0.0);
+  }
+  Eigen::VectorXd b(A.rows()), x;
+  for (Eigen::Index i = 0; i < b.size(); ++i) b[i] = n(rng);
+  EXPECT_LE(iterations_with(A, M, b, x), 60);
+  EXPECT_LE((A.selfadjointView<Eigen::Lower>() * x - b).norm(), 1e-10 * b.norm());
+}
+
 TEST(AlgebraicMultigrid, NeedsTheMeshBehindTheMatrixAndSaysSoInOneLine) {
   const VolumeMesh tets = box_tets(2);
   const std::vector<int> free(3 * tets.vertex_count(), 0), short_index(5, 0);

@@ -198,7 +198,8 @@ struct MultigridPreconditioner::Impl {
   void aggregate();
   void coarse_pattern(std::size_t l);
   void structure(const SparseLower& A);
-  bool values(const SparseLower& A, double shift);
+  bool values(const SparseLower& A, double shift, bool refresh);
+  bool coarse_current = false;  ///< the coarse levels were made from a matrix of the current structure
   bool invert_diagonal(Level& L);
   void smooth_prolongator(std::size_t l);
   void galerkin(Level& fine, Level& coarse_level);
@@ -613,7 +614,7 @@ bool MultigridPreconditioner::Impl::invert_diagonal(Level& L) {
   return true;
 }
 
-bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift) {
+bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift, bool refresh) {
   Level& L0 = levels.front();
   // Column c (DOF b of node j) of A's lower triangle: entry (i a, j b), i ≥ j, is block (i, j)'s entry (a, b).
   // Columns come in increasing j, so each row's cursor only moves forward to block (i, j).
@@ -636,6 +637,8 @@ bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift) {
     for (int a = 0; a < 3; ++a)
       if (L0.free[3 * i + a]) d[4 * a] += shift;
   }
+  if (!refresh && coarse_current && levels.size() > 1) return invert_diagonal(L0);
+  coarse_current = false;
   for (std::size_t l = 0; l + 1 < levels.size(); ++l) {
     if (!invert_diagonal(levels[l])) return false;
     if (coarsening == Coarsening::aggregation) smooth_prolongator(l);
@@ -643,7 +646,8 @@ bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift) {
   }
   const Level& K = levels.back();
   for (std::size_t e = 0; e < coarse_value.size(); ++e) coarse.valuePtr()[e] = K.A.val[coarse_value[e]];
-  return coarse.rows() == 0 || direct->try_factorize(coarse);
+  coarse_current = coarse.rows() == 0 || direct->try_factorize(coarse);
+  return coarse_current;
 }
 
 namespace {
@@ -796,16 +800,17 @@ MultigridPreconditioner::MultigridPreconditioner(const VolumeMesh& mesh, const s
 
 MultigridPreconditioner::~MultigridPreconditioner() = default;
 
-bool MultigridPreconditioner::compute(const SparseLower& A, double shift) {
+bool MultigridPreconditioner::compute(const SparseLower& A, double shift, bool coarse) {
   if (A.rows() != static_cast<Eigen::Index>(impl_->row_dof.size()) || A.cols() != A.rows())
     throw std::invalid_argument(fmt::format("multigrid: a {}x{} matrix for {} free DOFs", A.rows(), A.cols(), impl_->row_dof.size()));
   const std::uint64_t pattern = pattern_hash(A);
   if (!impl_->have_structure || pattern != impl_->pattern) {
     impl_->structure(A);
+    impl_->coarse_current = false;
     impl_->pattern = pattern;
     impl_->have_structure = true;
   }
-  return impl_->values(A, shift);
+  return impl_->values(A, shift, coarse);
 }
 
 void MultigridPreconditioner::multiply(const Eigen::VectorXd& p, Eigen::VectorXd& Ap) const { impl_->product(p, Ap); }
@@ -839,10 +844,10 @@ namespace {
 class MultigridSolver final : public LinearSolver {
  public:
   MultigridSolver(const LinearSolverOptions& o, const SolverGeometry& g, Coarsening how)
-      : name_(how == Coarsening::lattice ? "mg" : "amg"), tolerance_(o.tolerance), vcycle_(mesh_of(g, name_), *g.free_index, how) {}
-  bool try_factorize(const SparseLower& A) override { return vcycle_.compute(A); }
+      : how_(how), name_(how == Coarsening::lattice ? "mg" : "amg"), tolerance_(o.tolerance), vcycle_(mesh_of(g, name_), *g.free_index, how) {}
+  bool try_factorize(const SparseLower& A) override { return compute(A); }
   double factorize(const SparseLower& A) override {
-    if (vcycle_.compute(A)) return 0.0;
+    if (compute(A)) return 0.0;
     // As the direct solvers: a shift doubling from 1e-10 of the largest diagonal entry, up to Gershgorin's bound.
     Eigen::VectorXd row_abs = Eigen::VectorXd::Zero(A.rows());
     for (Eigen::Index c = 0; c < A.outerSize(); ++c)
@@ -863,6 +868,7 @@ class MultigridSolver final : public LinearSolver {
     const MatrixProduct A = [this](const Eigen::VectorXd& p, Eigen::VectorXd& Ap) { vcycle_.multiply(p, Ap); };
     const CgResult r = conjugate_gradients(A, b, vcycle_, std::max(tolerance_ * b.norm(), enough), max_iterations, x);
     iterations_ = r.iterations;
+    if (fresh_iterations_ < 0) fresh_iterations_ = r.iterations;
     return r.status == CgStatus::converged ? x : Eigen::VectorXd::Constant(b.size(), std::nan(""));
   }
   int last_iterations() const override { return iterations_; }
@@ -874,8 +880,20 @@ class MultigridSolver final : public LinearSolver {
       throw std::invalid_argument(fmt::format("the multigrid solver ({}) needs the mesh behind the matrix (use cholmod, ldlt or pcg)", name));
     return *g.mesh;
   }
+  /// The V-cycle for A. amg keeps its coarse levels (the costly part: smoothed P and the Galerkin products)
+  /// from an earlier Newton matrix while the last solve needed at most half as many iterations again as
+  /// the first solve after they were made; mg makes them for every matrix.
+  bool compute(const SparseLower& A) {
+    const bool coarse = how_ == Coarsening::lattice || fresh_iterations_ < 0 || 2 * iterations_ > 3 * fresh_iterations_;
+    if (coarse) fresh_iterations_ = -1;
+    if (vcycle_.compute(A, 0.0, coarse)) return true;
+    fresh_iterations_ = -1;  // factorize() then shifts: the coarse levels are made for each shifted try
+    return false;
+  }
+  Coarsening how_;
   std::string_view name_;
   double tolerance_;
+  int fresh_iterations_ = -1;  ///< iterations of the first solve with the current coarse levels (−1: none yet)
   MultigridPreconditioner vcycle_;
   int iterations_ = 0;
 };

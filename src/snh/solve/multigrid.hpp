@@ -60,7 +60,10 @@ class MultigridPreconditioner final : public Preconditioner {
   /// Takes the values of A (lower triangle on the free DOFs); the hierarchy's structure is rebuilt only
   /// when A's pattern changes. `shift` ≥ 0 is added to A's diagonal first. False where A (+ shift) is shown
   /// not to be positive definite (a nodal diagonal block or the coarsest operator is not).
-  [[nodiscard]] bool compute(const SparseLower& A, double shift = 0.0);
+  /// coarse = false keeps the coarse levels of the last compute() (same pattern), refreshing only the finest
+  /// level: the V-cycle stays symmetric positive definite (its coarse correction uses an older positive
+  /// definite Pᵀ A P), just weaker as A drifts from that matrix.
+  [[nodiscard]] bool compute(const SparseLower& A, double shift = 0.0, bool coarse = true);
   void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override;
   /// Ap = (A + shift) p for the A and shift of the last compute(), from the nodal blocks (no copy of A is kept).
   void multiply(const Eigen::VectorXd& p, Eigen::VectorXd& Ap) const;
