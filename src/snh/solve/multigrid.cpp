@@ -187,7 +187,7 @@ struct MultigridPreconditioner::Impl {
   SparseLower coarse;
   std::unique_ptr<LinearSolver> direct = make_ldlt_solver();  // small: no BLAS (its buffers and threads) needed
   Eigen::VectorXd coarse_b;
-  std::vector<double> row;  ///< work: one block row of A W (9 per coarse node)
+  std::vector<double> row;  ///< work: one block row of A P (9 per coarse node)
   std::vector<int> touched, where_coarse;
 
   Coarsening coarsening;
@@ -247,8 +247,9 @@ MultigridPreconditioner::Impl::Impl(const VolumeMesh& mesh, const std::vector<in
   grow([this] { coarsen(); });
 }
 
-/// Appends levels, each by `coarsen`, until the last has at most kCoarsestUnknowns (or kCoarsestAggregationUnknowns) free DOFs; a level that
-/// keeps more than kMinReduction of the one before (or none) is dropped and ends the hierarchy.
+/// Appends levels, each by `coarsen`, until the last has at most kCoarsestUnknowns (aggregation:
+/// kCoarsestAggregationUnknowns) free DOFs; a level that keeps more than kMinReduction of the one before (or
+/// none) is dropped and ends the hierarchy.
 void MultigridPreconditioner::Impl::grow(const std::function<void()>& coarsen) {
   const Eigen::Index coarsest = coarsening == Coarsening::lattice ? kCoarsestUnknowns : kCoarsestAggregationUnknowns;
   while (levels.size() < kMaxLevels && levels.back().unknowns() > coarsest) {
@@ -544,8 +545,7 @@ void MultigridPreconditioner::Impl::structure(const SparseLower& A) {
 /// The next level's A from this one's, Pᵀ A P, one fine block row at a time: the row's part of A P (A's
 /// diagonal blocks halved) spread to the row's parents I, each product Y = P_iIᵀ (A P)_iK for the coarse
 /// pair (I, K) stored as Y at (I, K) below the diagonal, Yᵀ at (K, I) above it, Y + Yᵀ on it (A is
-/// symmetric); then the coarse
-/// DOFs that are not free masked out.
+/// symmetric); then the coarse DOFs that are not free masked out.
 void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
   std::fill(C.A.val.begin(), C.A.val.end(), 0.0);
   row.assign(9 * static_cast<std::size_t>(C.nodes), 0.0);
