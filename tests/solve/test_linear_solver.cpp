@@ -145,20 +145,20 @@ TEST(FactorReuse, CanBeTurnedOff) {
 }
 
 TEST(LinearSolver, Registry) {
-  EXPECT_EQ(linear_solver_names(), (std::vector<std::string>{"cholmod", "ldlt", "pcg", "mg"}));
+  EXPECT_EQ(linear_solver_names(), (std::vector<std::string>{"cholmod", "ldlt", "pcg", "mg", "amg"}));
   EXPECT_TRUE(is_linear_solver("pcg"));
   EXPECT_FALSE(is_linear_solver("umfpack"));
   for (const auto& info : linear_solvers()) {
-    if (info.name != "mg") {
+    if (info.name != "mg" && info.name != "amg") {
       EXPECT_EQ(make_linear_solver({.name = std::string(info.name)})->name(), info.name);
     }
   }
-  // "mg" needs the mesh behind the matrix (test_multigrid).
+  // "mg" and "amg" need the mesh behind the matrix (test_multigrid).
   try {
     (void)make_linear_solver({.name = "umfpack"});
     FAIL() << "an unknown name must be refused";
   } catch (const std::invalid_argument& e) {
-    EXPECT_STREQ(e.what(), "unknown linear solver 'umfpack' (known: cholmod, ldlt, pcg, mg)");
+    EXPECT_STREQ(e.what(), "unknown linear solver 'umfpack' (known: cholmod, ldlt, pcg, mg, amg)");
   }
 }
 

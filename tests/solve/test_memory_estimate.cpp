@@ -40,7 +40,8 @@ TEST(MemoryEstimate, BracketsTheMeasuredPeaks) {
                             Measured{20, CellType::tet4, "pcg", 130}, Measured{25, CellType::hex8, "cholmod", 623},
                             Measured{25, CellType::tet4, "pcg", 243}, Measured{30, CellType::tet4, "cholmod", 1142},
                             Measured{30, CellType::hex8, "cholmod", 1177}, Measured{30, CellType::hex8, "pcg", 369},
-                            Measured{20, CellType::hex8, "mg", 119}, Measured{30, CellType::hex8, "mg", 382}}) {
+                            Measured{20, CellType::hex8, "mg", 119}, Measured{30, CellType::hex8, "mg", 382},
+                            Measured{20, CellType::tet4, "amg", 141}, Measured{30, CellType::tet4, "amg", 460}}) {
     const double e = estimate_memory(lattice_size(m.res, m.type), m.solver).resident_bytes / kMiB;
     EXPECT_GT(e, m.rss_mib) << m.res << " " << m.solver;
     EXPECT_LT(e, 2.0 * m.rss_mib) << m.res << " " << m.solver;

@@ -1,6 +1,8 @@
-// Geometric multigrid (issue 15): lattice coordinates from the cells, the V-cycle is symmetric and positive
-// definite, conjugate gradients with it converge in few iterations on hex elasticity with pins (whole
-// lattices and partial ones), and the solver refuses meshes that are not lattices.
+// Multigrid (issue 15). Geometric (mg): lattice coordinates from the cells, the V-cycle is symmetric and
+// positive definite, conjugate gradients with it converge in few iterations on hex elasticity with pins
+// (whole lattices and partial ones), and the solver refuses meshes that are not lattices. Algebraic (amg,
+// smoothed aggregation): the same V-cycle properties on tets, iterations that stay flat as the mesh is
+// refined, whole runs that match CHOLMOD and do not depend on the thread count.
 #include <gtest/gtest.h>
 #include <omp.h>
 #include <unistd.h>
@@ -109,12 +111,16 @@ TEST(LatticeCoordinates, MeshesThatAreNotLatticesAreRefused) {
 
 /// xᵀ M y = yᵀ M x and xᵀ M x > 0 on random vectors; PCG with the V-cycle converges in a fraction of Jacobi's
 /// iterations, to the same solution.
-void check_vcycle(const VolumeMesh& mesh, int levels_at_least, int max_iterations) {
+/// Returns the V-cycle's CG iterations.
+int check_vcycle(const VolumeMesh& mesh, int levels_at_least, int max_iterations, Coarsening how = Coarsening::lattice) {
   const std::vector<std::uint8_t> kinematic = pins(mesh);
   System s(mesh, kinematic, 7);
   const SparseLower& A = s.H.matrix;
-  MultigridPreconditioner M(mesh, s.problem.dofs().free_index());
-  ASSERT_TRUE(M.compute(A));
+  MultigridPreconditioner M(mesh, s.problem.dofs().free_index(), how);
+  if (!M.compute(A)) {
+    ADD_FAILURE() << "the V-cycle found a positive definite matrix not positive definite";
+    return 0;
+  }
   EXPECT_GE(M.levels(), levels_at_least);
   std::mt19937_64 rng(3);
   std::normal_distribution<double> n;
@@ -131,37 +137,105 @@ void check_vcycle(const VolumeMesh& mesh, int levels_at_least, int max_iteration
   for (Eigen::Index i = 0; i < size; ++i) b[i] = n(rng);
   Eigen::VectorXd x_mg, x_jacobi;
   const int mg = iterations_with(A, M, b, x_mg), jacobi = iterations_with(A, JacobiPreconditioner(A), b, x_jacobi);
-  std::cout << mesh.cell_count() << " hexes, " << M.levels() << " levels: mg " << mg << ", Jacobi " << jacobi << " CG iterations\n";
+  std::cout << mesh.cell_count() << " " << to_string(mesh.type) << " cells, " << M.levels() << " levels: V-cycle " << mg
+            << ", Jacobi " << jacobi << " CG iterations\n";
   EXPECT_LE(mg, max_iterations);
   EXPECT_LT(5 * mg, jacobi);
   EXPECT_LE((x_mg - x_jacobi).norm(), 1e-7 * x_jacobi.norm());
+  return mg;
 }
 
 TEST(Multigrid, VCycleIsSymmetricPositiveAndConvergesFastOnAPinnedBox) { check_vcycle(box_hexes(16), 2, 30); }
 
-TEST(Multigrid, APartialLatticeWithHolesAndTwoPiecesWorks) {
-  // A box of 20³ cells less a tunnel along y, a cavity, and a slab along z that splits it into two pieces.
+/// A box of 20³ hexes less a tunnel along y, a cavity, and a slab along z that splits it into two pieces.
+VolumeMesh partial_lattice() {
   const int res = 20;
-  const VolumeMesh mesh = keep_cells(box_hexes(res), [&](Eigen::Index c) {
+  return keep_cells(box_hexes(res), [&](Eigen::Index c) {
     const int i = static_cast<int>(c % res), j = static_cast<int>(c / res % res), k = static_cast<int>(c / (res * res));
     const bool tunnel = i >= 3 && i < 6 && k >= 4 && k < 9;
     const bool cavity = i >= 10 && i < 15 && j >= 7 && j < 12 && k >= 11 && k < 16;
     const bool slab = k == 17;
     return !tunnel && !cavity && !slab;
   });
+}
+
+TEST(Multigrid, APartialLatticeWithHolesAndTwoPiecesWorks) {
+  const VolumeMesh mesh = partial_lattice();
   check_vcycle(mesh, 2, 40);
   const std::vector<int> piece = lattice_coordinates(mesh).piece;
   EXPECT_EQ(*std::max_element(piece.begin(), piece.end()), 1) << "two pieces";
 }
 
-TEST(Multigrid, SolverRecognisesAnIndefiniteMatrixAndShiftsWhenRequired) {
-  const VolumeMesh mesh = box_hexes(6);
+// Smoothed aggregation on tets (any mesh: no lattice needed), pinned as above; the coarse levels are made
+// from the matrix, so a tet box of 12³ cells (6 591 free DOFs) has three levels.
+TEST(AlgebraicMultigrid, VCycleIsSymmetricPositiveAndConvergesFastOnAPinnedTetBox) {
+  check_vcycle(box_tets(12), 3, 40, Coarsening::aggregation);
+}
+
+// The iterations stay about flat as the mesh is refined (h-independence): res 6 to 18, 1 029 to 20 577 free DOFs.
+TEST(AlgebraicMultigrid, IterationsStayFlatAsTheTetMeshIsRefined) {
+  std::vector<int> its;
+  for (int res : {6, 12, 18}) its.push_back(check_vcycle(box_tets(res), 2, 45, Coarsening::aggregation));
+  EXPECT_LE(its.back(), 2 * its.front()) << "res 18 against res 6";
+}
+
+TEST(AlgebraicMultigrid, WorksOnAPartialHexLatticeWithHolesAndTwoPiecesToo) {
+  check_vcycle(partial_lattice(), 3, 40, Coarsening::aggregation);
+}
+
+// amg keeps its coarse levels from an earlier Newton matrix while they serve: the V-cycle with old coarse
+// levels and a new finest level is still symmetric positive definite, and CG with it converges.
+TEST(AlgebraicMultigrid, OldCoarseLevelsKeepTheVCycleSymmetricPositive) {
+  const VolumeMesh mesh = box_tets(10);
+  System first(mesh, pins(mesh), 7), second(mesh, pins(mesh), 8);
+  const SparseLower& A = second.H.matrix;
+  MultigridPreconditioner M(mesh, first.problem.dofs().free_index(), Coarsening::aggregation);
+  ASSERT_TRUE(M.compute(first.H.matrix));
+  ASSERT_TRUE(M.compute(A, 0.0, false));
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> n;
+  for (int trial = 0; trial < 5; ++trial) {
+    Eigen::VectorXd x(A.rows()), y(A.rows()), Mx, My;
+    for (Eigen::Index i = 0; i < A.rows(); ++i) x[i] = n(rng), y[i] = n(rng);
+    M.apply(x, Mx);
+    M.apply(y, My);
+    EXPECT_NEAR(y.dot(Mx), x.dot(My), 1e-12 * Mx.norm() * y.norm());
+    EXPECT_GT(x.dot(Mx), 0.0);
+  }
+  Eigen::VectorXd b(A.rows()), x;
+  for (Eigen::Index i = 0; i < b.size(); ++i) b[i] = n(rng);
+  EXPECT_LE(iterations_with(A, M, b, x), 60);
+  EXPECT_LE((A.selfadjointView<Eigen::Lower>() * x - b).norm(), 1e-10 * b.norm());
+}
+
+TEST(AlgebraicMultigrid, NeedsTheMeshBehindTheMatrixAndSaysSoInOneLine) {
+  const VolumeMesh tets = box_tets(2);
+  const std::vector<int> free(3 * tets.vertex_count(), 0), short_index(5, 0);
+  EXPECT_TRUE(amg_applicable({.mesh = &tets, .free_index = &free}));
+  EXPECT_FALSE(amg_applicable({.mesh = &tets}));
+  EXPECT_FALSE(amg_applicable({.mesh = &tets, .free_index = &short_index}));
+  EXPECT_FALSE(amg_applicable({}));
+  try {
+    (void)make_linear_solver({.name = "amg"});
+    FAIL() << "amg with no mesh behind the matrix must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "the multigrid solver (amg) needs the mesh behind the matrix (use cholmod, ldlt or pcg)");
+  }
+  EXPECT_THROW((void)make_linear_solver({.name = "amg"}, {.mesh = &tets, .free_index = &short_index}), std::invalid_argument);
+  EXPECT_EQ(make_linear_solver({.name = "amg"}, {.mesh = &tets, .free_index = &free})->name(), "amg");
+}
+
+class IndefiniteMatrix : public testing::TestWithParam<const char*> {};
+
+TEST_P(IndefiniteMatrix, SolverRecognisesItAndShiftsWhenRequired) {
+  const std::string name = GetParam();
+  const VolumeMesh mesh = name == "mg" ? box_hexes(6) : box_tets(6);
   System s(mesh, pins(mesh), 5);
   SparseLower A = s.H.matrix;
   for (Eigen::Index c = 0; c < A.outerSize(); ++c) A.valuePtr()[A.outerIndexPtr()[c]] -= 50.0;  // far negative diagonal
   const std::vector<int>& free = s.problem.dofs().free_index();
-  auto solver = make_linear_solver({.name = "mg"}, {.mesh = &mesh, .free_index = &free});
-  EXPECT_EQ(solver->name(), "mg");
+  auto solver = make_linear_solver({.name = name}, {.mesh = &mesh, .free_index = &free});
+  EXPECT_EQ(solver->name(), name);
   EXPECT_FALSE(solver->try_factorize(A));
   EXPECT_GT(solver->factorize(A), 0.0);
   const Eigen::VectorXd b = Eigen::VectorXd::Ones(A.rows());
@@ -172,6 +246,8 @@ TEST(Multigrid, SolverRecognisesAnIndefiniteMatrixAndShiftsWhenRequired) {
   EXPECT_LE((s.H.matrix.selfadjointView<Eigen::Lower>() * x - b).norm(), 1e-10 * b.norm());
   EXPECT_GT(solver->last_iterations(), 0);
 }
+
+INSTANTIATE_TEST_SUITE_P(Multigrid, IndefiniteMatrix, testing::Values("mg", "amg"));
 
 namespace fs = std::filesystem;
 
@@ -188,10 +264,10 @@ std::string contents(const fs::path& p) {
   return s.str();
 }
 
-/// The stretch test at hex res 10 (3 267 free DOFs: a two-level hierarchy) to a 2× stretch in 8 steps.
-StretchResult stretch(const std::string& solver, const fs::path& out) {
+/// The stretch test at res 10 (hexes: 3 267 free DOFs, a two-level hierarchy) to a 2× stretch in 8 steps.
+StretchResult stretch(const std::string& solver, const fs::path& out, CellType element = CellType::hex8) {
   StretchConfig c;
-  c.element = CellType::hex8;
+  c.element = element;
   c.resolution = 10;
   c.steps = 8;
   c.stretch = 2.0;
@@ -201,15 +277,20 @@ StretchResult stretch(const std::string& solver, const fs::path& out) {
   return run_stretch(c, log);
 }
 
-// A whole stretch run with mg gives the direct solver's answer to the Newton tolerance (‖f‖ < 1e-3: the
-// positions differ by about ‖f‖ over the stiffness), and the same run with 1 and 2 threads is bit-identical.
-TEST(MultigridRuns, StretchMatchesTheDirectSolverAndIsTheSameForOneAndTwoThreads) {
-  const fs::path direct_dir = fresh_dir("direct"), one = fresh_dir("one"), two = fresh_dir("two");
-  const StretchResult direct = stretch("cholmod", direct_dir);
+// A whole stretch run with mg (hexes) or amg (tets) gives the direct solver's answer to the Newton tolerance
+// (‖f‖ < 1e-3: the positions differ by about ‖f‖ over the stiffness), and the same run with 1 and 2 threads
+// is bit-identical.
+class StretchRun : public testing::TestWithParam<const char*> {};
+
+TEST_P(StretchRun, MatchesTheDirectSolverAndIsTheSameForOneAndTwoThreads) {
+  const std::string solver = GetParam();
+  const CellType element = solver == "mg" ? CellType::hex8 : CellType::tet4;
+  const fs::path direct_dir = fresh_dir(solver + "_direct"), one = fresh_dir(solver + "_one"), two = fresh_dir(solver + "_two");
+  const StretchResult direct = stretch("cholmod", direct_dir, element);
   omp_set_num_threads(1);
-  const StretchResult mg1 = stretch("mg", one);
+  const StretchResult mg1 = stretch(solver, one, element);
   omp_set_num_threads(2);
-  const StretchResult mg2 = stretch("mg", two);
+  const StretchResult mg2 = stretch(solver, two, element);
   ASSERT_TRUE(direct.all_converged && mg1.all_converged && mg2.all_converged);
   EXPECT_NEAR(mg1.middle_width, direct.middle_width, 1e-4);
   int cg = 0;
@@ -236,6 +317,8 @@ TEST(MultigridRuns, StretchMatchesTheDirectSolverAndIsTheSameForOneAndTwoThreads
   for (const fs::path& d : {direct_dir, one, two}) fs::remove_all(d);
 }
 
+INSTANTIATE_TEST_SUITE_P(MultigridRuns, StretchRun, testing::Values("mg", "amg"));
+
 TEST(MultigridRuns, TetMeshesAreRefusedWithOneLine) {
   StretchConfig c;
   c.element = CellType::tet4;
@@ -253,17 +336,20 @@ TEST(MultigridRuns, TetMeshesAreRefusedWithOneLine) {
   fs::remove_all(c.out);
 }
 
-// A flesh lattice (only the cubes that overlap a bent limb, its bone-bound vertices kinematic): mg gives the
-// direct solver's answer.
-TEST(MultigridRuns, AFleshLatticeMatchesTheDirectSolver) {
-  const fs::path dir = fresh_dir("flesh");
+// A flesh lattice (only the cubes that overlap a bent limb, its bone-bound vertices kinematic) with mg, and
+// the limb's tet mesh with amg: the direct solver's answer.
+class FleshRun : public testing::TestWithParam<const char*> {};
+
+TEST_P(FleshRun, MatchesTheDirectSolver) {
+  const std::string multigrid = GetParam();
+  const fs::path dir = fresh_dir("flesh_" + multigrid);
   fs::create_directories(dir);
   test::write_limb_gltf(dir / "limb.gltf");
   Eigen::VectorXd x[2];
   int k = 0;
-  for (const char* solver : {"cholmod", "mg"}) {
+  for (const std::string& solver : {std::string("cholmod"), multigrid}) {
     const nlohmann::json j = {
-        {"flesh", {{"model", (dir / "limb.gltf").string()}, {"volume", "lattice"}, {"resolution", 24}}},
+        {"flesh", {{"model", (dir / "limb.gltf").string()}, {"volume", multigrid == "mg" ? "lattice" : "tets"}, {"resolution", 24}}},
         {"frames", 3},
         {"solver", {{"linear", solver}}},
         {"output", {{"dir", (dir / solver).string()}}}};
@@ -271,13 +357,15 @@ TEST(MultigridRuns, AFleshLatticeMatchesTheDirectSolver) {
     std::ostringstream log;
     const SceneResult r = run_scene(s, log);
     ASSERT_TRUE(r.all_converged) << solver << ": " << r.failure;
-    if (k == 0) std::cout << r.vertices << " lattice vertices, " << r.cells << " hexes\n";
+    if (k == 0) std::cout << r.vertices << " vertices, " << r.cells << " cells\n";
     x[k++] = r.final_positions;
   }
   const double size = x[0].cwiseAbs().maxCoeff();
   EXPECT_LT((x[1] - x[0]).cwiseAbs().maxCoeff(), 1e-5 * size);
   fs::remove_all(dir);
 }
+
+INSTANTIATE_TEST_SUITE_P(MultigridRuns, FleshRun, testing::Values("mg", "amg"));
 
 }  // namespace
 }  // namespace snh

@@ -32,6 +32,8 @@ const std::vector<LinearSolverInfo>& linear_solvers() {
        [](const LinearSolverOptions& o, const SolverGeometry&) { return make_pcg_solver(o.tolerance); }},
       {"mg", "conjugate gradients with a geometric multigrid V-cycle (hexahedral lattices only)",
        [](const LinearSolverOptions& o, const SolverGeometry& g) { return make_multigrid_solver(o, g); }},
+      {"amg", "conjugate gradients with an algebraic (smoothed-aggregation) multigrid V-cycle (any mesh)",
+       [](const LinearSolverOptions& o, const SolverGeometry& g) { return make_amg_solver(o, g); }},
   };
   return registry;
 }

@@ -5,6 +5,7 @@
 //   ldlt     Eigen's simplicial LDLᵀ
 //   pcg      conjugate gradients with a Jacobi preconditioner
 //   mg       conjugate gradients with a geometric multigrid V-cycle, for hex lattices (multigrid.hpp)
+//   amg      conjugate gradients with a smoothed-aggregation multigrid V-cycle, any mesh (multigrid.hpp)
 // A new solver is one more registry entry; the public conjugate gradients (conjugate_gradient.hpp) take
 // any Preconditioner, and SolverGeometry carries what a geometric preconditioner (mg) needs to know about
 // the mesh behind the matrix.

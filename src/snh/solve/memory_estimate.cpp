@@ -34,9 +34,11 @@ constexpr double kReservedDirect = 170.0 * kMiB;
 
 // Multigrid (mg): the Newton matrix in 3×3 nodal blocks, both triangles (27 blocks of 72 bytes per
 // lattice vertex), and the coarse levels (an eighth more each); measured 58 MiB over PCG at hex res 30.
+// Algebraic multigrid (amg) holds the same blocks (15 per vertex on tets) and its prolongator (about 16
+// blocks per vertex); measured 39 MiB over PCG at tet res 30, so the same allowance covers it.
 constexpr double kMultigridPerVertex = 3.0 * 1024.0;
 
-bool is_direct(std::string_view solver) { return solver != "pcg" && solver != "mg"; }
+bool is_direct(std::string_view solver) { return solver != "pcg" && solver != "mg" && solver != "amg"; }
 
 }  // namespace
 
@@ -56,7 +58,7 @@ MemoryEstimate estimate_memory(const ProblemSize& size, std::string_view solver,
   const double npc = size.nodes_per_cell;
   double resident = kBaseResident + kPerVertex * v + kPerCellNodePair * c * npc * npc;
   if (is_direct(solver)) resident += kFactorPerN43 * std::pow(3.0 * v, 4.0 / 3.0);
-  if (solver == "mg") resident += kMultigridPerVertex * v;
+  if (solver == "mg" || solver == "amg") resident += kMultigridPerVertex * v;
   const double t = std::max(1u, threads ? threads : std::thread::hardware_concurrency());
   const double reserved = kReservedFixed + (t - 1.0) * kReservedPerExtraThread + (is_direct(solver) ? kReservedDirect : 0.0);
   return {.resident_bytes = resident, .address_space_bytes = resident + reserved};

@@ -4,11 +4,13 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <fmt/format.h>
 
 #include "snh/solve/direct_solver.hpp"
@@ -16,14 +18,19 @@
 namespace snh {
 namespace {
 
-/// A level with at most this many free DOFs is solved directly.
+/// A level with at most this many free DOFs is solved directly: lattice levels (sparse: 81 blocks per node
+/// at most), and aggregation's (whose coarse operators are much denser, their factor nearly full).
 constexpr Eigen::Index kCoarsestUnknowns = 3000;
+constexpr Eigen::Index kCoarsestAggregationUnknowns = 500;
 /// Coarsening stops where it keeps more than this fraction of the unknowns (a lattice too thin to coarsen).
 constexpr double kMinReduction = 0.6;
 constexpr int kMaxLevels = 16;
 
 /// Offset of hex corner k from corner 0 in lattice units (VolumeMesh's corner order).
 Eigen::Vector3i corner_offset(int k) { return {k & 1, (k >> 1) & 1, (k >> 2) & 1}; }
+
+using Block3 = Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
+using ConstBlock3 = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
 
 /// A symmetric matrix in 3×3 nodal blocks, its lower triangle stored: row i's blocks (i, j ≤ i) at
 /// start[i] .. start[i+1], columns sorted (the diagonal block last), values row-major (9 per block).
@@ -53,41 +60,39 @@ void sort_unique(std::vector<int>& v) {
   v.erase(std::unique(v.begin(), v.end()), v.end());
 }
 
-/// A sparse node-to-node map with weights (prolongation W: fine node → coarse parents, or its transpose).
-struct Weights {
+/// A prolongation P from a coarse level to a fine one in 3×3 blocks: per fine node, its coarse parents I with
+/// the block P_iI (row-major, 9 per entry). The lattice's trilinear weights are multiples of the identity;
+/// smoothed aggregation's blocks are full.
+struct Transfer {
   std::vector<int> start{0}, node;
-  std::vector<double> weight;
+  std::vector<double> block;
+  void push(int parent, const double* b) {
+    node.push_back(parent);
+    block.insert(block.end(), b, b + 9);
+  }
 };
-
-Weights transpose(const Weights& w, int columns) {
-  Weights t;
-  t.start.assign(columns + 1, 0);
-  for (int n : w.node) ++t.start[n + 1];
-  for (int c = 0; c < columns; ++c) t.start[c + 1] += t.start[c];
-  t.node.resize(w.node.size());
-  t.weight.resize(w.node.size());
-  std::vector<int> next(t.start.begin(), t.start.end() - 1);
-  for (int r = 0; r + 1 < static_cast<int>(w.start.size()); ++r)
-    for (int p = w.start[r]; p < w.start[r + 1]; ++p) {
-      const int q = next[w.node[p]]++;
-      t.node[q] = r;
-      t.weight[q] = w.weight[p];
-    }
-  return t;
-}
 
 struct Level {
   int nodes = 0;
   std::vector<std::uint8_t> free;       ///< 3 per node
+  // The lattice's (geometric coarsening):
   std::vector<Eigen::Vector3i> at;      ///< lattice coordinates
   std::vector<int> piece;               ///< connected piece
   std::vector<std::array<int, 8>> cells;
+  // Smoothed aggregation's:
+  std::vector<double> near_null;        ///< 18 per node: the rigid-body modes' rows (3×6, row-major)
+  std::vector<int> aggregate;           ///< per node, its aggregate (−1: a node with no free DOF)
+  std::vector<double> tentative;        ///< 18 per node: its rows of the tentative prolongator (3×6)
+  std::vector<int> full_start, full_slot;  ///< per node, every block of its row (both triangles), by slot
+  std::vector<int> full_node;           ///< … and the column node (> row: the stored block is (col, row)ᵀ)
   Blocks A;                             ///< masked: rows and columns of DOFs that are not free are zero
   std::vector<int> diagonal;            ///< per node, the slot of its diagonal block
   std::vector<double> inverse;          ///< 9 per node: the inverse of the free part of the diagonal block
-  Weights down, up;                     ///< to the next level: parents of each node; children of each coarse node
+  Transfer down;                        ///< P to the next level: the parents of each node
   Eigen::VectorXd x, b, r;              ///< work vectors (3 per node)
+  Eigen::VectorXd power;                ///< aggregation: the last power iteration's vector for ρ(D⁻¹ A)
   [[nodiscard]] Eigen::Index unknowns() const { return std::count(free.begin(), free.end(), std::uint8_t{1}); }
+  [[nodiscard]] bool has_free(int i) const { return free[3 * i] || free[3 * i + 1] || free[3 * i + 2]; }
 };
 
 }  // namespace
@@ -182,21 +187,29 @@ struct MultigridPreconditioner::Impl {
   SparseLower coarse;
   std::unique_ptr<LinearSolver> direct = make_ldlt_solver();  // small: no BLAS (its buffers and threads) needed
   Eigen::VectorXd coarse_b;
-  std::vector<double> row;  ///< work: one block row of A W (9 per coarse node)
+  std::vector<double> row;  ///< work: one block row of A P (9 per coarse node)
   std::vector<int> touched, where_coarse;
 
-  Impl(const VolumeMesh& mesh, const std::vector<int>& free_index);
+  Coarsening coarsening;
+
+  Impl(const VolumeMesh& mesh, const std::vector<int>& free_index, Coarsening how);
+  void grow(const std::function<void()>& coarsen);
   void coarsen();
+  void aggregate();
+  void coarse_pattern(std::size_t l);
   void structure(const SparseLower& A);
-  bool values(const SparseLower& A, double shift);
+  bool values(const SparseLower& A, double shift, bool refresh);
+  bool coarse_current = false;  ///< the coarse levels were made from a matrix of the current structure
+  bool invert_diagonal(Level& L);
+  void smooth_prolongator(std::size_t l);
   void galerkin(Level& fine, Level& coarse_level);
   void vcycle(std::size_t l);
   void product(const Eigen::VectorXd& p, Eigen::VectorXd& Ap);
   Eigen::VectorXd product_in, product_out;
 };
 
-MultigridPreconditioner::Impl::Impl(const VolumeMesh& mesh, const std::vector<int>& free_index) {
-  const LatticeCoordinates lattice = lattice_coordinates(mesh);
+MultigridPreconditioner::Impl::Impl(const VolumeMesh& mesh, const std::vector<int>& free_index, Coarsening how)
+    : coarsening(how) {
   Level L;
   L.nodes = static_cast<int>(mesh.vertex_count());
   if (free_index.size() != 3 * static_cast<std::size_t>(L.nodes))
@@ -210,6 +223,20 @@ MultigridPreconditioner::Impl::Impl(const VolumeMesh& mesh, const std::vector<in
   row_dof.assign(free_count, -1);
   for (std::size_t d = 0; d < free_index.size(); ++d)
     if (free_index[d] >= 0) row_dof[free_index[d]] = static_cast<int>(d);
+  if (how == Coarsening::aggregation) {
+    // The rigid-body modes at rest: translations, and rotations about the centroid (for conditioning).
+    const Eigen::Vector3d centre = L.nodes ? Eigen::Vector3d(mesh.vertices.rowwise().mean()) : Eigen::Vector3d::Zero();
+    L.near_null.assign(18 * static_cast<std::size_t>(L.nodes), 0.0);
+    for (int v = 0; v < L.nodes; ++v) {
+      const Eigen::Vector3d p = mesh.vertices.col(v) - centre;
+      Eigen::Map<Eigen::Matrix<double, 3, 6, Eigen::RowMajor>> b(&L.near_null[18 * static_cast<std::size_t>(v)]);
+      b.leftCols<3>().setIdentity();
+      b.rightCols<3>() << 0.0, p.z(), -p.y(), -p.z(), 0.0, p.x(), p.y(), -p.x(), 0.0;  // columns e_a × p
+    }
+    levels.push_back(std::move(L));
+    return;  // the levels follow the matrix's pattern (structure())
+  }
+  const LatticeCoordinates lattice = lattice_coordinates(mesh);
   L.at.resize(L.nodes);
   L.piece = lattice.piece;
   for (int v = 0; v < L.nodes; ++v) L.at[v] = lattice.coordinates.col(v);
@@ -217,19 +244,22 @@ MultigridPreconditioner::Impl::Impl(const VolumeMesh& mesh, const std::vector<in
   for (Eigen::Index c = 0; c < mesh.cell_count(); ++c)
     for (int k = 0; k < 8; ++k) L.cells[c][k] = mesh.cells(k, c);
   levels.push_back(std::move(L));
-  while (levels.size() < kMaxLevels && levels.back().unknowns() > kCoarsestUnknowns) {
+  grow([this] { coarsen(); });
+}
+
+/// Appends levels, each by `coarsen`, until the last has at most kCoarsestUnknowns (aggregation:
+/// kCoarsestAggregationUnknowns) free DOFs; a level that keeps more than kMinReduction of the one before (or
+/// none) is dropped and ends the hierarchy.
+void MultigridPreconditioner::Impl::grow(const std::function<void()>& coarsen) {
+  const Eigen::Index coarsest = coarsening == Coarsening::lattice ? kCoarsestUnknowns : kCoarsestAggregationUnknowns;
+  while (levels.size() < kMaxLevels && levels.back().unknowns() > coarsest) {
     const Eigen::Index before = levels.back().unknowns();
     coarsen();
     if (levels.back().unknowns() > kMinReduction * static_cast<double>(before) || levels.back().unknowns() == 0) {
       levels.pop_back();
-      levels.back().down = levels.back().up = Weights{};
+      levels.back().down = Transfer{};
       break;
     }
-  }
-  for (Level& l : levels) {
-    l.x.resize(3 * l.nodes);
-    l.b.resize(3 * l.nodes);
-    l.r.resize(3 * l.nodes);
   }
 }
 
@@ -288,22 +318,149 @@ void MultigridPreconditioner::Impl::coarsen() {
         }
         if (skip) continue;
         const int parent = node.at(Key{F.piece[v], p.z(), p.y(), p.x()});
-        F.down.node.push_back(parent);
-        F.down.weight.push_back(w);
+        const double block[9] = {w, 0.0, 0.0, 0.0, w, 0.0, 0.0, 0.0, w};
+        F.down.push(parent, block);
         if (w == 1.0) coincident[parent] = v;
       }
     }
     F.down.start.push_back(static_cast<int>(F.down.node.size()));
   }
-  F.up = transpose(F.down, C.nodes);
   // A coarse DOF is free where it reaches a free fine DOF and the fine vertex at its place (if any) is free there.
+  std::vector<std::uint8_t> reaches(3 * static_cast<std::size_t>(C.nodes), 0);
+  for (int v = 0; v < F.nodes; ++v)
+    for (int p = F.down.start[v]; p < F.down.start[v + 1]; ++p)
+      for (int a = 0; a < 3; ++a) reaches[3 * F.down.node[p] + a] |= F.free[3 * v + a];
   C.free.assign(3 * static_cast<std::size_t>(C.nodes), 0);
   for (int n = 0; n < C.nodes; ++n)
-    for (int a = 0; a < 3; ++a) {
-      bool reaches = false;
-      for (int p = F.up.start[n]; p < F.up.start[n + 1]; ++p) reaches = reaches || F.free[3 * F.up.node[p] + a];
-      C.free[3 * n + a] = reaches && (coincident[n] < 0 || F.free[3 * coincident[n] + a]);
+    for (int a = 0; a < 3; ++a) C.free[3 * n + a] = reaches[3 * n + a] && (coincident[n] < 0 || F.free[3 * coincident[n] + a]);
+  levels.push_back(std::move(C));
+}
+
+/// Level l + 1's block pattern, Pᵀ A P's, from level l's and P's.
+void MultigridPreconditioner::Impl::coarse_pattern(std::size_t l) {
+  Level &F = levels[l], &C = levels[l + 1];
+  // Block (i, k ≤ i) reaches the coarse pairs (I, K), I a parent of i and K of k, stored at (max, min).
+  std::vector<std::vector<int>> coarse_rows(C.nodes);
+  std::vector<int> reach;
+  for (int i = 0; i < F.nodes; ++i) {
+    reach.clear();
+    for (int s = F.A.start[i]; s < F.A.start[i + 1]; ++s) {
+      const int k = F.A.col[s];
+      reach.insert(reach.end(), F.down.node.begin() + F.down.start[k], F.down.node.begin() + F.down.start[k + 1]);
     }
+    sort_unique(reach);
+    for (int p = F.down.start[i]; p < F.down.start[i + 1]; ++p) {
+      const int I = F.down.node[p];
+      for (int K : reach) coarse_rows[std::max(I, K)].push_back(std::min(I, K));
+    }
+  }
+  for (int I = 0; I < C.nodes; ++I) {
+    coarse_rows[I].push_back(I);
+    sort_unique(coarse_rows[I]);
+  }
+  C.A.set_pattern(coarse_rows);
+}
+
+/// Smoothed aggregation: appends the level of the aggregates of the last level's nodes, from its block
+/// pattern (every connection counts as strong), with the tentative prolongator from the rigid-body modes
+/// and the smoothed prolongator's pattern (values: smooth_prolongator()).
+void MultigridPreconditioner::Impl::aggregate() {
+  Level& F = levels.back();
+  const int n = F.nodes;
+  // Every block of each row: (i, k < i) stored in row i, the diagonal, then (k > i, i)ᵀ stored in row k.
+  F.full_start.assign(n + 1, 0);
+  for (int i = 0; i < n; ++i)
+    for (int s = F.A.start[i]; s < F.A.start[i + 1]; ++s) {
+      ++F.full_start[i + 1];
+      if (F.A.col[s] != i) ++F.full_start[F.A.col[s] + 1];
+    }
+  for (int i = 0; i < n; ++i) F.full_start[i + 1] += F.full_start[i];
+  F.full_node.resize(F.full_start[n]);
+  F.full_slot.resize(F.full_start[n]);
+  {
+    std::vector<int> next(F.full_start.begin(), F.full_start.end() - 1);
+    for (int i = 0; i < n; ++i)  // row i's own blocks first (columns ≤ i), as rows below i are reached later
+      for (int s = F.A.start[i]; s < F.A.start[i + 1]; ++s) {
+        const int k = F.A.col[s];
+        F.full_node[next[i]] = k;
+        F.full_slot[next[i]++] = s;
+        if (k != i) {
+          F.full_node[next[k]] = i;
+          F.full_slot[next[k]++] = s;
+        }
+      }
+  }
+  // Greedy aggregation of the nodes with a free DOF, in node order: (1) a node whose neighbours are all
+  // unaggregated starts an aggregate with them; (2) a node left over joins the first aggregate of step 1
+  // among its neighbours; (3) one with none (isolated) starts its own with its unaggregated neighbours.
+  F.aggregate.assign(n, -1);
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!F.has_free(i) || F.aggregate[i] >= 0) continue;
+    bool alone = true;
+    for (int p = F.full_start[i]; p < F.full_start[i + 1] && alone; ++p)
+      alone = F.aggregate[F.full_node[p]] < 0;
+    if (!alone) continue;
+    for (int p = F.full_start[i]; p < F.full_start[i + 1]; ++p)
+      if (F.has_free(F.full_node[p])) F.aggregate[F.full_node[p]] = count;
+    F.aggregate[i] = count++;
+  }
+  const std::vector<int> first = F.aggregate;
+  for (int i = 0; i < n; ++i) {
+    if (!F.has_free(i) || F.aggregate[i] >= 0) continue;
+    for (int p = F.full_start[i]; p < F.full_start[i + 1] && F.aggregate[i] < 0; ++p) F.aggregate[i] = first[F.full_node[p]];
+    if (F.aggregate[i] >= 0) continue;
+    for (int p = F.full_start[i]; p < F.full_start[i + 1]; ++p)
+      if (F.has_free(F.full_node[p]) && F.aggregate[F.full_node[p]] < 0) F.aggregate[F.full_node[p]] = count;
+    F.aggregate[i] = count++;
+  }
+  // Tentative prolongator: per aggregate, an orthonormal basis Q of its rows of the near-null space B (the
+  // rows of DOFs that are not free zeroed; QR with column pivoting keeps its rank r ≤ 6); the coarse near-null
+  // space is Qᵀ B, so that P B_coarse = B. Each aggregate is two coarse nodes (DOFs 0–2 and 3–5), its DOFs
+  // from r on not free.
+  std::vector<std::vector<int>> members(count);
+  for (int i = 0; i < n; ++i)
+    if (F.aggregate[i] >= 0) members[F.aggregate[i]].push_back(i);
+  Level C;
+  C.nodes = 2 * count;
+  C.free.assign(6 * static_cast<std::size_t>(count), 0);
+  C.near_null.assign(36 * static_cast<std::size_t>(count), 0.0);
+  F.tentative.assign(18 * static_cast<std::size_t>(n), 0.0);
+  using Rows = Eigen::Matrix<double, Eigen::Dynamic, 6>;
+  for (int a = 0; a < count; ++a) {
+    const auto& m = members[a];
+    Rows B(3 * static_cast<Eigen::Index>(m.size()), 6);
+    for (std::size_t k = 0; k < m.size(); ++k)
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 6; ++c)
+          B(3 * static_cast<Eigen::Index>(k) + r, c) = F.free[3 * m[k] + r] ? F.near_null[18 * static_cast<std::size_t>(m[k]) + 6 * r + c] : 0.0;
+    Eigen::ColPivHouseholderQR<Rows> qr(B);
+    qr.setThreshold(1e-10);
+    const Eigen::Index rank = std::min<Eigen::Index>(qr.rank(), 6);
+    const Rows Q = qr.householderQ() * Eigen::MatrixXd::Identity(B.rows(), 6);
+    Eigen::Matrix<double, 6, 6> coarse = Eigen::Matrix<double, 6, 6>::Zero();
+    coarse.topRows(rank) = Q.leftCols(rank).transpose() * B;
+    for (std::size_t k = 0; k < m.size(); ++k)
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < rank; ++c) F.tentative[18 * static_cast<std::size_t>(m[k]) + 6 * r + c] = Q(3 * static_cast<Eigen::Index>(k) + r, c);
+    for (int d = 0; d < 6; ++d) {
+      C.free[6 * static_cast<std::size_t>(a) + d] = d < rank;
+      for (int c = 0; c < 6; ++c) C.near_null[36 * static_cast<std::size_t>(a) + 6 * d + c] = coarse(d, c);
+    }
+  }
+  // The smoothed prolongator (I − ω D⁻¹ A) P_tent reaches, from node i, the aggregates of i and its neighbours.
+  F.down = Transfer{};
+  std::vector<int> parents;
+  for (int i = 0; i < n; ++i) {
+    parents.clear();
+    if (F.has_free(i))
+      for (int p = F.full_start[i]; p < F.full_start[i + 1]; ++p)
+        if (const int g = F.aggregate[F.full_node[p]]; g >= 0) parents.insert(parents.end(), {2 * g, 2 * g + 1});
+    sort_unique(parents);
+    const double zero[9] = {};
+    for (int I : parents) F.down.push(I, zero);
+    F.down.start.push_back(static_cast<int>(F.down.node.size()));
+  }
   levels.push_back(std::move(C));
 }
 
@@ -328,33 +485,23 @@ void MultigridPreconditioner::Impl::structure(const SparseLower& A) {
     L0.A.set_pattern(rows);
   }
   cursor.assign(L0.nodes, 0);
-  for (std::size_t l = 0; l + 1 < levels.size(); ++l) {
-    Level &F = levels[l], &C = levels[l + 1];
-    // Block (i, k ≤ i) reaches the coarse pairs (I, K), I a parent of i and K of k, stored at (max, min).
-    std::vector<std::vector<int>> coarse_rows(C.nodes);
-    std::vector<int> reach;
-    for (int i = 0; i < F.nodes; ++i) {
-      reach.clear();
-      for (int s = F.A.start[i]; s < F.A.start[i + 1]; ++s) {
-        const int k = F.A.col[s];
-        reach.insert(reach.end(), F.down.node.begin() + F.down.start[k], F.down.node.begin() + F.down.start[k + 1]);
-      }
-      sort_unique(reach);
-      for (int p = F.down.start[i]; p < F.down.start[i + 1]; ++p) {
-        const int I = F.down.node[p];
-        for (int K : reach) coarse_rows[std::max(I, K)].push_back(std::min(I, K));
-      }
-    }
-    for (int I = 0; I < C.nodes; ++I) {
-      coarse_rows[I].push_back(I);
-      sort_unique(coarse_rows[I]);
-    }
-    C.A.set_pattern(coarse_rows);
+  if (coarsening == Coarsening::lattice) {
+    for (std::size_t l = 0; l + 1 < levels.size(); ++l) coarse_pattern(l);
+  } else {
+    levels.resize(1);
+    levels.front().down = Transfer{};
+    grow([this] {
+      aggregate();
+      coarse_pattern(levels.size() - 2);
+    });
   }
   for (Level& l : levels) {
     l.diagonal.resize(l.nodes);
     for (int i = 0; i < l.nodes; ++i) l.diagonal[i] = l.A.find(i, i);
     l.inverse.assign(9 * static_cast<std::size_t>(l.nodes), 0.0);
+    l.x.resize(3 * l.nodes);
+    l.b.resize(3 * l.nodes);
+    l.r.resize(3 * l.nodes);
   }
   // The coarsest level's free DOFs as a lower-triangular scalar matrix (column c: rows r ≥ c in order).
   const Level& K = levels.back();
@@ -395,10 +542,10 @@ void MultigridPreconditioner::Impl::structure(const SparseLower& A) {
   coarse_b.resize(n);
 }
 
-/// The next level's A from this one's, Wᵀ A W, one fine block row at a time: the row's part of A W (A's
-/// diagonal blocks halved) spread to the row's parents I, each product Y for the coarse pair (I, K) stored
-/// as Y at (I, K) below the diagonal, Yᵀ at (K, I) above it, Y + Yᵀ on it (A is symmetric); then the coarse
-/// DOFs that are not free masked out.
+/// The next level's A from this one's, Pᵀ A P, one fine block row at a time: the row's part of A P (A's
+/// diagonal blocks halved) spread to the row's parents I, each product Y = P_iIᵀ (A P)_iK for the coarse
+/// pair (I, K) stored as Y at (I, K) below the diagonal, Yᵀ at (K, I) above it, Y + Yᵀ on it (A is
+/// symmetric); then the coarse DOFs that are not free masked out.
 void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
   std::fill(C.A.val.begin(), C.A.val.end(), 0.0);
   row.assign(9 * static_cast<std::size_t>(C.nodes), 0.0);
@@ -416,30 +563,23 @@ void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
           where_coarse[K] = 0;
           touched.push_back(K);
         }
-        const double w = half * F.down.weight[p];
-        for (int e = 0; e < 9; ++e) t[e] += w * a[e];
+        Block3(t).noalias() += half * (ConstBlock3(a) * ConstBlock3(&F.down.block[9 * static_cast<std::size_t>(p)]));
       }
     }
     std::sort(touched.begin(), touched.end());  // a fixed order of the sums below
     for (int p = F.down.start[i]; p < F.down.start[i + 1]; ++p) {
       const int I = F.down.node[p];
-      const double w = F.down.weight[p];
+      const ConstBlock3 w(&F.down.block[9 * static_cast<std::size_t>(p)]);
       int s = C.A.start[I];
       for (int K : touched) {
-        const double* t = &row[9 * static_cast<std::size_t>(K)];
+        const Eigen::Matrix3d y = w.transpose() * ConstBlock3(&row[9 * static_cast<std::size_t>(K)]);
         if (K <= I) {
           while (C.A.col[s] < K) ++s;  // both sorted; every K ≤ I reached from i is in row I
-          double* c = &C.A.val[9 * static_cast<std::size_t>(s)];
-          if (K < I) {
-            for (int e = 0; e < 9; ++e) c[e] += w * t[e];
-          } else {
-            for (int a = 0; a < 3; ++a)
-              for (int b = 0; b < 3; ++b) c[3 * a + b] += w * (t[3 * a + b] + t[3 * b + a]);
-          }
+          Block3 c(&C.A.val[9 * static_cast<std::size_t>(s)]);
+          if (K < I) c += y;
+          else c += y + y.transpose();
         } else {
-          double* c = &C.A.val[9 * static_cast<std::size_t>(C.A.find(K, I))];
-          for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) c[3 * a + b] += w * t[3 * b + a];
+          Block3(&C.A.val[9 * static_cast<std::size_t>(C.A.find(K, I))]) += y.transpose();
         }
       }
     }
@@ -457,7 +597,24 @@ void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
     }
 }
 
-bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift) {
+/// The inverses of L's diagonal blocks' free parts (Cholesky: false where a block is not positive definite,
+/// which proves that A is not).
+bool MultigridPreconditioner::Impl::invert_diagonal(Level& L) {
+  for (int i = 0; i < L.nodes; ++i) {
+    Eigen::Matrix3d D = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&L.A.val[9 * static_cast<std::size_t>(L.diagonal[i])]);
+    for (int a = 0; a < 3; ++a)
+      if (!L.free[3 * i + a]) D(a, a) = 1.0;
+    const Eigen::LLT<Eigen::Matrix3d> llt(D);
+    if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().array() > 0.0).all()) return false;
+    Eigen::Matrix3d inv = llt.solve(Eigen::Matrix3d::Identity());
+    for (int a = 0; a < 3; ++a)
+      if (!L.free[3 * i + a]) inv.row(a).setZero(), inv.col(a).setZero();
+    Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&L.inverse[9 * static_cast<std::size_t>(i)]) = inv;
+  }
+  return true;
+}
+
+bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift, bool refresh) {
   Level& L0 = levels.front();
   // Column c (DOF b of node j) of A's lower triangle: entry (i a, j b), i ≥ j, is block (i, j)'s entry (a, b).
   // Columns come in increasing j, so each row's cursor only moves forward to block (i, j).
@@ -480,25 +637,17 @@ bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift) {
     for (int a = 0; a < 3; ++a)
       if (L0.free[3 * i + a]) d[4 * a] += shift;
   }
-  for (std::size_t l = 0; l + 1 < levels.size(); ++l) galerkin(levels[l], levels[l + 1]);
-  // Inverses of the diagonal blocks' free parts (Cholesky: a block that is not positive definite proves A is not).
+  if (!refresh && coarse_current && levels.size() > 1) return invert_diagonal(L0);
+  coarse_current = false;
   for (std::size_t l = 0; l + 1 < levels.size(); ++l) {
-    Level& L = levels[l];
-    for (int i = 0; i < L.nodes; ++i) {
-      Eigen::Matrix3d D = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&L.A.val[9 * static_cast<std::size_t>(L.diagonal[i])]);
-      for (int a = 0; a < 3; ++a)
-        if (!L.free[3 * i + a]) D(a, a) = 1.0;
-      const Eigen::LLT<Eigen::Matrix3d> llt(D);
-      if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().array() > 0.0).all()) return false;
-      Eigen::Matrix3d inv = llt.solve(Eigen::Matrix3d::Identity());
-      for (int a = 0; a < 3; ++a)
-        if (!L.free[3 * i + a]) inv.row(a).setZero(), inv.col(a).setZero();
-      Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&L.inverse[9 * static_cast<std::size_t>(i)]) = inv;
-    }
+    if (!invert_diagonal(levels[l])) return false;
+    if (coarsening == Coarsening::aggregation) smooth_prolongator(l);
+    galerkin(levels[l], levels[l + 1]);
   }
   const Level& K = levels.back();
   for (std::size_t e = 0; e < coarse_value.size(); ++e) coarse.valuePtr()[e] = K.A.val[coarse_value[e]];
-  return coarse.rows() == 0 || direct->try_factorize(coarse);
+  coarse_current = coarse.rows() == 0 || direct->try_factorize(coarse);
+  return coarse_current;
 }
 
 namespace {
@@ -571,6 +720,51 @@ void subtract_product(const Level& L, const double* x, const double* b, double* 
 
 }  // namespace
 
+/// Smoothed aggregation's prolongator for the current A: P = (I − ω D⁻¹ A) P_tent, D the diagonal blocks,
+/// ω = 4 / (3 ρ(D⁻¹ A)) with ρ from power iterations (5 % added): 15 from a fixed start vector for the
+/// first matrix, then 5 from the last matrix's vector (consecutive Newton matrices differ little).
+void MultigridPreconditioner::Impl::smooth_prolongator(std::size_t l) {
+  Level& F = levels[l];
+  Eigen::VectorXd &v = F.power, &w = F.r;
+  const bool warm = v.size() == 3 * F.nodes;
+  if (!warm) {
+    v.resize(3 * F.nodes);
+    for (int d = 0; d < 3 * F.nodes; ++d) v[d] = F.free[d] ? 1.0 + static_cast<double>((d * 7919) % 101) / 101.0 : 0.0;
+  }
+  double rho = 0.0;
+  for (int it = 0; it < (warm ? 5 : 15); ++it) {
+    const double norm = v.norm();
+    if (!(norm > 0.0)) break;
+    v /= norm;
+    subtract_product(F, v.data(), nullptr, w.data());  // −A v
+    for (int i = 0; i < F.nodes; ++i) solve_diagonal(F, i, w.data() + 3 * i, v.data() + 3 * i);
+    rho = v.norm();
+  }
+  const double omega = rho > 0.0 ? 4.0 / (3.0 * 1.05 * rho) : 0.0;
+  using Columns = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>, 0, Eigen::OuterStride<6>>;
+  row.assign(9 * static_cast<std::size_t>(levels[l + 1].nodes), 0.0);
+  for (int i = 0; i < F.nodes; ++i) {
+    if (F.down.start[i] == F.down.start[i + 1]) continue;
+    for (int p = F.full_start[i]; p < F.full_start[i + 1]; ++p) {
+      const int k = F.full_node[p], g = F.aggregate[k];
+      if (g < 0) continue;
+      const ConstBlock3 stored(&F.A.val[9 * static_cast<std::size_t>(F.full_slot[p])]);
+      const Eigen::Matrix3d a = k > i ? Eigen::Matrix3d(stored.transpose()) : Eigen::Matrix3d(stored);  // A_ik
+      for (int c = 0; c < 2; ++c)
+        Block3(&row[9 * static_cast<std::size_t>(2 * g + c)]).noalias() += a * Columns(&F.tentative[18 * static_cast<std::size_t>(k) + 3 * c]);
+    }
+    const ConstBlock3 inverse(&F.inverse[9 * static_cast<std::size_t>(i)]);
+    for (int p = F.down.start[i]; p < F.down.start[i + 1]; ++p) {
+      const int I = F.down.node[p];
+      Block3 P(&F.down.block[9 * static_cast<std::size_t>(p)]);
+      Block3 t(&row[9 * static_cast<std::size_t>(I)]);
+      P.noalias() = -omega * (inverse * t);
+      if (I / 2 == F.aggregate[i]) P += Columns(&F.tentative[18 * static_cast<std::size_t>(i) + 3 * (I % 2)]);
+      t.setZero();
+    }
+  }
+}
+
 void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
   Level& L = levels[l];
   if (l + 1 == levels.size()) {
@@ -584,47 +778,39 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
   Level& C = levels[l + 1];
   forward_sweep(L);
   subtract_product(L, L.x.data(), L.b.data(), L.r.data());
-  // Restriction Wᵀ r on the coarse free DOFs.
-  for (int I = 0; I < C.nodes; ++I) {
-    double r0 = 0.0, r1 = 0.0, r2 = 0.0;
-    for (int p = L.up.start[I]; p < L.up.start[I + 1]; ++p) {
-      const int i = L.up.node[p];
-      const double w = L.up.weight[p];
-      r0 += w * L.r[3 * i];
-      r1 += w * L.r[3 * i + 1];
-      r2 += w * L.r[3 * i + 2];
-    }
-    C.b[3 * I] = C.free[3 * I] ? r0 : 0.0;
-    C.b[3 * I + 1] = C.free[3 * I + 1] ? r1 : 0.0;
-    C.b[3 * I + 2] = C.free[3 * I + 2] ? r2 : 0.0;
-  }
-  vcycle(l + 1);
-  // Prolongation W e on the fine free DOFs.
+  // Restriction Pᵀ r on the coarse free DOFs, prolongation P e on the fine ones.
+  C.b.setZero();
   for (int i = 0; i < L.nodes; ++i)
-    for (int p = L.down.start[i]; p < L.down.start[i + 1]; ++p) {
-      const int I = L.down.node[p];
-      const double w = L.down.weight[p];
-      for (int a = 0; a < 3; ++a)
-        if (L.free[3 * i + a]) L.x[3 * i + a] += w * C.x[3 * I + a];
-    }
+    for (int p = L.down.start[i]; p < L.down.start[i + 1]; ++p)
+      subtract_transposed(&L.down.block[9 * static_cast<std::size_t>(p)], L.r.data() + 3 * i, C.b.data() + 3 * L.down.node[p]);
+  for (int d = 0; d < 3 * C.nodes; ++d) C.b[d] = C.free[d] ? -C.b[d] : 0.0;
+  vcycle(l + 1);
+  for (int i = 0; i < L.nodes; ++i) {
+    double e[3] = {0.0, 0.0, 0.0};
+    for (int p = L.down.start[i]; p < L.down.start[i + 1]; ++p)
+      subtract(&L.down.block[9 * static_cast<std::size_t>(p)], C.x.data() + 3 * L.down.node[p], e);
+    for (int a = 0; a < 3; ++a)
+      if (L.free[3 * i + a]) L.x[3 * i + a] -= e[a];
+  }
   backward_sweep(L);
 }
 
-MultigridPreconditioner::MultigridPreconditioner(const VolumeMesh& mesh, const std::vector<int>& free_index)
-    : impl_(std::make_unique<Impl>(mesh, free_index)) {}
+MultigridPreconditioner::MultigridPreconditioner(const VolumeMesh& mesh, const std::vector<int>& free_index, Coarsening how)
+    : impl_(std::make_unique<Impl>(mesh, free_index, how)) {}
 
 MultigridPreconditioner::~MultigridPreconditioner() = default;
 
-bool MultigridPreconditioner::compute(const SparseLower& A, double shift) {
+bool MultigridPreconditioner::compute(const SparseLower& A, double shift, bool coarse) {
   if (A.rows() != static_cast<Eigen::Index>(impl_->row_dof.size()) || A.cols() != A.rows())
     throw std::invalid_argument(fmt::format("multigrid: a {}x{} matrix for {} free DOFs", A.rows(), A.cols(), impl_->row_dof.size()));
   const std::uint64_t pattern = pattern_hash(A);
   if (!impl_->have_structure || pattern != impl_->pattern) {
     impl_->structure(A);
+    impl_->coarse_current = false;
     impl_->pattern = pattern;
     impl_->have_structure = true;
   }
-  return impl_->values(A, shift);
+  return impl_->values(A, shift, coarse);
 }
 
 void MultigridPreconditioner::multiply(const Eigen::VectorXd& p, Eigen::VectorXd& Ap) const { impl_->product(p, Ap); }
@@ -657,10 +843,11 @@ namespace {
 
 class MultigridSolver final : public LinearSolver {
  public:
-  MultigridSolver(const LinearSolverOptions& o, const SolverGeometry& g) : tolerance_(o.tolerance), vcycle_(mesh_of(g), *g.free_index) {}
-  bool try_factorize(const SparseLower& A) override { return vcycle_.compute(A); }
+  MultigridSolver(const LinearSolverOptions& o, const SolverGeometry& g, Coarsening how)
+      : how_(how), name_(how == Coarsening::lattice ? "mg" : "amg"), tolerance_(o.tolerance), vcycle_(mesh_of(g, name_), *g.free_index, how) {}
+  bool try_factorize(const SparseLower& A) override { return compute(A); }
   double factorize(const SparseLower& A) override {
-    if (vcycle_.compute(A)) return 0.0;
+    if (compute(A)) return 0.0;
     // As the direct solvers: a shift doubling from 1e-10 of the largest diagonal entry, up to Gershgorin's bound.
     Eigen::VectorXd row_abs = Eigen::VectorXd::Zero(A.rows());
     for (Eigen::Index c = 0; c < A.outerSize(); ++c)
@@ -672,7 +859,7 @@ class MultigridSolver final : public LinearSolver {
     for (double shift = 1e-10 * std::max(A.diagonal().cwiseAbs().maxCoeff(), 1e-300); std::isfinite(bound) && shift <= 2.0 * bound;
          shift *= 2.0)
       if (vcycle_.compute(A, shift)) return shift;
-    throw std::runtime_error("mg: the Newton matrix could not be made positive definite by a diagonal shift (it has a non-finite entry)");
+    throw std::runtime_error(fmt::format("{}: the Newton matrix could not be made positive definite by a diagonal shift (it has a non-finite entry)", name_));
   }
   /// Conjugate gradients on the matrix the V-cycle holds (A, plus the shift factorize() added).
   Eigen::VectorXd solve(const Eigen::VectorXd& b, double enough) override {
@@ -681,19 +868,33 @@ class MultigridSolver final : public LinearSolver {
     const MatrixProduct A = [this](const Eigen::VectorXd& p, Eigen::VectorXd& Ap) { vcycle_.multiply(p, Ap); };
     const CgResult r = conjugate_gradients(A, b, vcycle_, std::max(tolerance_ * b.norm(), enough), max_iterations, x);
     iterations_ = r.iterations;
+    if (fresh_iterations_ < 0) fresh_iterations_ = r.iterations;
     return r.status == CgStatus::converged ? x : Eigen::VectorXd::Constant(b.size(), std::nan(""));
   }
   int last_iterations() const override { return iterations_; }
-  std::string_view name() const override { return "mg"; }
+  std::string_view name() const override { return name_; }
   bool inexact() const override { return true; }
 
  private:
-  static const VolumeMesh& mesh_of(const SolverGeometry& g) {
+  static const VolumeMesh& mesh_of(const SolverGeometry& g, std::string_view name) {
     if (!g.mesh || !g.free_index)
-      throw std::invalid_argument("the multigrid solver (mg) needs the mesh behind the matrix (use cholmod, ldlt or pcg)");
+      throw std::invalid_argument(fmt::format("the multigrid solver ({}) needs the mesh behind the matrix (use cholmod, ldlt or pcg)", name));
     return *g.mesh;
   }
+  /// The V-cycle for A. amg keeps its coarse levels (the costly part: smoothed P and the Galerkin products)
+  /// from an earlier Newton matrix while the last solve needed at most half as many iterations again as
+  /// the first solve after they were made; mg makes them for every matrix.
+  bool compute(const SparseLower& A) {
+    const bool coarse = how_ == Coarsening::lattice || fresh_iterations_ < 0 || 2 * iterations_ > 3 * fresh_iterations_;
+    if (coarse) fresh_iterations_ = -1;
+    if (vcycle_.compute(A, 0.0, coarse)) return true;
+    fresh_iterations_ = -1;  // factorize() then shifts: the coarse levels are made for each shifted try
+    return false;
+  }
+  Coarsening how_;
+  std::string_view name_;
   double tolerance_;
+  int fresh_iterations_ = -1;  ///< iterations of the first solve with the current coarse levels (−1: none yet)
   MultigridPreconditioner vcycle_;
   int iterations_ = 0;
 };
@@ -701,7 +902,15 @@ class MultigridSolver final : public LinearSolver {
 }  // namespace
 
 std::unique_ptr<LinearSolver> make_multigrid_solver(const LinearSolverOptions& options, const SolverGeometry& geometry) {
-  return std::make_unique<MultigridSolver>(options, geometry);
+  return std::make_unique<MultigridSolver>(options, geometry, Coarsening::lattice);
+}
+
+bool amg_applicable(const SolverGeometry& geometry) {
+  return geometry.mesh && geometry.free_index && geometry.free_index->size() == 3 * static_cast<std::size_t>(geometry.mesh->vertex_count());
+}
+
+std::unique_ptr<LinearSolver> make_amg_solver(const LinearSolverOptions& options, const SolverGeometry& geometry) {
+  return std::make_unique<MultigridSolver>(options, geometry, Coarsening::aggregation);
 }
 
 }  // namespace snh

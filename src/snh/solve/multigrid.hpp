@@ -1,6 +1,7 @@
 #pragma once
-// Geometric multigrid for hexahedral lattices (DESIGN.md solve/, issue 15): a V-cycle that preconditions
-// conjugate gradients, named "mg" in the registry.
+// Multigrid V-cycles that precondition conjugate gradients (DESIGN.md solve/, issue 15): geometric for
+// hexahedral lattices, named "mg" in the registry, and algebraic (smoothed aggregation) for any mesh, "amg".
+// Both share the V-cycle below; only the prolongation P differs.
 //
 // Levels: the simulated hex mesh, then lattices of twice the cell size, each cube of a coarse level the
 // union of the (up to 8) fine cubes inside it, until a level has few enough unknowns for a direct solve
@@ -15,6 +16,15 @@
 // Smoother: one forward nodal-block Gauss–Seidel sweep before the coarse correction and one backward sweep
 // after it, so the V-cycle is symmetric, and positive definite when A is. Every loop runs in a fixed order
 // on one thread: results do not depend on the thread count.
+//
+// Smoothed aggregation (amg): levels from the matrix's nodal block graph, not from positions. Greedy
+// aggregation of the nodes with a free DOF (every block of the pattern a connection); a tentative
+// prolongator per aggregate from the 6 rigid-body modes (3 translations, 3 rotations of the rest
+// positions), orthonormalized on the aggregate's free DOFs by a QR with column pivoting (rank r ≤ 6: an
+// aggregate becomes two coarse nodes of 3 DOFs, those from r on not free; the coarse level's rigid-body
+// modes are Qᵀ B, so coarser levels aggregate the same way); then one damped block-Jacobi step,
+// P = (I − ω D⁻¹ A) P_tent with ω = 4 / (3 ρ(D⁻¹ A)), recomputed with the Galerkin products for each
+// Newton matrix (aggregates and patterns: once per pattern).
 #include <memory>
 
 #include <Eigen/Core>
@@ -34,18 +44,26 @@ struct LatticeCoordinates {
 /// vertex different coordinates.
 [[nodiscard]] LatticeCoordinates lattice_coordinates(const VolumeMesh& mesh);
 
+/// How the levels are made: from the hex lattice (trilinear P) or by smoothed aggregation.
+enum class Coarsening { lattice, aggregation };
+
 /// The V-cycle as a preconditioner M⁻¹ ≈ A⁻¹ on the free DOFs.
 class MultigridPreconditioner final : public Preconditioner {
  public:
-  /// mesh: hex8 lattice at rest; free_index: per DOF (3 #V) its row, −1 where kinematic.
-  MultigridPreconditioner(const VolumeMesh& mesh, const std::vector<int>& free_index);
+  /// mesh: at rest (a hex8 lattice for Coarsening::lattice, any cells for aggregation); free_index: per DOF
+  /// (3 #V) its row, −1 where kinematic.
+  MultigridPreconditioner(const VolumeMesh& mesh, const std::vector<int>& free_index,
+                          Coarsening how = Coarsening::lattice);
   ~MultigridPreconditioner() override;
   MultigridPreconditioner(const MultigridPreconditioner&) = delete;
   MultigridPreconditioner& operator=(const MultigridPreconditioner&) = delete;
   /// Takes the values of A (lower triangle on the free DOFs); the hierarchy's structure is rebuilt only
   /// when A's pattern changes. `shift` ≥ 0 is added to A's diagonal first. False where A (+ shift) is shown
   /// not to be positive definite (a nodal diagonal block or the coarsest operator is not).
-  [[nodiscard]] bool compute(const SparseLower& A, double shift = 0.0);
+  /// coarse = false keeps the coarse levels of the last compute() (same pattern), refreshing only the finest
+  /// level: the V-cycle stays symmetric positive definite (its coarse correction uses an older positive
+  /// definite Pᵀ A P), just weaker as A drifts from that matrix.
+  [[nodiscard]] bool compute(const SparseLower& A, double shift = 0.0, bool coarse = true);
   void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override;
   /// Ap = (A + shift) p for the A and shift of the last compute(), from the nodal blocks (no copy of A is kept).
   void multiply(const Eigen::VectorXd& p, Eigen::VectorXd& Ap) const;
@@ -63,5 +81,14 @@ class MultigridPreconditioner final : public Preconditioner {
 /// (one line) where the geometry has no mesh, or a mesh that is not a hex lattice.
 [[nodiscard]] std::unique_ptr<LinearSolver> make_multigrid_solver(const LinearSolverOptions& options,
                                                                   const SolverGeometry& geometry);
+
+/// True where "amg" can be made for this geometry: a mesh (any cell type) and a DOF index for each of its
+/// vertices' DOFs (for an automatic choice of solver).
+[[nodiscard]] bool amg_applicable(const SolverGeometry& geometry);
+
+/// The registry's "amg": conjugate gradients preconditioned by the smoothed-aggregation V-cycle. Throws
+/// std::invalid_argument (one line) where !amg_applicable(geometry).
+[[nodiscard]] std::unique_ptr<LinearSolver> make_amg_solver(const LinearSolverOptions& options,
+                                                            const SolverGeometry& geometry);
 
 }  // namespace snh
