@@ -278,8 +278,8 @@ StretchResult stretch(const std::string& solver, const fs::path& out, CellType e
 }
 
 // A whole stretch run with mg (hexes) or amg (tets) gives the direct solver's answer to the Newton tolerance
-// (‖f‖ < 1e-3: the positions differ by about ‖f‖ over the stiffness), and the same run with 1 and 2 threads
-// is bit-identical.
+// (‖f‖ < 1e-3: each run's positions are off the exact answer by about ‖f‖ over the stiffness, 1e-4, so the
+// two runs differ by up to twice that), and the same run with 1 and 2 threads is bit-identical.
 class StretchRun : public testing::TestWithParam<const char*> {};
 
 TEST_P(StretchRun, MatchesTheDirectSolverAndIsTheSameForOneAndTwoThreads) {
@@ -296,7 +296,7 @@ TEST_P(StretchRun, MatchesTheDirectSolverAndIsTheSameForOneAndTwoThreads) {
   int cg = 0;
   for (const StepStats& s : mg1.steps) cg += s.linear_iterations;
   EXPECT_GT(cg, 0) << "conjugate gradients ran";
-  // Every frame's positions (OBJ, 10 significant digits) within 1e-4 of the direct solver's.
+  // Every frame's positions (OBJ, 10 significant digits) within 2e-4 of the direct solver's.
   std::istringstream a(contents(direct_dir / "008.obj")), b(contents(one / "008.obj"));
   double worst = 0.0;
   for (std::string la, lb; std::getline(a, la) && std::getline(b, lb);) {
@@ -309,7 +309,7 @@ TEST_P(StretchRun, MatchesTheDirectSolverAndIsTheSameForOneAndTwoThreads) {
       worst = std::max(worst, std::abs(x - y));
     }
   }
-  EXPECT_LT(worst, 1e-4);
+  EXPECT_LT(worst, 2e-4);
   EXPECT_GT(worst, 0.0) << "CG and the direct solver stop at different residuals";
   // The exact state (checkpoint.bin holds the positions as doubles) and the frames: bit-identical.
   EXPECT_EQ(contents(one / "checkpoint.bin"), contents(two / "checkpoint.bin"));

@@ -73,10 +73,11 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     // no non-positive curvature) and gives a descent direction; otherwise the projected Hessian.
     Eigen::VectorXd d;
     bool have_step = false;
-    // Inexact Newton (Eisenstat and Walker's forcing terms, in the form η = min(0.1, √(‖g‖/‖g₀‖))): an
+    // Inexact Newton (Eisenstat and Walker's forcing terms, in the form η = min(forcing, √(‖g‖/‖g₀‖))): an
     // iterative solver stops at a residual η‖g‖, loose while ‖g‖ is far above its first value and ever
     // tighter as it falls, so that convergence stays superlinear; the stopping rule above is unchanged.
-    const double enough = solver.inexact() && r0 > 0.0 ? std::max(linear_enough, std::min(0.1, std::sqrt(r / r0)) * r) : linear_enough;
+    const double eta = solver.inexact() ? std::min(options.forcing, std::sqrt(r / r0)) : 0.0;
+    const double enough = std::max(linear_enough, eta * r);
     if (try_true && solver.try_factorize(H.matrix)) {
       d = solver.solve(-g, enough);
       report.linear_iterations += solver.last_iterations();
