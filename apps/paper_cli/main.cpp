@@ -77,6 +77,7 @@ int main(int argc, char** argv) {
   }
   snh::StretchConfig config;
   config.program = program;
+  config.solver = "cholmod";  // the paper programs' runs as they were (snh stretch chooses by size: "auto")
   config.command_line = snh::cli::quoted_command_line(argc, argv);
   config.element = kHex ? snh::CellType::hex8 : snh::CellType::tet4;
   config.resolution = parse_int(program, "resolution", argv[1]);

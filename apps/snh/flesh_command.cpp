@@ -17,7 +17,7 @@ namespace snh::cli {
 
 void add_flesh_command(CLI::App& app, int& exit_code) {
   struct Options {
-    std::string model, animation, volume = "lattice", material = "stable_neo_hookean", out, solver = "cholmod";
+    std::string model, animation, volume = "lattice", material = "stable_neo_hookean", out, solver = "auto";
     int resolution = FleshSpec{}.resolution;
     ParameterOptions params;
     bool quasi_static = false, dynamic = false, resume = false, no_report = false, force = false;
@@ -59,7 +59,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--dynamic", o->dynamic, "Backward Euler with gravity -9.81 y instead (density 1000)")->excludes(qs);
   cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(CLI::PositiveNumber);
   cmd->add_option("--out", o->out, "Output directory (default output/<model name>)")->check(non_empty_path());
-  cmd->add_option("--solver", o->solver, "Linear solver (default cholmod; see snh stretch --help)");
+  cmd->add_option("--solver", o->solver, "Linear solver (default auto: by size; see snh stretch --help)");
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
   cmd->add_flag("--force", o->force, "Write into --out even if it is not empty and holds no snh run (files with the names of ours are replaced)");
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");

@@ -20,9 +20,9 @@
 namespace snh::cli {
 namespace {
 
-/// "Linear solver (default cholmod): NAME: what it is; ..." from the registry.
+/// "Linear solver (default auto): NAME: what it is; ..." from the registry.
 std::string linear_solver_help() {
-  std::string out = "Linear solver (default cholmod)";
+  std::string out = "Linear solver (default auto)";
   for (const auto& s : linear_solvers()) out += fmt::format("; {}: {}", s.name, s.description);
   return out;
 }
@@ -40,7 +40,7 @@ struct Options {
   double stretch = 3.5;
   std::string out = "output";
   int threads = 0;
-  std::string solver = "cholmod";
+  std::string solver = "auto";
   double tolerance = 1e-3;
   std::string projection = "clamp";
   bool projected_only = false;

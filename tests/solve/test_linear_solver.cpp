@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "snh/mesh/box.hpp"
 #include "snh/solve/linear_solver.hpp"
 
 namespace snh {
@@ -145,11 +146,11 @@ TEST(FactorReuse, CanBeTurnedOff) {
 }
 
 TEST(LinearSolver, Registry) {
-  EXPECT_EQ(linear_solver_names(), (std::vector<std::string>{"cholmod", "ldlt", "pcg", "mg", "amg"}));
+  EXPECT_EQ(linear_solver_names(), (std::vector<std::string>{"cholmod", "ldlt", "pcg", "mg", "amg", "auto"}));
   EXPECT_TRUE(is_linear_solver("pcg"));
   EXPECT_FALSE(is_linear_solver("umfpack"));
   for (const auto& info : linear_solvers()) {
-    if (info.name != "mg" && info.name != "amg") {
+    if (info.name != "mg" && info.name != "amg" && info.name != "auto") {
       EXPECT_EQ(make_linear_solver({.name = std::string(info.name)})->name(), info.name);
     }
   }
@@ -158,8 +159,40 @@ TEST(LinearSolver, Registry) {
     (void)make_linear_solver({.name = "umfpack"});
     FAIL() << "an unknown name must be refused";
   } catch (const std::invalid_argument& e) {
-    EXPECT_STREQ(e.what(), "unknown linear solver 'umfpack' (known: cholmod, ldlt, pcg, mg, amg)");
+    EXPECT_STREQ(e.what(), "unknown linear solver 'umfpack' (known: cholmod, ldlt, pcg, mg, amg, auto)");
   }
+}
+
+// "auto" chooses by the free DOFs and the mesh: the direct solver below kAutoIterativeFrom, then mg on a hex
+// lattice and amg on tets (or hexes that are no lattice); a matrix with no mesh behind it gets the direct one.
+TEST(LinearSolver, AutoChoosesBySizeAndMesh) {
+  EXPECT_EQ(auto_linear_solver(kAutoIterativeFrom - 1, true), "cholmod");
+  EXPECT_EQ(auto_linear_solver(kAutoIterativeFrom, true), "mg");
+  EXPECT_EQ(auto_linear_solver(kAutoIterativeFrom, false), "amg");
+  EXPECT_EQ(make_linear_solver({.name = "auto"})->name(), "cholmod");
+  auto chosen = [](const VolumeMesh& mesh) {
+    const std::vector<int> free_index = [&] {
+      std::vector<int> f(3 * static_cast<std::size_t>(mesh.vertex_count()));
+      for (std::size_t d = 0; d < f.size(); ++d) f[d] = static_cast<int>(d);
+      return f;
+    }();
+    return std::string(make_linear_solver({.name = "auto"}, {.mesh = &mesh, .free_index = &free_index})->name());
+  };
+  // 3 (r+1)³ free DOFs: r = 10 has 3 993, r = 19 has 24 000.
+  EXPECT_EQ(chosen(box_hexes(10)), "cholmod");
+  EXPECT_EQ(chosen(box_hexes(19)), "mg");
+  EXPECT_EQ(chosen(box_tets(19)), "amg");
+  // Hexes that do not fit together as a lattice (one cell's corners relabelled by a quarter turn about z:
+  // its x axis along the others' y): amg.
+  VolumeMesh turned = box_hexes(19);
+  const Eigen::VectorXi old = turned.cells.col(0);
+  for (int a = 0; a < 8; a += 4) {
+    turned.cells(a, 0) = old[a + 1];
+    turned.cells(a + 1, 0) = old[a + 3];
+    turned.cells(a + 2, 0) = old[a];
+    turned.cells(a + 3, 0) = old[a + 2];
+  }
+  EXPECT_EQ(chosen(turned), "amg");
 }
 
 /// A preconditioner that counts its applications, around Jacobi.

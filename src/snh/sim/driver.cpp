@@ -74,7 +74,7 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
   // keeps and their history. A fresh run starts from an empty directory of ours.
   // A run whose memory estimate exceeds what this process may use is refused before any work.
   const ProblemSize size = problem_size(sim.mesh());
-  const std::string& solver = sim.setup().linear.name;
+  const std::string solver(sim.solver().name());  // what "auto" chose
   check_memory(size, solver, fmt::format("{} mesh", to_string(sim.mesh().type)));
 
   std::optional<Checkpoint> resume_from;

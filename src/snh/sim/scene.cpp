@@ -450,7 +450,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   settings["gravity"] = {s.forces.gravity[0], s.forces.gravity[1], s.forces.gravity[2]};
   settings["mass_damping"] = s.forces.mass_damping;
   settings["stiffness_damping"] = s.forces.stiffness_damping;
-  settings["solver"] = s.solver.linear;
+  settings["solver"] = std::string(sim.solver().name());  // what "auto" chose
   settings["tolerance"] = sim.setup().newton.tolerance;
   settings["step_tolerance"] = sim.setup().newton.step_tolerance;
   settings["relative_step_tolerance"] = sim.setup().newton.relative_step_tolerance;
@@ -482,7 +482,9 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     o << fmt::format("{}, {} frames to t = {:g}{}, gravity ({:g}, {:g}, {:g}), solver {} ({}), output {}\n",
                      dynamic ? "backward Euler" : "quasi-static", s.time.frames, s.time.end_time,
                      dynamic ? fmt::format(" ({} substeps of {:g} per frame)", substeps, h) : "", s.forces.gravity[0],
-                     s.forces.gravity[1], s.forces.gravity[2], s.solver.linear, stopping_rule(sim.setup().newton),
+                     s.forces.gravity[1], s.forces.gravity[2],
+                     s.solver.linear == "auto" ? fmt::format("{} (auto)", sim.solver().name()) : s.solver.linear,
+                     stopping_rule(sim.setup().newton),
                      s.output.dir.string());
   };
   plan.fill = [&](StepRecord& f, const StepReport*) {

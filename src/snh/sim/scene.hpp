@@ -110,7 +110,7 @@ using InitialOp = std::variant<ScaleOp, ReflectOp, CollapseOp, PerturbOp, MoveOp
 
 /// "solver".
 struct SolverSpec {
-  std::string linear = "cholmod";  ///< a linear_solvers() name
+  std::string linear = "auto";  ///< a linear_solvers() name ("auto": by size)
   bool refactorize = false;
   /// Newton's stopping rule for scenes, scale-aware (the same for any units, density, stiffness or time
   /// step): converged when ‖g‖ < force_fraction · E ℓ² (E ℓ²: the force a unit strain puts on a cell of

@@ -106,6 +106,8 @@ class Simulation {
   [[nodiscard]] const ElasticTerm& elastic() const { return elastic_; }
   [[nodiscard]] const TimeStepTerm& inertia() const { return inertia_; }
   [[nodiscard]] Problem& problem() { return problem_; }
+  /// The linear solver (its name() is the one \"auto\" chose).
+  [[nodiscard]] const LinearSolver& solver() const { return *solver_; }
   /// The setup (its mesh moved into the elastic term: mesh(); its initial positions into x()).
   [[nodiscard]] const SimulationSetup& setup() const { return setup_; }
   /// Per vertex: true if any of its DOFs is kinematic.

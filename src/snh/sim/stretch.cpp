@@ -55,8 +55,13 @@ void validate(const StretchConfig& c) {
     throw std::invalid_argument(fmt::format("unknown linear solver '{}'", printable(c.solver)));
   (void)make_material(c.material, c.params, c.reparametrize);  // unknown name or bad parameters
   // The lattice's memory estimate, before building it (a mesh file's is checked by the driver).
-  if (c.mesh_file.empty())
-    check_memory(lattice_size(c.resolution, c.element), c.solver, fmt::format("{} res {}", to_string(c.element), c.resolution));
+  if (c.mesh_file.empty()) {
+    // "auto" on the box: the solver it will choose for the free DOFs (all but the two end layers).
+    const std::int64_t r = c.resolution;
+    const std::string_view solver =
+        c.solver == "auto" ? auto_linear_solver(3 * (r + 1) * (r + 1) * std::max<std::int64_t>(r - 1, 0), c.element == CellType::hex8) : c.solver;
+    check_memory(lattice_size(c.resolution, c.element), solver, fmt::format("{} res {}", to_string(c.element), c.resolution));
+  }
   // The directory itself is made and checked by the run's lock (RunDirectoryLock), which removes it again if
   // the run is refused before writing anything; here only what would stop the lock at once.
   std::error_code ec;
@@ -133,7 +138,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   settings["reparametrize"] = c.reparametrize;
   settings["steps_requested"] = c.steps;
   settings["stretch"] = c.stretch;
-  settings["solver"] = c.solver;
+  settings["solver"] = std::string(sim.solver().name());  // what "auto" chose
   settings["reuse_factor"] = c.reuse_factor;
   settings["axis"] = std::string(1, char('x' + a));
   if (c.element == CellType::tet4) settings["tet_split"] = c.tet_split == TetSplit::paper ? "paper" : "mirrored";
@@ -158,7 +163,8 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
                      c.material, c.params.mu, c.params.lambda, c.reparametrize ? " (linear, reparametrized)" : "");
     if (reoriented) o << fmt::format("warning: {} inverted cell(s) of the mesh re-oriented\n", reoriented);
     o << fmt::format("{} vertices, {} {}, {} steps to a {:g}x stretch along {}, solver {}, output {}\n", mesh.vertex_count(),
-                     mesh.cell_count(), cells, c.steps, c.stretch, char('x' + a), c.solver, c.out.string());
+                     mesh.cell_count(), cells, c.steps, c.stretch, char('x' + a),
+                     c.solver == "auto" ? fmt::format("{} (auto)", sim.solver().name()) : c.solver, c.out.string());
     o << "mesh: " << describe(mesh_quality(sim.elastic().mesh(), sim.elastic().rest()), mesh.type) << "\n";
   };
   plan.line = [&](const StepRecord& s) {

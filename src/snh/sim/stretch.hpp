@@ -32,7 +32,7 @@ struct StretchConfig {
   int steps = 25;
   double stretch = 3.5;                   ///< final length / rest length along y
   std::filesystem::path out = "output";
-  std::string solver = "cholmod";            ///< a linear_solvers() name
+  std::string solver = "auto";               ///< a linear_solvers() name ("auto": by size)
   bool reuse_factor = true;               ///< direct solvers: precondition with the last factor (linear_solver.hpp)
   /// Inexact Newton's forcing 0.01 (NewtonOptions::forcing): measured fewer Newton iterations here than 0.1.
   NewtonOptions newton = [] {

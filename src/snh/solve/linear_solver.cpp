@@ -20,7 +20,34 @@ std::unique_ptr<LinearSolver> direct(std::unique_ptr<LinearSolver> solver, const
   return with_factor_reuse(std::move(solver), o.tolerance, o.reuse_iterations);
 }
 
+/// "auto": the solver for this size and mesh (hexes are a lattice where mg can be made on them); a matrix
+/// with no mesh behind it gets the direct solver.
+std::unique_ptr<LinearSolver> automatic(const LinearSolverOptions& o, const SolverGeometry& g) {
+  LinearSolverOptions chosen = o;
+  Eigen::Index free = 0;
+  if (g.free_index)
+    for (int i : *g.free_index) free += i >= 0;
+  if (!g.mesh || !g.free_index || auto_linear_solver(free, false) == "cholmod") {
+    chosen.name = "cholmod";
+    return make_linear_solver(chosen, g);
+  }
+  if (g.mesh->type == CellType::hex8) {
+    try {
+      chosen.name = "mg";
+      return make_multigrid_solver(chosen, g);
+    } catch (const std::invalid_argument&) {  // hexes that are not one lattice: amg
+    }
+  }
+  chosen.name = "amg";
+  return make_amg_solver(chosen, g);
+}
+
 }  // namespace
+
+std::string_view auto_linear_solver(Eigen::Index free_dofs, bool hex_lattice) {
+  if (free_dofs < kAutoIterativeFrom) return "cholmod";
+  return hex_lattice ? "mg" : "amg";
+}
 
 const std::vector<LinearSolverInfo>& linear_solvers() {
   static const std::vector<LinearSolverInfo> registry = {
@@ -34,6 +61,7 @@ const std::vector<LinearSolverInfo>& linear_solvers() {
        [](const LinearSolverOptions& o, const SolverGeometry& g) { return make_multigrid_solver(o, g); }},
       {"amg", "conjugate gradients with an algebraic (smoothed-aggregation) multigrid V-cycle (any mesh)",
        [](const LinearSolverOptions& o, const SolverGeometry& g) { return make_amg_solver(o, g); }},
+      {"auto", "by size: cholmod below 20 000 free DOFs, else mg on a hexahedral lattice and amg on any other mesh", automatic},
   };
   return registry;
 }

@@ -76,6 +76,12 @@ class LinearSolver {
   [[nodiscard]] virtual bool inexact() const { return false; }
 };
 
+/// "auto": the direct solver below this many free DOFs, multigrid from it (README "How a step is solved").
+inline constexpr Eigen::Index kAutoIterativeFrom = 20000;
+/// The registry name "auto" stands for: cholmod below kAutoIterativeFrom free DOFs, else mg on a hexahedral
+/// lattice and amg on any other mesh.
+[[nodiscard]] std::string_view auto_linear_solver(Eigen::Index free_dofs, bool hex_lattice);
+
 /// One entry of the registry.
 struct LinearSolverInfo {
   std::string_view name;

@@ -18,7 +18,7 @@ constexpr double kMiB = 1024.0 * 1024.0;
 // Calibration (README "Memory"): peak resident set and peak address space of `snh stretch` at
 // resolutions 5-30, tets and hexes, CHOLMOD and PCG, 2 threads; each coefficient rounded up.
 constexpr double kBaseResident = 16.0 * kMiB;     // the program, its libraries, a tiny mesh
-constexpr double kPerVertex = 10.0 * 1024.0;      // positions, DOF vectors, frames, surface, stats (bytes)
+constexpr double kPerVertex = 7.0 * 1024.0;       // positions, DOF vectors, the PCG matrix, frames, stats (bytes)
 constexpr double kPerCellNodePair = 30.0;         // per cell and (node, node) pair: the scatter map (6 ints per pair)
 constexpr double kFactorPerN43 = 260.0;           // CHOLMOD's L and workspace, bytes per n^{4/3}
 // Address space reserved beyond the resident set (VmPeak minus the peak resident set, `snh stretch` on this
