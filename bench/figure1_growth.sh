@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Growth of bench/figure1.sh with the lattice's size (issue 15): runs it at each ELEMENTS (default about
+# 25k, 50k, 100k and 200k hexes), with FRAMES (default 8) frames over END_TIME (default 2/3 s: the same
+# motion per frame as figure1.sh's default 24 frames over 2 s), and writes figure1_growth.csv and
+# figure1_growth.png (seconds per step against elements, log-log, with the line of linear growth) in OUT.
+# Usage: bench/figure1_growth.sh [ELEMENTS ...]
+# Environment: as figure1.sh (SNH, SOLVER, THREADS, JOINT_CELLS), OUT (default /tmp/snh-figure1-growth).
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+sizes=("$@")
+[ ${#sizes[@]} -gt 0 ] || sizes=(25000 50000 100000 200000)
+OUT="${OUT:-/tmp/snh-figure1-growth}"
+export FRAMES="${FRAMES:-8}" END_TIME="${END_TIME:-0.6667}"
+mkdir -p "$OUT"
+csv="$OUT/figure1_growth.csv"
+echo "elements,dofs,newton_per_step,cg_per_step,seconds_per_step,peak_mib" > "$csv"
+for e in "${sizes[@]}"; do
+  OUT="$OUT/$e" "$here/figure1.sh" "$e" | tee "$OUT/$e.log"
+  tail -1 "$OUT/$e.log" | sed -n 's/^figure1: \([0-9]*\) elements, \([0-9]*\) dofs, \([0-9.]*\) newton\/step, \([0-9]*\) cg\/step, \([0-9.]*\) s\/step, \([0-9]*\) MiB$/\1,\2,\3,\4,\5,\6/p' >> "$csv"
+done
+cat "$csv"
+PY=/usr/bin/python3
+[ -x "$PY" ] || PY=python3
+"$PY" - "$csv" "$OUT/figure1_growth.png" <<'EOF'
+import csv, sys
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+rows = list(csv.DictReader(open(sys.argv[1])))
+e = [int(r["elements"]) for r in rows]
+s = [float(r["seconds_per_step"]) for r in rows]
+fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
+ax.loglog(e, s, "o-", label="snh (mg), seconds per step")
+ax.loglog(e, [s[0] * x / e[0] for x in e], "--", color="gray", label="linear growth from the smallest")
+for x, y, r in zip(e, s, rows):
+    ax.annotate(f"{float(r['newton_per_step']):.1f} Newton, {r['cg_per_step']} CG", (x, y), textcoords="offset points",
+                xytext=(6, -12), fontsize=7)
+ax.set_xlabel("hexahedra")
+ax.set_ylabel("seconds per quasi-static step")
+ax.set_title("Bone-driven hand lattice (nu = 0.488): time per step against size")
+ax.legend(fontsize=8)
+ax.grid(True, which="both", alpha=0.3)
+fig.tight_layout()
+fig.savefig(sys.argv[2])
+print(f"plot: {sys.argv[2]}")
+EOF
