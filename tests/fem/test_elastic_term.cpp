@@ -153,6 +153,14 @@ TEST(Assembly, RejectsDegenerateAndBadInput) {
   VolumeMesh bad_index = box_tets(1);
   bad_index.cells(2, 3) = 999;  // checked before the rest state reads vertex 999
   EXPECT_THROW(ElasticTerm(bad_index, snh), std::invalid_argument);
+  VolumeMesh repeated = box_tets(1);
+  repeated.cells(3, 2) = repeated.cells(0, 2);  // a vertex twice in one cell: refused before the rest state
+  try {
+    ElasticTerm term(repeated, snh);
+    FAIL() << "a cell with a vertex twice must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "cell 2: vertex " + std::to_string(repeated.cells(0, 2)) + " appears twice");
+  }
   const VolumeMesh ok = box_tets(1);
   EXPECT_THROW(ElasticTerm(ok, {snh, snh}, {}), std::invalid_argument) << "two materials need an index per cell";
   EXPECT_THROW(ElasticTerm(ok, {snh, snh}, {0, 1, 2, 0, 0, 0}), std::invalid_argument) << "index out of range";
