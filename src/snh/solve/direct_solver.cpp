@@ -77,24 +77,15 @@ class DirectSolver final : public LinearSolver {
   }
   double factorize(const SparseLower& A) override {
     if (try_factorize(A)) return 0.0;
-    // Shifts double from 1e-10 of the largest diagonal entry; beyond the Gershgorin bound (largest
-    // absolute row sum) every shifted matrix is positive definite, so only a non-finite A can fail.
-    Eigen::VectorXd row_abs = Eigen::VectorXd::Zero(A.rows());
-    for (Eigen::Index c = 0; c < A.outerSize(); ++c)
-      for (SparseLower::InnerIterator it(A, c); it; ++it) {
-        row_abs[it.row()] += std::abs(it.value());
-        if (it.row() != it.col()) row_abs[it.col()] += std::abs(it.value());
-      }
-    const double bound = 2.0 * std::max(row_abs.maxCoeff(), 1e-300);
+    // The shared search (linear_solver.hpp): each shift added to the last shifted copy.
     SparseLower shifted = A;
-    double shift = 1e-10 * std::max(A.diagonal().cwiseAbs().maxCoeff(), 1e-300);
     double applied = 0.0;
-    while (std::isfinite(bound) && applied <= bound) {
-      add_to_diagonal(shifted, shift - applied);
-      applied = shift;
-      if (numeric(shifted)) return applied;
-      shift *= 2.0;
-    }
+    const double shift = search_diagonal_shift(A, [&](double s) {
+      add_to_diagonal(shifted, s - applied);
+      applied = s;
+      return numeric(shifted);
+    });
+    if (!std::isnan(shift)) return shift;
     throw std::runtime_error(fmt::format("{}: the Newton matrix could not be factorized even with a diagonal shift "
                                          "of {:g} (it has a non-finite entry)",
                                          name_, applied));

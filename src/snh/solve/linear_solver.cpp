@@ -1,5 +1,7 @@
 #include "snh/solve/linear_solver.hpp"
 
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -43,6 +45,20 @@ std::unique_ptr<LinearSolver> automatic(const LinearSolverOptions& o, const Solv
 }
 
 }  // namespace
+
+double search_diagonal_shift(const SparseLower& A, const std::function<bool(double)>& attempt) {
+  Eigen::VectorXd row_abs = Eigen::VectorXd::Zero(A.rows());
+  for (Eigen::Index c = 0; c < A.outerSize(); ++c)
+    for (SparseLower::InnerIterator it(A, c); it; ++it) {
+      row_abs[it.row()] += std::abs(it.value());
+      if (it.row() != it.col()) row_abs[it.col()] += std::abs(it.value());
+    }
+  const double bound = 4.0 * std::max(row_abs.size() ? row_abs.maxCoeff() : 0.0, 1e-300);
+  const double first = 1e-10 * std::max(A.rows() ? A.diagonal().cwiseAbs().maxCoeff() : 0.0, 1e-300);
+  for (double shift = first; std::isfinite(bound) && shift <= bound; shift *= 2.0)
+    if (attempt(shift)) return shift;
+  return std::numeric_limits<double>::quiet_NaN();
+}
 
 std::string_view auto_linear_solver(Eigen::Index free_dofs, bool hex_lattice) {
   if (free_dofs < kAutoIterativeFrom) return "cholmod";

@@ -76,6 +76,12 @@ class LinearSolver {
   [[nodiscard]] virtual bool inexact() const { return false; }
 };
 
+/// The diagonal shifts a solver tries when A (lower triangle) is not positive definite: σ doubling from
+/// 1e-10 of A's largest diagonal entry up to twice its Gershgorin bound (twice the largest absolute row
+/// sum), beyond which A + σI is positive definite, so only a non-finite A makes every try fail. Calls
+/// attempt(σ) for each in turn and returns the first σ for which it returns true; NaN when none does.
+[[nodiscard]] double search_diagonal_shift(const SparseLower& A, const std::function<bool(double)>& attempt);
+
 /// "auto": the direct solver below this many free DOFs, multigrid from it (README "How a step is solved").
 inline constexpr Eigen::Index kAutoIterativeFrom = 20000;
 /// The registry name "auto" stands for: cholmod below kAutoIterativeFrom free DOFs, else mg on a hexahedral

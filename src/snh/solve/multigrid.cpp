@@ -848,17 +848,9 @@ class MultigridSolver final : public LinearSolver {
   bool try_factorize(const SparseLower& A) override { return compute(A); }
   double factorize(const SparseLower& A) override {
     if (compute(A)) return 0.0;
-    // As the direct solvers: a shift doubling from 1e-10 of the largest diagonal entry, up to Gershgorin's bound.
-    Eigen::VectorXd row_abs = Eigen::VectorXd::Zero(A.rows());
-    for (Eigen::Index c = 0; c < A.outerSize(); ++c)
-      for (SparseLower::InnerIterator it(A, c); it; ++it) {
-        row_abs[it.row()] += std::abs(it.value());
-        if (it.row() != it.col()) row_abs[it.col()] += std::abs(it.value());
-      }
-    const double bound = 2.0 * std::max(row_abs.size() ? row_abs.maxCoeff() : 0.0, 1e-300);
-    for (double shift = 1e-10 * std::max(A.diagonal().cwiseAbs().maxCoeff(), 1e-300); std::isfinite(bound) && shift <= 2.0 * bound;
-         shift *= 2.0)
-      if (vcycle_.compute(A, shift)) return shift;
+    // The direct solvers' search (linear_solver.hpp), on the V-cycle of A + σI.
+    const double shift = search_diagonal_shift(A, [&](double s) { return vcycle_.compute(A, s); });
+    if (!std::isnan(shift)) return shift;
     throw std::runtime_error(fmt::format("{}: the Newton matrix could not be made positive definite by a diagonal shift (it has a non-finite entry)", name_));
   }
   /// Conjugate gradients on the matrix the V-cycle holds (A, plus the shift factorize() added).
