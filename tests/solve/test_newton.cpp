@@ -1,6 +1,6 @@
 // Projected Newton on toy problems: trials outside an energy's domain (+∞) shorten the step and never
 // enter the state, a term's step bound starts the line search, accepted iterates reach the terms, and the
-// step-size stopping rule, and the looser linear solves an inexact solver is allowed.
+// step-size stopping rule, the looser linear solves an inexact solver is allowed, and one Hessian per Newton step.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -23,6 +23,7 @@ class Barrier final : public Term {
   double energy(const Eigen::VectorXd& x) const override { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, const HessianValues* H, PsdProjection) const override {
     ++evaluations;
+    if (H) ++hessians;
     double E = 0.0;
     for (Eigen::Index i = 0; i < x.size(); ++i) {
       const double s = x[i] - b_;
@@ -52,7 +53,7 @@ class Barrier final : public Term {
     ++accepted;
     last_accepted = x;
   }
-  mutable int evaluations = 0, outside = 0, bounds = 0;
+  mutable int evaluations = 0, outside = 0, bounds = 0, hessians = 0;
   int accepted = 0;
   Eigen::VectorXd last_accepted;
 
@@ -156,6 +157,24 @@ TEST(Newton, StopsOnTheStepSizeWhenAsked) {
   ASSERT_TRUE(p.converged) << p.failure;
   EXPECT_TRUE(p.converged_by_step);
   EXPECT_LE((z.array() - 1.0).abs().maxCoeff(), 1e-8);
+}
+
+TEST(Newton, AssemblesOneHessianPerNewtonStepAndNoneForAConvergedStart) {
+  // The Hessian is made only once an iterate is known not to have converged: k Newton steps with the true
+  // Hessian (positive definite here) assemble exactly k, and a start that is already converged none.
+  Toy toy(true);
+  Eigen::VectorXd x = kStart;
+  auto solver = make_linear_solver({.name = "ldlt"});
+  const NewtonReport r = newton_solve(toy.problem, x, *solver, options(200, 1e-10));
+  ASSERT_TRUE(r.converged) << r.failure;
+  ASSERT_GT(r.iterations, 2);
+  EXPECT_EQ(r.true_hessian_steps, r.iterations);
+  EXPECT_EQ(toy.term.hessians, r.iterations);
+  toy.term.hessians = 0;
+  const NewtonReport again = newton_solve(toy.problem, x, *solver, options(200, 1e-10));
+  ASSERT_TRUE(again.converged);
+  EXPECT_EQ(again.iterations, 0);
+  EXPECT_EQ(toy.term.hessians, 0);
 }
 
 /// A direct solver that says it may be inexact, and records the residual each solve was allowed.

@@ -47,9 +47,8 @@ void Problem::update_layout(const Eigen::VectorXd& x) {
   for (Term* t : terms_) t->bind(layout_);
 }
 
-double Problem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, HessianMatrix* hessian,
-                         PsdProjection projection) {
-  Eigen::VectorXd full = Eigen::VectorXd::Zero(x.size());
+double Problem::sum_terms(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, HessianMatrix* hessian,
+                          PsdProjection projection) {
   std::optional<HessianValues> values;
   if (hessian) {  // only a Hessian needs the layout (and the varying stencils at x)
     update_layout(x);
@@ -62,15 +61,23 @@ double Problem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, He
   }
   double total = 0.0;
   for (const Term* t : terms_) {
-    const double e = t->evaluate(x, &full, values ? &*values : nullptr, projection);
-    if (!std::isfinite(e)) {
-      gradient = dofs_.gather_free(full);
-      return e;
-    }
+    const double e = t->evaluate(x, gradient, values ? &*values : nullptr, projection);
+    if (!std::isfinite(e)) return e;
     total += e;
   }
+  return total;
+}
+
+double Problem::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, HessianMatrix* hessian,
+                         PsdProjection projection) {
+  Eigen::VectorXd full = Eigen::VectorXd::Zero(x.size());
+  const double total = sum_terms(x, &full, hessian, projection);
   gradient = dofs_.gather_free(full);
   return total;
+}
+
+void Problem::hessian(const Eigen::VectorXd& x, HessianMatrix& hessian, PsdProjection projection) {
+  (void)sum_terms(x, nullptr, &hessian, projection);
 }
 
 double Problem::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx_free) const {

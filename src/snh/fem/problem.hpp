@@ -36,6 +36,8 @@ class Problem {
   /// the Hessian on the free DOFs, its pattern replaced first if it is not the current layout's.
   /// Returns +∞ (gradient and Hessian not meaningful) where a term is undefined.
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, HessianMatrix* hessian, PsdProjection projection);
+  /// The Hessian alone at x (no gradient: Newton has it from the line search), as evaluate() makes it.
+  void hessian(const Eigen::VectorXd& x, HessianMatrix& hessian, PsdProjection projection);
   /// The smallest max_step over the terms for the step dx on the free DOFs (free_count()).
   [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx_free) const;
   /// Tells every term that Newton accepted x.
@@ -48,6 +50,8 @@ class Problem {
  private:
   /// Builds the layout if there is none, or if a varying stencil at x is not covered.
   void update_layout(const Eigen::VectorXd& x);
+  /// Σ terms' evaluate() into `gradient` (null: none) and `hessian` (null: none).
+  double sum_terms(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, HessianMatrix* hessian, PsdProjection projection);
   DofMap dofs_;
   std::vector<Term*> terms_;
   std::vector<Stencil> fixed_, varying_;  ///< per term (empty where not of that kind)

@@ -39,7 +39,8 @@ class Term {
   /// The largest α in (0, 1] such that x + α dx is safe for this term (dx: a step on every DOF, 0 on the
   /// kinematic ones); 1 by default. Newton starts its line search at the smallest over all terms.
   [[nodiscard]] virtual double max_step(const Eigen::VectorXd& /*x*/, const Eigen::VectorXd& /*dx*/) const { return 1.0; }
-  /// Called with every iterate Newton accepts.
+  /// Called with every iterate Newton accepts (Newton evaluated the energy and gradient there before this
+  /// call and keeps them: a term must not change its energy here).
   virtual void on_accepted(const Eigen::VectorXd& /*x*/) {}
   /// Called before each solve with the time it solves for: a term whose data follow a script (a soft
   /// binding's targets carried by bones, a moving collider) updates them here.

@@ -30,10 +30,14 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
   Eigen::VectorXd g;
   HessianMatrix H;
   const bool try_true = options.try_true_hessian;
+  const PsdProjection first = try_true ? PsdProjection::none : options.projection;
   // An iterative linear solve may stop at a residual that cannot decide convergence: a tenth of the tolerance.
   const double linear_enough = 0.1 * options.tolerance;
+  // The energy and gradient come first (at the start, then from each accepted line-search trial); the
+  // Hessian is assembled only once the iterate is known not to have converged (a solve that needs one
+  // Newton step used to assemble two).
   auto t = Clock::now();
-  double E = problem.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
+  double E = problem.evaluate(x, g, nullptr, options.projection);
   report.assembly_seconds += seconds_since(t);
   if (!std::isfinite(E)) {
     report.energy = E;
@@ -71,6 +75,9 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     t = Clock::now();
     // The true Hessian when it is positive definite (a direct solver's Cholesky succeeds, or PCG meets
     // no non-positive curvature) and gives a descent direction; otherwise the projected Hessian.
+    problem.hessian(x, H, first);
+    report.assembly_seconds += seconds_since(t);
+    t = Clock::now();
     Eigen::VectorXd d;
     bool have_step = false;
     // Inexact Newton (Eisenstat and Walker's forcing terms, in the form η = min(forcing, √(‖g‖/‖g₀‖))): an
@@ -88,8 +95,7 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
       if (try_true) {  // H held the true Hessian: assemble the projected one
         report.solve_seconds += seconds_since(t);
         t = Clock::now();
-        Eigen::VectorXd unused;
-        problem.evaluate(x, unused, &H, options.projection);
+        problem.hessian(x, H, options.projection);
         report.assembly_seconds += seconds_since(t);
         t = Clock::now();
       }
@@ -109,7 +115,7 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     }
 
     t = Clock::now();
-    Eigen::VectorXd trial = x;
+    Eigen::VectorXd trial = x, g_trial;
     // The line search starts at the largest step every term allows.
     double alpha = std::min(1.0, problem.max_step(x, d)), E_trial = 0.0;
     if (!(alpha > 0.0)) {
@@ -121,15 +127,13 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     for (int h = 0; h <= options.max_halvings; ++h) {
       trial = x;
       problem.dofs().scatter_add_free(d, alpha, trial);
-      E_trial = problem.energy(trial);
+      E_trial = problem.evaluate(trial, g_trial, nullptr, options.projection);  // the gradient for the next iterate
       if (std::isfinite(E_trial) && E_trial <= E + 1e-4 * alpha * slope) {
         accepted = true;
         break;
       }
       // Within rounding of E: accept the full step if it reduces the residual.
       if (h == 0 && std::isfinite(E_trial) && std::abs(E_trial - E) <= 1e-12 * std::max(1.0, std::abs(E))) {
-        Eigen::VectorXd g_trial;
-        problem.evaluate(trial, g_trial, nullptr, options.projection);
         if (g_trial.norm() < r) {
           accepted = true;
           break;
@@ -147,9 +151,8 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     }
     x = trial;
     problem.on_accepted(x);
-    t = Clock::now();
-    E = problem.evaluate(x, g, &H, try_true ? PsdProjection::none : options.projection);
-    report.assembly_seconds += seconds_since(t);
+    E = E_trial;
+    g = std::move(g_trial);
   }
 }
 

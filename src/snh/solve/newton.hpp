@@ -16,7 +16,9 @@
 // > 0) Newton also stops when the Newton step's largest entry is below step_tolerance (the criterion of
 // IPC and PolyFEM: scale-aware where an absolute ‖g‖ is not), or (relative_step_tolerance > 0) below
 // that fraction of how far the solve has moved x, or below the coordinates' rounding. A step rule stops
-// before taking that last step.
+// before taking that last step. Each line-search trial evaluates the energy and the gradient, so the
+// accepted trial's serve the next iteration; the Hessian is assembled only once the convergence test has
+// failed (one per Newton step; none for a converged start).
 #include <functional>
 #include <string>
 #include <vector>
