@@ -4,7 +4,10 @@
 
 #include <random>
 
+#include <dlfcn.h>
+
 #include "snh/mesh/box.hpp"
+#include "snh/solve/direct_solver.hpp"
 #include "snh/solve/linear_solver.hpp"
 
 namespace snh {
@@ -45,6 +48,21 @@ TEST(LinearSolver, AllKindsAgreeOnAPositiveDefiniteSystem) {
     }
     EXPECT_EQ(s->factorize(A), 0.0) << "no shift needed";
   }
+}
+
+TEST(DirectSolver, SmallFactorizationsRunTheBlasOnOneThread) {
+  using Get = int (*)();
+  const auto threads = reinterpret_cast<Get>(::dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  const int own = choose_blas_threads(1e12);  // a large factorization: OpenBLAS's own count
+  if (own == 0 || !threads) GTEST_SKIP() << "the BLAS is not OpenBLAS";
+  EXPECT_EQ(threads(), own);
+  EXPECT_EQ(choose_blas_threads(1e6), 1);
+  EXPECT_EQ(choose_blas_threads(1e12), own) << "a larger factorization gets the threads back";
+  // CHOLMOD's analysis of a small matrix chooses one thread by itself.
+  auto s = make_linear_solver({.name = "cholmod"});
+  ASSERT_TRUE(s->try_factorize(random_matrix(300, 0.0, 3)));
+  EXPECT_EQ(threads(), 1);
+  (void)choose_blas_threads(1e12);
 }
 
 TEST(LinearSolver, IndefiniteMatricesAreRecognised) {

@@ -10,6 +10,7 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <fmt/format.h>
+#include <dlfcn.h>
 #include <sys/mman.h>
 
 #include "snh/solve/memory_estimate.hpp"
@@ -59,6 +60,12 @@ bool room_for_first_factorization(const cholmod_factor* L) {
   return true;
 }
 
+/// Below this many flops for a factorization (CHOLMOD's estimate after its analysis) the BLAS runs on one
+/// thread. Measured with hexcli (2-core Intel Xeon VM): at res 10 (2.8e8 flops) OpenBLAS's second thread
+/// cost 0.4 s of sys time waiting (sched_yield) for 0.47-0.59 s of wall time, and one thread took 1.8x less
+/// CPU; at res 20 (1.1e10 flops) two threads were faster on an idle machine (6.5 against 8.6 s).
+constexpr double kThreadedBlasFlops = 3e9;
+
 /// CHOLMOD and LDLᵀ share the symbolic-reuse and shift logic.
 template <class Factor>
 class DirectSolver final : public LinearSolver {
@@ -71,6 +78,7 @@ class DirectSolver final : public LinearSolver {
     if (!analysed_ || !same_pattern(A, pattern_)) {
       pattern_ = A;
       guarded("symbolic analysis", [&] { factor_.analyzePattern(A); });
+      if constexpr (std::is_same_v<Factor, Cholmod>) (void)choose_blas_threads(factor_.cholmod().fl);
       analysed_ = true;
     }
     return numeric(A);
@@ -211,6 +219,18 @@ class FactorReuse final : public LinearSolver {
 };
 
 }  // namespace
+
+int choose_blas_threads(double flops) {
+  // OpenBLAS's functions, looked up at run time so that any other BLAS is left as it is.
+  using Set = void (*)(int);
+  using Get = int (*)();
+  static const Set set = reinterpret_cast<Set>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+  static const Get get = reinterpret_cast<Get>(::dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  static const int initial = get ? get() : 0;
+  if (!set || !get) return 0;
+  set(flops < kThreadedBlasFlops ? 1 : initial);
+  return get();
+}
 
 std::unique_ptr<LinearSolver> make_cholmod_solver() {
   return std::make_unique<DirectSolver<Cholmod>>("cholmod");

@@ -21,4 +21,9 @@ namespace snh {
 [[nodiscard]] std::unique_ptr<LinearSolver> with_factor_reuse(std::unique_ptr<LinearSolver> direct, double tolerance,
                                                               int max_iterations);
 
+/// The BLAS threads for a factorization of `flops` (CHOLMOD's estimate, made by each new analysis): one
+/// below 3e9 flops, where OpenBLAS's idle threads cost more than they save, else OpenBLAS's own count. Sets
+/// them where the BLAS is OpenBLAS (found at run time) and returns the count set; 0 for any other BLAS.
+int choose_blas_threads(double flops);
+
 }  // namespace snh
