@@ -1,12 +1,11 @@
 // The barrier b(s, ŝ) = −(s − ŝ)² ln(s/ŝ) and its derivatives by finite differences; zero at and beyond ŝ,
-// unbounded as s → 0; the barrier of a pair's squared distance by the chain rule; the PSD projection.
+// unbounded as s → 0; the PSD projection.
 #include <gtest/gtest.h>
 
 #include <random>
 
 #include "fd_check.hpp"
 #include "snh/contact/barrier.hpp"
-#include "snh/contact/point_triangle_distance.hpp"
 #include "snh/contact/project_psd.hpp"
 
 namespace snh::contact {
@@ -67,32 +66,6 @@ TEST(Barrier, UnboundedAsTheDistanceVanishes) {
   EXPECT_EQ(barrier(0.0, s_hat), std::numeric_limits<double>::infinity());
   EXPECT_EQ(barrier(-1.0, s_hat), std::numeric_limits<double>::infinity());
   EXPECT_EQ(barrier_first_derivative(0.0, s_hat), -std::numeric_limits<double>::infinity());
-}
-
-/// The barrier of a point–triangle pair through the chain rule (what a contact term computes per pair):
-/// ∇(b∘s) = b'∇s, ∇²(b∘s) = b''∇s∇sᵀ + b'∇²s, checked by finite differences.
-TEST(Barrier, ChainRuleThroughAPairDistance) {
-  std::mt19937_64 rng(21);
-  const double dhat = 0.5, s_hat = dhat * dhat;
-  int active = 0;
-  for (int i = 0; i < 200 && active < 40; ++i) {
-    const std::array<Vec3, 4> x = {test::random_point(rng, -0.6, 0.6), test::random_point(rng),
-                                   test::random_point(rng), test::random_point(rng)};
-    const auto type = point_triangle_distance_type(x[0], x[1], x[2], x[3]);
-    if (point_triangle_distance(x[0], x[1], x[2], x[3]) >= s_hat) continue;
-    ++active;
-    const auto energy = [&](const std::array<Vec3, 4>& y) {
-      const auto s = point_triangle_distance_derivatives(y[0], y[1], y[2], y[3], type);
-      Derivatives<12> e;
-      const double b1 = barrier_first_derivative(s.value, s_hat);
-      e.value = barrier(s.value, s_hat);
-      e.gradient = b1 * s.gradient;
-      e.hessian = barrier_second_derivative(s.value, s_hat) * s.gradient * s.gradient.transpose() + b1 * s.hessian;
-      return e;
-    };
-    test::expect_derivatives(energy, x, "barrier of point-triangle " + std::string(to_string(type)), 1e-6, 1e-8);
-  }
-  EXPECT_GE(active, 40);
 }
 
 TEST(ProjectPsd, ClampsNegativeEigenvaluesOnly) {
