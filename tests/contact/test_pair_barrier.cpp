@@ -66,6 +66,8 @@ TEST(PairBarrier, ZeroOutOfRangeInfiniteInContact) {
             std::numeric_limits<double>::infinity());
   const auto e = edge_edge_barrier(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0.5, -1, 0), Vec3(0.5, 1, 0), kShat, 1e-3, true);
   EXPECT_EQ(e.value, std::numeric_limits<double>::infinity());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(std::isnan(point_triangle_barrier(Vec3(0.2, nan, 0.1), t0, t1, t2, kShat, true).value));
 }
 
 TEST(PairBarrier, ProjectedHessianIsThePsdPart) {

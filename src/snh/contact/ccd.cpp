@@ -27,7 +27,8 @@ double additive_ccd(const Four& x, Four dx, int split, const CcdOptions& options
   double first = 0.0, second = 0.0;
   for (int i = 0; i < 4; ++i) {
     dx[i] -= mean;
-    (i < split ? first : second) = std::max(i < split ? first : second, dx[i].norm());
+    double& bound = i < split ? first : second;
+    bound = std::max(bound, dx[i].norm());
   }
   const double speed = first + second;
   if (!std::isfinite(speed))

@@ -1,5 +1,5 @@
 #pragma once
-// The three smooth squared distances IPC's closest-feature pairs reduce to, written on difference vectors
+// The smooth squared distances IPC's closest-feature pairs reduce to, written on difference vectors
 // (u = x_i − x_j) with exact gradients and Hessians, and the chain rule back to the pair's points.
 //   point–point   f(u)       = |u|²
 //   point–line    f(u, v)    = |u|² − (u·v)²/|v|²          (u from a point of the line, v its direction)

@@ -1,5 +1,6 @@
 #include "snh/contact/pair_barrier.hpp"
 
+#include <cmath>
 #include <limits>
 
 #include "snh/contact/barrier.hpp"
@@ -21,10 +22,11 @@ Derivatives<12> barrier_of(const Derivatives<12>& s, double s_hat) {
   return b;
 }
 
-/// The pair's energy when out of range (all zero) or in contact (+∞).
+/// The pair's energy when out of range (all zero), in contact (+∞) or at non-finite positions (NaN).
 Derivatives<12> outside(double s) {
   Derivatives<12> z;
   if (s <= 0.0) z.value = std::numeric_limits<double>::infinity();
+  if (std::isnan(s)) z.value = std::numeric_limits<double>::quiet_NaN();
   return z;
 }
 

@@ -6,7 +6,8 @@
 // with s the squared distance of the pair's type at x (distance_type.hpp) and ŝ = d̂². Chain and product
 // rules:  ∇(b∘s) = b'∇s,  ∇²(b∘s) = b''∇s∇sᵀ + b'∇²s;  ∇(m·b) = m∇b + b∇m,  ∇²(m·b) = m∇²b + ∇m∇bᵀ + ∇b∇mᵀ
 // + b∇²m. With project, the Hessian is made PSD (project_psd.hpp) for Newton. A pair at s ≥ ŝ gives
-// exactly 0 (value, gradient, Hessian); at s ≤ 0 the value is +∞ (CCD keeps iterates away from it).
+// exactly 0 (value, gradient, Hessian); at s ≤ 0 the value is +∞ (CCD keeps iterates away from it), and
+// at non-finite positions NaN (the derivatives then 0): a line search rejects either.
 #include "snh/contact/distance_core.hpp"
 
 namespace snh::contact {
