@@ -1,0 +1,35 @@
+#pragma once
+// The broad phase: which vertex–triangle and edge–edge pairs of a triangle surface may come within d̂ of
+// each other during a step, found by box overlap (IPC's candidate sets, before the exact distances).
+// Each primitive's box bounds its vertices at the start and at the end of the step (the box of a linearly
+// swept primitive: every point of x + t·dx, t ∈ [0, 1], lies in it), grown by d̂/2 on every side, so two
+// primitives that come within d̂ at any time of the step have overlapping boxes. Pairs that share a vertex
+// are never candidates (their distance is 0 by construction; IPC leaves them to the elasticity).
+// The method is sort and sweep: boxes sorted by their lower bound on the axis along which the box centres
+// spread most, each box tested only against the boxes still open on that axis; the result is sorted, so it
+// does not depend on the sweep's order (deterministic).
+#include <array>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace snh::contact {
+
+/// Candidate pairs, each list sorted lexicographically and free of duplicates.
+struct Candidates {
+  std::vector<std::array<int, 2>> vertex_triangle;  ///< (vertex, triangle column of F)
+  std::vector<std::array<int, 2>> edge_edge;        ///< (edge, edge) column indices of E, first < second
+};
+
+/// The undirected edges of a triangle list: 2 by #E, each column (lower id, higher id), columns sorted.
+[[nodiscard]] Eigen::Matrix2Xi surface_edges(const Eigen::Matrix3Xi& F);
+
+/// Candidates of the step from V0 to V1 (3 by #V each; pass V0 twice for a static test).
+///   F  3 by #F triangles, E  2 by #E edges (e.g. surface_edges(F)), vertex ids in [0, #V)
+///   dhat  the distance below which pairs interact (≥ 0)
+/// Throws std::invalid_argument (one line) for non-finite positions, V0 and V1 of different sizes, an
+/// index out of range, or dhat negative or non-finite.
+[[nodiscard]] Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, const Eigen::Matrix3Xi& F,
+                                     const Eigen::Matrix2Xi& E, double dhat);
+
+}  // namespace snh::contact
