@@ -1,5 +1,6 @@
 // The stepping core without files: a Simulation driven by kinematic providers (a Python script or a rig
-// sets targets the same way), its substeps, an interruption that restores the frame's start, the DOF
+// sets targets the same way), its substeps, quadratic extrapolation and its saved state, an interruption
+// that restores the frame's start, the DOF
 // conflicts it refuses; scripted motions; the stats tables (one description drives JSON, CSV and resume);
 // and the statuses the driver writes.
 #include <gtest/gtest.h>
@@ -112,6 +113,59 @@ TEST(Simulation, AnInterruptedFrameReturnsToItsStart) {
   EXPECT_EQ(sim.v(), before.aux);
   EXPECT_EQ(sim.time(), before.time);
   EXPECT_EQ(sim.steps(), before.steps);
+}
+
+/// Targets that rise faster and faster (0.15 t²): consecutive solutions lie on a curve.
+class Accelerating final : public KinematicProvider {
+ public:
+  explicit Accelerating(Eigen::Matrix3Xd rest) : rest_(std::move(rest)) {}
+  void targets(double t, Eigen::Matrix3Xd& out) const override {
+    out = rest_;
+    out.row(1).array() += 0.15 * t * t;
+  }
+
+ private:
+  Eigen::Matrix3Xd rest_;
+};
+
+SimulationSetup accelerating_box(int extrapolation) {
+  SimulationSetup s = pulled_box(Integrator::quasi_static);
+  s.kinematic[1].provider = std::make_shared<Accelerating>(s.mesh.vertices(Eigen::all, s.kinematic[1].vertices));
+  s.extrapolation = extrapolation;
+  s.linear.reuse_factor = false;  // every solve from a fresh factor: a restored run matches bit for bit
+  return s;
+}
+
+TEST(Simulation, QuadraticExtrapolationStartsCloserAndResumesExactly) {
+  Simulation linear(accelerating_box(1)), quadratic(accelerating_box(2));
+  // From the third step on the guess is closer: the first residual of each solve is smaller.
+  for (int k = 1; k <= 6; ++k) {
+    const StepReport a = linear.step(0.4 * k), b = quadratic.step(0.4 * k);
+    ASSERT_TRUE(a.converged && b.converged) << a.failure << b.failure;
+    if (k < 3) EXPECT_EQ(a.newton.residuals, b.newton.residuals) << "the linear guess until three solutions exist";
+    else EXPECT_LT(b.newton.residuals.front(), 0.5 * a.newton.residuals.front()) << "step " << k;
+  }
+  EXPECT_LE((linear.x() - quadratic.x()).lpNorm<Eigen::Infinity>(), 1e-8) << "the same answers";
+  // The state holds the last two solutions (6 #V numbers); a simulation restored from it continues exactly
+  // as the one it was taken from.
+  const SimulationState saved = quadratic.state();
+  EXPECT_EQ(saved.aux.size(), 2 * saved.x.size());
+  EXPECT_EQ(linear.state().aux.size(), saved.x.size());
+  Simulation resumed(accelerating_box(2));
+  resumed.restore(saved);
+  for (int k = 7; k <= 8; ++k) {
+    ASSERT_TRUE(quadratic.step(0.4 * k).converged);
+    ASSERT_TRUE(resumed.step(0.4 * k).converged);
+  }
+  EXPECT_EQ(resumed.x(), quadratic.x());
+  // A state of one previous solution (a checkpoint of an extrapolation-1 run) restores too.
+  Simulation from_linear(accelerating_box(2));
+  from_linear.restore(linear.state());
+  const StepReport after = from_linear.step(0.4 * 7);
+  EXPECT_TRUE(after.converged) << after.failure;
+  SimulationState bad = saved;
+  bad.aux.conservativeResize(bad.aux.size() - 1);
+  EXPECT_THROW(resumed.restore(bad), std::invalid_argument);
 }
 
 TEST(Simulation, RefusesACoordinateHeldByTwoSetsAndBadSizes) {

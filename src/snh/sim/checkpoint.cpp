@@ -139,7 +139,7 @@ Checkpoint checkpoint_for_resume(const std::filesystem::path& dir, const std::st
   if (c->fingerprint != fingerprint)
     throw std::invalid_argument(fmt::format("cannot resume: the run in {} used other settings ({}; now {})", dir.string(),
                                             printable(c->fingerprint), printable(fingerprint)));
-  if (c->x.size() != dofs || c->aux.size() != dofs)
+  if (c->x.size() != dofs || (c->aux.size() != dofs && c->aux.size() != 2 * dofs))
     throw std::invalid_argument(fmt::format("cannot resume: the checkpoint in {} is for another mesh", dir.string()));
   return *c;
 }

@@ -412,6 +412,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   setup.materials = {make_material(s.material.name, s.material.params, s.material.reparametrize)};
   setup.density = s.material.density;
   setup.integrator = s.time.integrator;
+  setup.extrapolation = 2;
   setup.dt = h;
   setup.gravity = s.forces.gravity;
   setup.mass_damping = s.forces.mass_damping;

@@ -91,7 +91,7 @@ std::vector<bool> Simulation::kinematic_vertices() const {
 StepReport Simulation::step(double t, const NewtonOptions* newton) {
   StepReport report;
   report.substeps = 1;
-  const Eigen::VectorXd x_n = x_, previous_n = previous_;
+  const Eigen::VectorXd x_n = x_, previous_n = previous_, previous2_n = previous2_;
   const double h = setup_.dt;
   // The guess: the inertial prediction (backward Euler), a linear extrapolation from the last two
   // solutions, or for the first quasi-static step the setup's (the current state by default).
@@ -102,10 +102,23 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
   place_kinematic(guess, t);
   problem_.at_time(t);
   inertia_.begin_step(x_n, v_);
-  if (!std::isfinite(problem_.energy(guess))) {  // the prediction leaves an energy's domain
+  double E = problem_.energy(guess);
+  if (!dynamic() && setup_.extrapolation >= 2 && steps_ >= 2 && previous2_.size() == x_.size()) {
+    // The quadratic extrapolation is closer along a smooth motion; at a kink of a keyframed one (a joint
+    // that stops or turns) the linear one can be: the lower energy decides.
+    Eigen::VectorXd quadratic = 3.0 * (x_ - previous_) + previous2_;
+    place_kinematic(quadratic, t);
+    const double Eq = problem_.energy(quadratic);
+    if (Eq < E || (!std::isfinite(E) && std::isfinite(Eq))) {
+      guess = std::move(quadratic);
+      E = Eq;
+    }
+  }
+  if (!std::isfinite(E)) {  // the prediction leaves an energy's domain
     guess = setup_.fallback_guess ? setup_.fallback_guess(x_n, t) : x_n;
     place_kinematic(guess, t);
   }
+  if (!dynamic() && setup_.extrapolation >= 2 && steps_ >= 1) previous2_ = previous_;
   previous_ = x_n;
   x_ = guess;
   report.newton = newton_solve(problem_, x_, *solver_, newton ? *newton : setup_.newton);
@@ -113,6 +126,7 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
   if (r.interrupted) {  // abandon the step: back to where it started
     x_ = x_n;
     previous_ = previous_n;
+    previous2_ = previous2_n;
     report.interrupted = true;
     report.converged = false;
     report.failure = r.failure;
@@ -171,15 +185,23 @@ StepReport Simulation::advance(double t_start, double h, int substeps, const New
 }
 
 SimulationState Simulation::state() const {
-  return {.x = x_, .aux = dynamic() ? v_ : previous_, .time = time_, .steps = steps_};
+  if (dynamic()) return {.x = x_, .aux = v_, .time = time_, .steps = steps_};
+  if (setup_.extrapolation < 2 || previous2_.size() != x_.size()) return {.x = x_, .aux = previous_, .time = time_, .steps = steps_};
+  Eigen::VectorXd both(2 * x_.size());
+  both << previous_, previous2_;
+  return {.x = x_, .aux = std::move(both), .time = time_, .steps = steps_};
 }
 
 void Simulation::restore(const SimulationState& s) {
-  if (s.x.size() != x_.size() || s.aux.size() != x_.size())
-    throw std::invalid_argument(fmt::format("a saved state of {} numbers for a mesh of {} DOFs", s.x.size(), x_.size()));
+  const Eigen::Index n = x_.size();
+  const bool two = !dynamic() && setup_.extrapolation >= 2 && s.aux.size() == 2 * n;
+  if (s.x.size() != n || (s.aux.size() != n && !two))
+    throw std::invalid_argument(fmt::format("a saved state of {} and {} numbers for a mesh of {} DOFs", s.x.size(), s.aux.size(), n));
   x_ = s.x;
   if (dynamic()) v_ = s.aux;
-  else previous_ = s.aux;
+  else previous_ = s.aux.head(n);
+  if (two) previous2_ = s.aux.tail(n);
+  else previous2_.resize(0);
   time_ = s.time;
   steps_ = s.steps;
 }
