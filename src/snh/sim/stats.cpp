@@ -81,6 +81,8 @@ const RecordTable& scene_table() {
                  min_J(),
                  inverted(),
                  {"wall_seconds", &R::wall_seconds, "{:.6f}", "wall", "wall"},
+                 {"assembly_seconds", &R::assembly_seconds, "{:.6f}", "assembly", "wall", true},
+                 {"solve_seconds", &R::solve_seconds, "{:.6f}", "linear solve", "wall", true},
                  failure()},
       .plots = {{"newton", "Newton iterations", "iterations"},
                 {"residual", "Residual ‖g‖ (largest of the substeps)", "‖g‖", true},
