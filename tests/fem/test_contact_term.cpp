@@ -19,6 +19,7 @@
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/sim/dynamics.hpp"
+#include "snh/sim/simulation.hpp"
 #include "snh/solve/linear_solver.hpp"
 #include "snh/solve/newton.hpp"
 #include "fem/problem_fd.hpp"
@@ -467,6 +468,34 @@ TEST(ContactTerm, TwoCubesThrownAtEachOtherBounceApartWithoutIntersecting) {
   EXPECT_GT(vb, 0.0);
   std::cout << "closest approach " << closest << ", steps in contact " << contact_steps << ", velocities " << va
             << " " << vb << "\n";
+}
+
+TEST(ContactTerm, ASimulationsGuessDoesNotJumpThroughAContact) {
+  // Two cubes 0.3 apart at ±40 m/s with h = 0.01: the inertial prediction x_n + h v overlaps them by 0.5,
+  // an intersecting state of finite energy (no pair exactly at distance 0), from which Newton would never
+  // separate them. The Simulation bounds the guess by the contact term's CCD, so no step ever intersects.
+  const TwoCubes cubes(1.0, Vec3(1.3, 0.1, 0.05));
+  SimulationSetup setup;
+  setup.mesh = cubes.mesh;
+  setup.materials = {make_material("stable_neo_hookean", {2e5, 2e6})};
+  setup.density = 100.0;
+  setup.integrator = Integrator::backward_euler;
+  setup.dt = 0.01;
+  setup.newton.tolerance = 1e-2;
+  setup.linear.name = "ldlt";
+  setup.terms.push_back(std::make_shared<ContactTerm>(cubes.F, cubes.mesh.vertices, 0.02, 1e8));
+  Simulation sim(std::move(setup));
+  const Eigen::Index n = cubes.mesh.vertex_count() / 2;
+  SimulationState state = sim.state();
+  state.aux = Eigen::VectorXd::Zero(state.x.size());
+  for (Eigen::Index i = 0; i < 2 * n; ++i) state.aux[3 * i] = i < n ? 40.0 : -40.0;
+  sim.restore(state);
+  EXPECT_TRUE(surface_intersects(cubes.F, unflatten(state.x + 0.01 * state.aux)));  // the prediction would
+  for (int s = 1; s <= 10; ++s) {
+    const StepReport r = sim.step(0.01 * s);
+    ASSERT_TRUE(r.converged) << "step " << s << ": " << r.failure;
+    ASSERT_FALSE(surface_intersects(cubes.F, unflatten(sim.x()))) << "step " << s;
+  }
 }
 
 }  // namespace

@@ -102,6 +102,16 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
   place_kinematic(guess, t);
   problem_.at_time(t);
   inertia_.begin_step(x_n, v_);
+  {
+    // Contact terms bound the move from x_n (its kinematic DOFs already at t) to the guess by continuous
+    // collision detection, so that the guess never jumps through a contact (a term without a bound, as
+    // every one but contact, says 1: the guess is then unchanged).
+    Eigen::VectorXd base = x_n;
+    place_kinematic(base, t);
+    const Eigen::VectorXd dx = dofs_.gather_free(guess) - dofs_.gather_free(base);
+    const double alpha = problem_.max_step(base, dx);
+    if (alpha < 1.0) guess = base + alpha * dofs_.expand(dx);
+  }
   if (!std::isfinite(problem_.energy(guess))) {  // the prediction leaves an energy's domain
     guess = setup_.fallback_guess ? setup_.fallback_guess(x_n, t) : x_n;
     place_kinematic(guess, t);
