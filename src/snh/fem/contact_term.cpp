@@ -296,6 +296,8 @@ PlaneContactTerm::PlaneContactTerm(std::vector<int> vertices, const Eigen::Vecto
 }
 
 double PlaneContactTerm::distance(const Eigen::VectorXd& x, int v) const {
+  if (3 * static_cast<Eigen::Index>(v) + 3 > x.size())
+    throw std::logic_error(fmt::format("plane contact: vertex {} is beyond the {} DOFs given", v, x.size()));
   return normal_.dot(x.segment<3>(3 * v) - point_);
 }
 
@@ -318,7 +320,7 @@ double PlaneContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gra
     if (gradient) gradient->segment<3>(3 * v) += (kappa_ * b1 * 2.0 * d) * normal_;
     if (hessian) {
       double c = kappa_ * (4.0 * s * contact::barrier_second_derivative(s, s_hat) + 2.0 * b1);
-      if (projection != PsdProjection::none) c = projection == PsdProjection::abs ? std::abs(c) : std::max(c, 0.0);
+      if (projection != PsdProjection::none) c = std::max(c, 0.0);  // clamped, as the pairs' projection
       hessian->add_block(v, v, c * normal_ * normal_.transpose());
     }
   }
