@@ -353,6 +353,19 @@ TEST(ContactTerm, BadArgumentsThrow) {
   EXPECT_THROW(PlaneContactTerm({0}, Vec3::Zero(), Vec3::UnitY(), 0.1, INFINITY), std::invalid_argument);
 }
 
+TEST(ContactTerm, IpcStiffnessFollowsItsFormula) {
+  // κ = 1e11 m̄ / (4 d₀ b''(d₀, ŝ)) / h², d₀ = (1e-8 · diagonal)², b'' written out here.
+  const double diagonal = 3.0, dhat = 0.02, mass = 30.0, h = 0.01;
+  const double d0 = 1e-16 * diagonal * diagonal, s_hat = dhat * dhat;
+  const double b2 = -2.0 * std::log(d0 / s_hat) - 4.0 * (d0 - s_hat) / d0 + (d0 - s_hat) * (d0 - s_hat) / (d0 * d0);
+  const double kappa = ipc_barrier_stiffness(diagonal, dhat, mass, h);
+  EXPECT_NEAR(kappa, 1e11 * mass / (4.0 * d0 * b2) / (h * h), 1e-12 * kappa);
+  EXPECT_NEAR(ipc_barrier_stiffness(diagonal, dhat, 2 * mass, h), 2 * kappa, 1e-12 * kappa);
+  EXPECT_NEAR(ipc_barrier_stiffness(diagonal, dhat, mass, 2 * h), kappa / 4, 1e-12 * kappa);
+  EXPECT_THROW((void)ipc_barrier_stiffness(0.0, dhat, mass, h), std::invalid_argument);
+  EXPECT_THROW((void)ipc_barrier_stiffness(diagonal, dhat, mass, NAN), std::invalid_argument);
+}
+
 // ---- dynamics with contact
 
 /// Elasticity, backward Euler with gravity, and optional contact terms over a mesh, free everywhere.

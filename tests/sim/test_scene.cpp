@@ -122,9 +122,13 @@ TEST(SceneFile, ContactKeysAreChecked) {
             "s.json: contact.dhat: required: the distance below which surfaces repel (> 0)");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": -1, "stiffness": 1}})")), "s.json: contact.dhat: must be > 0, got -1");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1}})")),
-            "s.json: contact.stiffness: required: the barrier's stiffness kappa (> 0)");
-  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "auto"}})")),
-            "s.json: contact.stiffness: expected a number > 0 (an automatic choice is not implemented yet), got \"auto\"");
+            "s.json: contact.stiffness: required: the barrier's stiffness kappa (> 0, or \"auto\")");
+  EXPECT_EQ(parse_scene(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "auto"}})"), "s.json").contact.stiffness, 0.0);
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "soft"}})")),
+            "s.json: contact.stiffness: expected a number > 0 or \"auto\", got \"soft\"");
+  EXPECT_EQ(error_of(json::parse(R"({"integrator": "quasi_static", "contact": {"dhat": 0.1, "stiffness": "auto"}})")),
+            "s.json: contact.stiffness: \"auto\" needs backward_euler (its masses and time step set the scale): give a number");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 0}})")), "s.json: contact.stiffness: must be > 0, got 0");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "self": 1}})")),
             "s.json: contact.self: expected true or false, got 1");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction": 0.3}})")),
@@ -250,20 +254,23 @@ TEST(SceneRun, AStartOutsideTheDomainIsReportedNotCrashed) {
 }
 
 TEST(SceneRun, ACubeFallsOntoAPlaneColliderAndStaysAboveIt) {
-  // A cube of tets dropped 0.3 above the ground with self-contact on: it lands and rests on the barrier.
+  // A cube of tets dropped 0.3 above the ground with self-contact on: it lands and rests on the barrier,
+  // with κ given and with IPC's automatic choice.
+  for (const char* stiffness : {"1e8", "\"auto\""}) {
   const double ground = -1.3, dhat = 0.02;
   const SceneResult r = run_json(fmt::format(R"({{
     "mesh": {{"box": {{"element": "tet", "res": 2}}}}, "material": {{"youngs": 1e5, "poisson": 0.3}}, "density": 100,
     "gravity": [0, -9.8, 0], "dt": 0.01, "end_time": 1.5, "frames": 15,
-    "contact": {{"self": true, "dhat": {}, "stiffness": 1e8}},
+    "contact": {{"self": true, "dhat": {}, "stiffness": {}}},
     "colliders": [{{"type": "plane", "point": [0, {}, 0], "normal": [0, 1, 0]}}]}})",
-                                             dhat, ground),
+                                             dhat, stiffness, ground),
                                  "drop");
-  ASSERT_TRUE(r.all_converged) << r.failure;
+  ASSERT_TRUE(r.all_converged) << stiffness << ": " << r.failure;
   double bottom = INFINITY;
   for (Eigen::Index v = 0; v < r.final_positions.size() / 3; ++v) bottom = std::min(bottom, r.final_positions[3 * v + 1]);
-  EXPECT_GT(bottom, ground);
-  EXPECT_LT(bottom, ground + dhat);  // resting on the ground (it fell 0.3)
+  EXPECT_GT(bottom, ground) << stiffness;
+  EXPECT_LT(bottom, ground + dhat) << stiffness;  // resting on the ground (it fell 0.3)
+  }
 }
 
 TEST(SceneRun, AStopKeepsTheCompletedFrames) {

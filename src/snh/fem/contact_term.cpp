@@ -280,6 +280,19 @@ double ContactTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx
   return t;
 }
 
+double ipc_barrier_stiffness(double bbox_diagonal, double dhat, double average_mass, double dt) {
+  check_positive("the bounding box diagonal", bbox_diagonal);
+  check_positive("dhat", dhat);
+  check_positive("the average vertex mass", average_mass);
+  check_positive("the time step", dt);
+  double d0 = 1e-8 * bbox_diagonal;
+  d0 *= d0;
+  const double s_hat = dhat * dhat;
+  if (!(d0 < s_hat)) d0 = 0.5 * s_hat;  // a d̂ below 1e-8 of the scene: the barrier's own middle
+  const double scaled = 1e11 * average_mass / (4.0 * d0 * contact::barrier_second_derivative(d0, s_hat));
+  return scaled / (dt * dt);
+}
+
 // ---------------------------------------------------------------------------------------------------------
 
 PlaneContactTerm::PlaneContactTerm(std::vector<int> vertices, const Eigen::Vector3d& point,

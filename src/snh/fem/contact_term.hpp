@@ -98,6 +98,16 @@ class ContactTerm final : public Term {
   double dhat_, kappa_;
 };
 
+/// IPC's automatic barrier stiffness (Li et al. 2020, §4.3 and its code's initial choice) when nothing is in
+/// contact at the start: the smallest κ for which the barrier's Hessian 4 d₀ b''(d₀, ŝ) at a squared
+/// distance d₀ = (1e-8 · bbox_diagonal)² weighs 1e11 times an average vertex mass, in IPC's incremental
+/// potential scaled by h² (½|x − x̃|²_M + h²Ψ + κ̃ B):
+///     κ̃ = 1e11 · m̄ / (4 d₀ b''(d₀, ŝ)),
+/// so in snh's unscaled potential (Ψ + M/(2h²)|x − x̃|² + κ B) κ = κ̃ / h². IPC raises κ during a run when
+/// distances keep shrinking; snh keeps it fixed. Throws std::invalid_argument (one line) for an argument
+/// that is not finite and > 0.
+[[nodiscard]] double ipc_barrier_stiffness(double bbox_diagonal, double dhat, double average_mass, double dt);
+
 /// A fixed plane n·x = n·p that vertices stay above (on the side n points to): for each vertex at signed
 /// distance d = n·(x − p) (n of unit length) with d² < d̂², the energy κ b(d², d̂²); a vertex at or below the
 /// plane makes the energy +∞. The Hessian per vertex is κ(4d²b'' + 2b') n nᵀ (rank one; its projection

@@ -143,7 +143,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
   s.pins = scene::parse_pins(top, s.time.end_time);
   s.initial = scene::parse_initial(top);
   s.solver = scene::parse_solver(top);
-  s.contact = scene::parse_contact(top);
+  s.contact = scene::parse_contact(top, s.time.integrator);
   s.output = scene::parse_output(top, source);
   top.finish();
   s.settings = j.dump();  // object keys sorted: the same text for the same scene
@@ -423,15 +423,22 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   if (loaded->flesh)
     if (std::shared_ptr<Term> soft = soft_binding_term(loaded->flesh, s.flesh->soft_stiffness, youngs_modulus(s.material.params)))
       setup.terms.push_back(std::move(soft));
+  double kappa = s.contact.stiffness;
   if (s.contact.enabled) {
+    if (kappa == 0.0) {  // "auto": IPC's choice on the mesh's size, its average vertex mass and the substep
+      const Eigen::Matrix3Xd& X = mesh.vertices;
+      const double diagonal = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
+      const double mass = s.material.density * std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.vertex_count());
+      kappa = as_scene_error([&] { return ipc_barrier_stiffness(diagonal, s.contact.dhat, mass, h); });
+    }
     const Eigen::Matrix3Xi F = boundary_triangles(mesh);
-    if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, s.contact.stiffness));
+    if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa));
     std::vector<int> surface(F.data(), F.data() + F.size());
     std::sort(surface.begin(), surface.end());
     surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
     for (const PlaneColliderSpec& plane : s.contact.planes)
       setup.terms.push_back(
-          std::make_shared<PlaneContactTerm>(surface, plane.point, plane.normal, s.contact.dhat, s.contact.stiffness));
+          std::make_shared<PlaneContactTerm>(surface, plane.point, plane.normal, s.contact.dhat, kappa));
   }
   setup.initial = x0;
   setup.linear.name = s.solver.linear;
@@ -473,7 +480,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     json planes = json::array();
     for (const PlaneColliderSpec& p : s.contact.planes)
       planes.push_back({{"point", {p.point[0], p.point[1], p.point[2]}}, {"normal", {p.normal[0], p.normal[1], p.normal[2]}}});
-    settings["contact"] = {{"self", s.contact.self}, {"dhat", s.contact.dhat}, {"stiffness", s.contact.stiffness}, {"planes", planes}};
+    settings["contact"] = {{"self", s.contact.self}, {"dhat", s.contact.dhat}, {"stiffness", kappa},
+                           {"stiffness_auto", s.contact.stiffness == 0.0}, {"planes", planes}};
   }
 
   RunPlan plan;

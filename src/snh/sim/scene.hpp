@@ -141,7 +141,7 @@ struct ContactSpec {
   bool enabled = false;    ///< a "contact" section was given
   bool self = false;       ///< self-contact of the boundary surface
   double dhat = 0.0;       ///< the distance below which the barrier acts
-  double stiffness = 0.0;  ///< κ
+  double stiffness = 0.0;  ///< κ; 0: "auto" (ipc_barrier_stiffness on the mesh, its mass and time step)
   std::vector<PlaneColliderSpec> planes;
 };
 

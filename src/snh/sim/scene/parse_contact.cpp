@@ -2,7 +2,7 @@
 
 namespace snh::scene {
 
-ContactSpec parse_contact(Keys& top) {
+ContactSpec parse_contact(Keys& top, Integrator integrator) {
   ContactSpec s;
   if (const json* c = top.get("contact")) {
     Keys k(*c, "contact", top.file());
@@ -10,11 +10,15 @@ ContactSpec parse_contact(Keys& top) {
     s.self = k.boolean("self", s.self);
     if (!k.has("dhat")) k.fail("required: the distance below which surfaces repel (> 0)", "dhat");
     s.dhat = k.positive("dhat", 0.0);
-    if (!k.has("stiffness")) k.fail("required: the barrier's stiffness kappa (> 0)", "stiffness");
-    if (k.get("stiffness")->is_string())
-      k.fail("expected a number > 0 (an automatic choice is not implemented yet), got " + k.get("stiffness")->dump(),
-             "stiffness");
-    s.stiffness = k.positive("stiffness", 0.0);
+    if (!k.has("stiffness")) k.fail("required: the barrier's stiffness kappa (> 0, or \"auto\")", "stiffness");
+    if (const json* st = k.get("stiffness"); st->is_string()) {
+      if (st->get<std::string>() != "auto") k.fail("expected a number > 0 or \"auto\", got " + st->dump(), "stiffness");
+      if (integrator != Integrator::backward_euler)
+        k.fail("\"auto\" needs backward_euler (its masses and time step set the scale): give a number", "stiffness");
+      s.stiffness = 0.0;  // auto: chosen on the mesh (ipc_barrier_stiffness)
+    } else {
+      s.stiffness = k.positive("stiffness", 0.0);
+    }
     k.finish();
   }
   if (const json* list = top.get("colliders")) {
