@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Every file of a layer includes only headers of its own layer and of the layers below it (DESIGN.md):
 #   math <- material <- fem <- solve <- sim <- report, mesh beside material (knows math), io, rig, embed and
-#   contact beside fem (know mesh and math). One line per include that breaks an arrow, and a non-zero exit code.
+#   contact beside fem (know mesh and math), fem above contact (its contact terms). One line per include that breaks an arrow, and a non-zero exit code.
 # Usage: test_layers.sh SRC_SNH_DIR
 set -u
 SRC="$1"
@@ -13,8 +13,8 @@ declare -A allowed=(
   [rig]="math mesh rig"
   [embed]="math mesh embed"
   [contact]="math mesh contact"
-  [fem]="math material mesh fem"
-  [solve]="math material mesh fem solve"
+  [fem]="math material mesh contact fem"
+  [solve]="math material mesh contact fem solve"
   [sim]="math material mesh io rig embed contact fem solve sim"
   [report]="math material mesh io rig embed contact fem solve sim report"
 )

@@ -109,6 +109,53 @@ TEST(SceneFile, ErrorsNameTheKey) {
   EXPECT_EQ(error_of(json::parse("[1, 2]")), "s.json: expected an object");
 }
 
+TEST(SceneFile, ContactKeysAreChecked) {
+  const Scene s = parse_scene(json::parse(R"({"contact": {"self": true, "dhat": 0.01, "stiffness": 1e6},
+    "colliders": [{"type": "plane", "point": [0, -2, 0], "normal": [0, 2, 0]}]})"), "s.json");
+  EXPECT_TRUE(s.contact.enabled);
+  EXPECT_TRUE(s.contact.self);
+  EXPECT_EQ(s.contact.dhat, 0.01);
+  EXPECT_EQ(s.contact.stiffness, 1e6);
+  ASSERT_EQ(s.contact.planes.size(), 1u);
+  EXPECT_EQ(s.contact.planes[0].normal, Eigen::Vector3d(0, 1, 0));
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"self": true, "stiffness": 1}})")),
+            "s.json: contact.dhat: required: the distance below which surfaces repel (> 0)");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": -1, "stiffness": 1}})")), "s.json: contact.dhat: must be > 0, got -1");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1}})")),
+            "s.json: contact.stiffness: required: the barrier's stiffness kappa (> 0, or \"auto\")");
+  EXPECT_EQ(parse_scene(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "auto"}})"), "s.json").contact.stiffness, 0.0);
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "soft"}})")),
+            "s.json: contact.stiffness: expected a number > 0 or \"auto\", got \"soft\"");
+  EXPECT_EQ(error_of(json::parse(R"({"integrator": "quasi_static", "contact": {"dhat": 0.1, "stiffness": "auto"}})")),
+            "s.json: contact.stiffness: \"auto\" needs backward_euler (its masses and time step set the scale): give a number");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 0}})")), "s.json: contact.stiffness: must be > 0, got 0");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "self": 1}})")),
+            "s.json: contact.self: expected true or false, got 1");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction": 0.3}})")),
+            "s.json: contact.friction: unknown key (known here: dhat, self, stiffness)");
+  const std::string contact = R"("contact": {"dhat": 0.1, "stiffness": 1}, )";
+  EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": {"type": "plane"}})")),
+            "s.json: colliders: expected an array of colliders, got {\"type\":\"plane\"}");
+  EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "sphere"}]})")),
+            "s.json: colliders[0].type: expected one of plane, got \"sphere\"");
+  EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"point": [0, 0, 0], "normal": [0, 1, 0]}]})")),
+            "s.json: colliders[0].type: required: the collider's type (plane)");
+  EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "normal": [0, 1, 0]}]})")),
+            "s.json: colliders[0].point: required: a point of the plane, 3 numbers");
+  EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, 0, 0]}]})")),
+            "s.json: colliders[0].normal: required: the plane's normal (the side kept free), 3 numbers");
+  EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 0]}]})")),
+            "s.json: colliders[0].normal: must not be zero");
+  EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, 0], "normal": [0, 1, 0]}]})")),
+            "s.json: colliders[0].point: expected 3 numbers, got [0,0]");
+  EXPECT_EQ(error_of(json::parse("{" + contact +
+                                 R"("colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "motion": []}]})"))
+,
+            "s.json: colliders[0].motion: unknown key (known here: normal, point, type)");
+  EXPECT_EQ(error_of(json::parse(R"({"colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0]}]})")),
+            "s.json: colliders: colliders need a \"contact\" section (its dhat and stiffness)");
+}
+
 TEST(SceneFile, UnreadableAndMalformedFiles) {
   EXPECT_THROW((void)load_scene("/nonexistent/scene.json"), SceneError);
   const auto path = std::filesystem::temp_directory_path() / ("snh_bad_scene_" + std::to_string(::getpid()) + ".json");
@@ -204,6 +251,26 @@ TEST(SceneRun, AStartOutsideTheDomainIsReportedNotCrashed) {
   const SceneResult good = run_json(scene("stable_neo_hookean"), "inverted_snh");
   EXPECT_TRUE(good.all_converged) << good.failure;
   EXPECT_EQ(good.frames.size(), 3u);
+}
+
+TEST(SceneRun, ACubeFallsOntoAPlaneColliderAndStaysAboveIt) {
+  // A cube of tets dropped 0.3 above the ground with self-contact on: it lands and rests on the barrier,
+  // with κ given and with IPC's automatic choice.
+  for (const char* stiffness : {"1e8", "\"auto\""}) {
+  const double ground = -1.3, dhat = 0.02;
+  const SceneResult r = run_json(fmt::format(R"({{
+    "mesh": {{"box": {{"element": "tet", "res": 2}}}}, "material": {{"youngs": 1e5, "poisson": 0.3}}, "density": 100,
+    "gravity": [0, -9.8, 0], "dt": 0.01, "end_time": 1.5, "frames": 15,
+    "contact": {{"self": true, "dhat": {}, "stiffness": {}}},
+    "colliders": [{{"type": "plane", "point": [0, {}, 0], "normal": [0, 1, 0]}}]}})",
+                                             dhat, stiffness, ground),
+                                 "drop");
+  ASSERT_TRUE(r.all_converged) << stiffness << ": " << r.failure;
+  double bottom = INFINITY;
+  for (Eigen::Index v = 0; v < r.final_positions.size() / 3; ++v) bottom = std::min(bottom, r.final_positions[3 * v + 1]);
+  EXPECT_GT(bottom, ground) << stiffness;
+  EXPECT_LT(bottom, ground + dhat) << stiffness;  // resting on the ground (it fell 0.3)
+  }
 }
 
 TEST(SceneRun, AStopKeepsTheCompletedFrames) {

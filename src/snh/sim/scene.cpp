@@ -16,8 +16,10 @@
 #include "snh/io/mesh_read.hpp"
 #include "snh/io/obj.hpp"
 #include "snh/io/surface_read.hpp"
+#include "snh/fem/contact_term.hpp"
 #include "snh/io/usda.hpp"
 #include "snh/material/registry.hpp"
+#include "snh/mesh/surface.hpp"
 #include "snh/sim/driver.hpp"
 #include "snh/sim/scene/sections.hpp"
 
@@ -141,6 +143,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
   s.pins = scene::parse_pins(top, s.time.end_time);
   s.initial = scene::parse_initial(top);
   s.solver = scene::parse_solver(top);
+  s.contact = scene::parse_contact(top, s.time.integrator);
   s.output = scene::parse_output(top, source);
   top.finish();
   s.settings = j.dump();  // object keys sorted: the same text for the same scene
@@ -421,6 +424,23 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   if (loaded->flesh)
     if (std::shared_ptr<Term> soft = soft_binding_term(loaded->flesh, s.flesh->soft_stiffness, youngs_modulus(s.material.params)))
       setup.terms.push_back(std::move(soft));
+  double kappa = s.contact.stiffness;
+  if (s.contact.enabled) {
+    if (kappa == 0.0) {  // "auto": IPC's choice on the mesh's size, its average vertex mass and the substep
+      const Eigen::Matrix3Xd& X = mesh.vertices;
+      const double diagonal = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
+      const double mass = s.material.density * std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.vertex_count());
+      kappa = as_scene_error([&] { return ipc_barrier_stiffness(diagonal, s.contact.dhat, mass, h); });
+    }
+    const Eigen::Matrix3Xi F = boundary_triangles(mesh);
+    if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa));
+    std::vector<int> surface(F.data(), F.data() + F.size());
+    std::sort(surface.begin(), surface.end());
+    surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
+    for (const PlaneColliderSpec& plane : s.contact.planes)
+      setup.terms.push_back(
+          std::make_shared<PlaneContactTerm>(surface, plane.point, plane.normal, s.contact.dhat, kappa));
+  }
   setup.initial = x0;
   setup.linear.name = s.solver.linear;
   setup.linear.reuse_factor = !s.solver.refactorize;
@@ -457,6 +477,13 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   settings["relative_step_tolerance"] = sim.setup().newton.relative_step_tolerance;
   settings["vertices"] = result.vertices;
   settings["cells"] = result.cells;
+  if (s.contact.enabled) {
+    json planes = json::array();
+    for (const PlaneColliderSpec& p : s.contact.planes)
+      planes.push_back({{"point", {p.point[0], p.point[1], p.point[2]}}, {"normal", {p.normal[0], p.normal[1], p.normal[2]}}});
+    settings["contact"] = {{"self", s.contact.self}, {"dhat", s.contact.dhat}, {"stiffness", kappa},
+                           {"stiffness_auto", s.contact.stiffness == 0.0}, {"planes", planes}};
+  }
 
   RunPlan plan;
   plan.out = s.output.dir;

@@ -132,6 +132,19 @@ struct SolverSpec {
 /// force fraction turned into a force.
 [[nodiscard]] NewtonOptions newton_options(const SolverSpec& solver, const VolumeMesh& rest, double youngs);
 
+/// "contact" and "colliders": IPC barriers (fem/contact_term.hpp) on the mesh's boundary surface.
+struct PlaneColliderSpec {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  ///< unit length; the surface stays on its side
+};
+struct ContactSpec {
+  bool enabled = false;    ///< a "contact" section was given
+  bool self = false;       ///< self-contact of the boundary surface
+  double dhat = 0.0;       ///< the distance below which the barrier acts
+  double stiffness = 0.0;  ///< κ; 0: "auto" (ipc_barrier_stiffness on the mesh, its mass and time step)
+  std::vector<PlaneColliderSpec> planes;
+};
+
 /// "output".
 struct OutputSpec {
   std::filesystem::path dir;  ///< a scene file's default: output/<file stem>
@@ -169,6 +182,7 @@ struct Scene {
   std::vector<PinSpec> pins;
   std::vector<InitialOp> initial;
   SolverSpec solver;
+  ContactSpec contact;
   OutputSpec output;
   RunControl run;
   /// The mesh, read once by parse_scene (which needs it to check the selections); built on demand for a

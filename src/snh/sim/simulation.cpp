@@ -114,6 +114,20 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
       E = Eq;
     }
   }
+  {
+    // Contact terms bound the move from x_n (its kinematic DOFs already at t) to the guess by continuous
+    // collision detection, so that the guess never jumps through a contact (a term without a bound, as
+    // every one but contact, says 1: the guess is then unchanged).
+    Eigen::VectorXd base = x_n;
+    for (Eigen::Index d = 0; d < base.size(); ++d)
+      if (!dofs_.is_free(d)) base[d] = guess[d];  // the kinematic DOFs as placed (providers asked once a step)
+    const Eigen::VectorXd dx = dofs_.gather_free(guess) - dofs_.gather_free(base);
+    const double alpha = problem_.max_step(base, dx);
+    if (alpha < 1.0) {
+      guess = base + alpha * dofs_.expand(dx);
+      E = problem_.energy(guess);
+    }
+  }
   if (!std::isfinite(E)) {  // the prediction leaves an energy's domain
     guess = setup_.fallback_guess ? setup_.fallback_guess(x_n, t) : x_n;
     place_kinematic(guess, t);

@@ -28,6 +28,8 @@ namespace snh::scene {
 [[nodiscard]] std::vector<InitialOp> parse_initial(Keys& top);
 /// "solver".
 [[nodiscard]] SolverSpec parse_solver(Keys& top);
+/// "contact" and "colliders" ("auto" stiffness only with backward Euler).
+[[nodiscard]] ContactSpec parse_contact(Keys& top, Integrator integrator);
 /// "output" (the directory defaults to output/<file stem>).
 [[nodiscard]] OutputSpec parse_output(Keys& top, const std::filesystem::path& source);
 

@@ -1,0 +1,515 @@
+// The contact terms (IPC barrier over a triangle surface, and a ground plane): derivatives of the whole
+// term by finite differences with vertex–triangle, edge–edge and mollified edge–edge pairs; how duplicate
+// candidates merge (a vertex over a shared edge or a shared vertex) and why they keep their weights (the
+// energy stays continuous across a closest-feature change); that max_step keeps every pair apart on random
+// steps of two approaching cubes (an intersection test of its own below); that a term with nothing in
+// range changes nothing, bit for bit; and two physics runs: a cube dropped on the ground comes to rest
+// above it, two cubes thrown at each other bounce apart, never intersecting.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "snh/contact/barrier.hpp"
+#include "snh/contact/edge_edge_distance.hpp"
+#include "snh/contact/point_triangle_distance.hpp"
+#include "snh/fem/contact_term.hpp"
+#include "snh/fem/problem.hpp"
+#include "snh/material/registry.hpp"
+#include "snh/mesh/box.hpp"
+#include "snh/mesh/surface.hpp"
+#include "snh/sim/dynamics.hpp"
+#include "snh/sim/simulation.hpp"
+#include "snh/solve/linear_solver.hpp"
+#include "snh/solve/newton.hpp"
+#include "fem/problem_fd.hpp"
+
+namespace snh {
+namespace {
+
+using Kind = ContactPair::Kind;
+
+Eigen::VectorXd flatten(const Eigen::Matrix3Xd& X) { return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()); }
+Eigen::Matrix3Xd unflatten(const Eigen::VectorXd& x) { return Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3); }
+
+/// Tet A = (0,0,0), (1,0,0), (0,1,0), (0,0,−1) (its top face on z = 0) and tet B = vertices 4..7.
+struct TwoTets {
+  Eigen::Matrix3Xd V{3, 8};
+  Eigen::Matrix3Xi F{3, 8};
+  explicit TwoTets(const Eigen::Matrix<double, 3, 4>& B) {
+    V.leftCols<4>() << 0, 1, 0, 0,  //
+        0, 0, 1, 0,                  //
+        0, 0, 0, -1;
+    V.rightCols<4>() = B;
+    const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+    for (int t = 0; t < 2; ++t)
+      for (int f = 0; f < 4; ++f)
+        for (int k = 0; k < 3; ++k) F(k, 4 * t + f) = faces[f][k] + 4 * t;
+  }
+};
+
+bool has_kind(const std::vector<ContactPair>& pairs, Kind kind) {
+  for (const ContactPair& p : pairs)
+    if (p.kind == kind) return true;
+  return false;
+}
+
+void expect_matches_finite_differences(const TwoTets& tets, double dhat, double kappa) {
+  ContactTerm term(tets.F, tets.V, dhat, kappa);
+  Problem problem(DofMap(std::vector<std::uint8_t>(24, 0)));
+  problem.add(term);
+  const Eigen::VectorXd x = flatten(tets.V);
+  Eigen::VectorXd g;
+  EXPECT_EQ(problem.energy(x), problem.evaluate(x, g, nullptr, PsdProjection::none));
+  EXPECT_GT(problem.energy(x), 0.0);
+  const FdErrors e = problem_fd_errors(problem, x);
+  EXPECT_LE(e.gradient, 1e-6);
+  EXPECT_LE(e.hessian, 1e-6);
+  // The projected Hessian is PSD.
+  HessianMatrix H;
+  problem.evaluate(x, g, &H, PsdProjection::clamp);
+  const Eigen::MatrixXd Hd = Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>();
+  EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Hd).eigenvalues().minCoeff(), -1e-9 * Hd.norm());
+}
+
+Eigen::Matrix<double, 3, 4> jitter(Eigen::Matrix<double, 3, 4> B, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-0.003, 0.003);
+  for (int i = 0; i < B.size(); ++i) B.data()[i] += u(rng);
+  return B;
+}
+
+TEST(ContactTerm, VertexTriangleAndEdgeEdgePairsMatchFiniteDifferences) {
+  // B's edge (4, 5) crosses over A's edge (0, 1) 0.04 above it, and vertex 5 is 0.04 above A's top face.
+  Eigen::Matrix<double, 3, 4> B;
+  B << 0.5, 0.5, 0.3, 0.8,  //
+      -0.3, 0.3, 0.0, 0.0,  //
+      0.04, 0.04, 1.0, 1.0;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const TwoTets tets(jitter(B, seed));
+    const ContactTerm term(tets.F, tets.V, 0.1, 10.0);
+    const auto pairs = term.pairs(flatten(tets.V));
+    EXPECT_TRUE(has_kind(pairs, Kind::point_triangle));
+    EXPECT_TRUE(has_kind(pairs, Kind::edge_edge));
+    expect_matches_finite_differences(tets, 0.1, 10.0);
+  }
+}
+
+TEST(ContactTerm, MollifiedEdgeEdgeAndPointEdgePairsMatchFiniteDifferences) {
+  // B's edge (4, 5) runs nearly parallel to A's edge (0, 1) (|a×b|² = 1e-4 below ε ≈ 3.6e-4: mollified),
+  // its endpoints just outside A beside that edge (point–edge pairs with both faces at the edge).
+  Eigen::Matrix<double, 3, 4> B;
+  B << 0.2, 0.8, 0.3, 0.7,     //
+      -0.02, -0.01, -0.4, -0.4,  //
+      0.05, 0.05, 1.0, 1.0;
+  for (unsigned seed : {4u, 5u}) {
+    const TwoTets tets(jitter(B, seed));
+    const ContactTerm term(tets.F, tets.V, 0.1, 10.0);
+    const Eigen::VectorXd x = flatten(tets.V);
+    bool mollified = false;
+    for (const ContactPair& p : term.pairs(x))
+      if (p.kind == Kind::edge_edge) {
+        const auto& v = p.vertices;
+        const double cross = (tets.V.col(v[1]) - tets.V.col(v[0])).cross(tets.V.col(v[3]) - tets.V.col(v[2])).squaredNorm();
+        mollified = mollified || cross < p.mollifier_threshold;
+      }
+    EXPECT_TRUE(mollified);
+    EXPECT_TRUE(has_kind(term.pairs(x), Kind::point_edge));
+    expect_matches_finite_differences(tets, 0.1, 10.0);
+  }
+}
+
+/// A roof: ridge edge (0, 1) shared by triangles (0, 1, 2) and (1, 0, 3); a triangle (4, 5, 6) hangs over it,
+/// its vertex 4 at (x, y, h) above the ridge, its other vertices far up.
+struct Roof {
+  Eigen::Matrix3Xd V{3, 7};
+  Eigen::Matrix3Xi F{3, 3};
+  Roof(double x, double y, double h) {
+    V << -1, 1, 0, 0, x, x, x,  //
+        0, 0, 1, -1, y, y + 0.6, y - 0.6,  //
+        0, 0, -0.5, -0.5, h, h + 1.5, h + 1.5;
+    F << 0, 1, 4,  //
+        1, 0, 5,   //
+        2, 3, 6;
+  }
+};
+
+TEST(ContactTerm, AVertexOverASharedEdgeIsOnePairWeightedByItsCandidates) {
+  const Roof roof(0.1, 0.0, 0.05);
+  const double dhat = 0.1, kappa = 3.0;
+  const ContactTerm term(roof.F, roof.V, dhat, kappa);
+  const Eigen::VectorXd x = flatten(roof.V);
+  const auto pairs = term.pairs(x);
+  // Four candidates reduce to the point–edge pair (4, ridge): vertex 4 against both roof triangles, and
+  // its two edges (4, 5), (4, 6) against the ridge (their closest points are vertex 4 and the ridge's
+  // interior). One pair, computed once, weight 4: E = κ·4·b(0.05², d̂²).
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_EQ(pairs[0].kind, Kind::point_edge);
+  EXPECT_EQ(pairs[0].vertices, (std::array<int, 4>{4, 0, 1, -1}));
+  EXPECT_EQ(pairs[0].weight, 4);
+  EXPECT_NEAR(term.energy(x), kappa * 4 * contact::barrier(0.05 * 0.05, dhat * dhat), 1e-12 * term.energy(x));
+  EXPECT_NEAR(term.min_distance(x), 0.05, 1e-15);
+}
+
+TEST(ContactTerm, AVertexOverASharedVertexIsOnePairWeightedByItsCandidates) {
+  // A cone of k = 5 triangles around apex 0 (ring at z = −0.5); vertex 6 hangs 0.05 above the apex with its
+  // triangle (6, 7, 8) going up. Candidates: vertex 6 against each of the 5 triangles (closest: the apex),
+  // each of the 5 spokes (0, ring) against the two edges (6, 7), (6, 8) (closest: the two endpoints 0 and
+  // 6), and the apex against triangle (6, 7, 8) (closest: vertex 6): 16 candidates, one point–point pair.
+  const int k = 5;
+  Eigen::Matrix3Xd V(3, k + 4);
+  V.col(0) = Vec3(0, 0, 0);
+  for (int i = 0; i < k; ++i) V.col(1 + i) = Vec3(std::cos(2 * M_PI * i / k), std::sin(2 * M_PI * i / k), -0.5);
+  V.col(k + 1) = Vec3(0.01, 0.02, 0.05);
+  V.col(k + 2) = Vec3(0.5, 0.02, 1.5);
+  V.col(k + 3) = Vec3(-0.5, 0.02, 1.5);
+  Eigen::Matrix3Xi F(3, k + 1);
+  for (int i = 0; i < k; ++i) F.col(i) << 0, 1 + i, 1 + (i + 1) % k;
+  F.col(k) << k + 1, k + 2, k + 3;
+  const ContactTerm term(F, V, 0.1, 1.0);
+  const auto pairs = term.pairs(flatten(V));
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_EQ(pairs[0].kind, Kind::point_point);
+  EXPECT_EQ(pairs[0].vertices, (std::array<int, 4>{0, k + 1, -1, -1}));
+  EXPECT_EQ(pairs[0].weight, 3 * k + 1);
+  const double s = V.col(k + 1).squaredNorm();
+  EXPECT_NEAR(term.energy(flatten(V)), (3 * k + 1) * contact::barrier(s, 0.01), 1e-12 * term.energy(flatten(V)));
+}
+
+TEST(ContactTerm, EnergyIsContinuousAcrossAClosestFeatureChange) {
+  // Vertex 4 slides across the ridge (y from −0.03 to 0.03, 0.05 above it): for each roof triangle its
+  // closest feature switches between the ridge and the triangle's interior. With the candidates' weights
+  // the energy is continuous (each step changes it by O(step)); counting each key once would make it jump
+  // by a whole pair's barrier where a triangle's interior takes over from the shared edge.
+  const double dhat = 0.1;
+  const int n = 3001;
+  double largest_jump = 0.0, largest = 0.0;
+  bool seen_triangle = false, seen_edge_only = false;
+  double previous = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double y = -0.03 + 0.06 * i / (n - 1);
+    const Roof roof(0.1, y, 0.05);
+    const ContactTerm term(roof.F, roof.V, dhat, 1.0);
+    const Eigen::VectorXd x = flatten(roof.V);
+    const auto pairs = term.pairs(x);
+    (has_kind(pairs, Kind::point_triangle) ? seen_triangle : seen_edge_only) = true;
+    const double e = term.energy(x);
+    if (i > 0) largest_jump = std::max(largest_jump, std::abs(e - previous));
+    largest = std::max(largest, e);
+    previous = e;
+  }
+  EXPECT_TRUE(seen_triangle);
+  EXPECT_TRUE(seen_edge_only);
+  EXPECT_LT(largest_jump, 1e-3 * largest);  // a jump of one pair's barrier would be ~25% of it
+}
+
+// ---- an intersection test of our own: orientation signs, conservative (a sign too close to call counts as
+// zero, which can only report touching where there is none, never miss a crossing).
+
+int orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const Vec3 u = b - a, v = c - a, w = d - a;
+  const double det = u.dot(v.cross(w));
+  const double bound = 1e-12 * u.norm() * v.norm() * w.norm();
+  return det > bound ? 1 : det < -bound ? -1 : 0;
+}
+
+/// Does segment pq touch triangle abc (up to the filter above)?
+bool segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const int sp = orient(a, b, c, p), sq = orient(a, b, c, q);
+  if (sp != 0 && sp == sq) return false;  // both strictly on one side
+  const int s0 = orient(p, q, a, b), s1 = orient(p, q, b, c), s2 = orient(p, q, c, a);
+  const bool has_pos = s0 > 0 || s1 > 0 || s2 > 0, has_neg = s0 < 0 || s1 < 0 || s2 < 0;
+  return !(has_pos && has_neg);  // the line through pq passes inside (or on the rim of) abc
+}
+
+bool triangles_intersect(const std::array<Vec3, 3>& s, const std::array<Vec3, 3>& t) {
+  for (int i = 0; i < 3; ++i) {
+    if (segment_hits_triangle(s[i], s[(i + 1) % 3], t[0], t[1], t[2])) return true;
+    if (segment_hits_triangle(t[i], t[(i + 1) % 3], s[0], s[1], s[2])) return true;
+  }
+  return false;
+}
+
+/// True if two triangles of F that share no vertex intersect at x (every pair checked).
+bool surface_intersects(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& V) {
+  for (Eigen::Index i = 0; i < F.cols(); ++i)
+    for (Eigen::Index j = i + 1; j < F.cols(); ++j) {
+      bool shared = false;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) shared = shared || F(a, i) == F(b, j);
+      if (shared) continue;
+      if (triangles_intersect({V.col(F(0, i)), V.col(F(1, i)), V.col(F(2, i))},
+                              {V.col(F(0, j)), V.col(F(1, j)), V.col(F(2, j))}))
+        return true;
+    }
+  return false;
+}
+
+/// The smallest distance between a vertex and a triangle, or two edges, of F that share no vertex.
+double surface_min_distance(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& V) {
+  double s = INFINITY;
+  for (Eigen::Index i = 0; i < F.cols(); ++i)
+    for (Eigen::Index j = 0; j < F.cols(); ++j) {
+      if (i == j) continue;
+      for (int a = 0; a < 3; ++a) {
+        const int v = F(a, i);
+        if (v != F(0, j) && v != F(1, j) && v != F(2, j))
+          s = std::min(s, contact::point_triangle_distance(V.col(v), V.col(F(0, j)), V.col(F(1, j)), V.col(F(2, j))));
+        for (int b = 0; b < 3; ++b) {
+          const int a0 = F(a, i), a1 = F((a + 1) % 3, i), b0 = F(b, j), b1 = F((b + 1) % 3, j);
+          if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) continue;
+          s = std::min(s, contact::edge_edge_distance(V.col(a0), V.col(a1), V.col(b0), V.col(b1)));
+        }
+      }
+    }
+  return std::sqrt(s);
+}
+
+/// Two cubes of side `side` (box_tets(1) scaled), the second shifted by `offset`, as one mesh.
+struct TwoCubes {
+  VolumeMesh mesh;
+  Eigen::Matrix3Xi F;
+  TwoCubes(double side, const Vec3& offset) {
+    const VolumeMesh one = box_tets(1);
+    const Eigen::Index n = one.vertex_count();
+    mesh = one;
+    mesh.vertices.resize(3, 2 * n);
+    mesh.vertices.leftCols(n) = 0.5 * side * one.vertices;
+    mesh.vertices.rightCols(n) = (0.5 * side * one.vertices).colwise() + offset;
+    mesh.cells.resize(one.cells.rows(), 2 * one.cells.cols());
+    mesh.cells.leftCols(one.cells.cols()) = one.cells;
+    mesh.cells.rightCols(one.cells.cols()) = one.cells.array() + static_cast<int>(n);
+    F = boundary_triangles(mesh);
+  }
+};
+
+TEST(ContactTerm, MaxStepKeepsEveryPairApartOnRandomSteps) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.15);
+  int unsafe_full_steps = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const TwoCubes cubes(1.0, Vec3(1.1 + 0.1 * trial / 30.0, 0.2 * noise(rng), 0.2 * noise(rng)));
+    const ContactTerm term(cubes.F, cubes.mesh.vertices, 0.05, 1.0);
+    const Eigen::VectorXd x = flatten(cubes.mesh.vertices);
+    const Eigen::Index n = cubes.mesh.vertex_count() / 2;
+    Eigen::Matrix3Xd D(3, 2 * n);
+    for (Eigen::Index v = 0; v < 2 * n; ++v)
+      D.col(v) = Vec3(v < n ? 1.0 : -1.0, 0, 0) + Vec3(noise(rng), noise(rng), noise(rng));
+    const Eigen::VectorXd dx = flatten(D);
+    const double alpha = term.max_step(x, dx);
+    ASSERT_GT(alpha, 0.0);
+    ASSERT_LE(alpha, 1.0);
+    const Eigen::Matrix3Xd after = unflatten(x + alpha * dx);
+    EXPECT_FALSE(surface_intersects(cubes.F, after)) << "trial " << trial << ", alpha " << alpha;
+    EXPECT_GT(surface_min_distance(cubes.F, after), 0.0) << "trial " << trial;
+    if (surface_intersects(cubes.F, unflatten(x + dx))) ++unsafe_full_steps;
+  }
+  EXPECT_GT(unsafe_full_steps, 10);  // the full steps mostly do pass through: the bound has work to do
+}
+
+TEST(PlaneContactTerm, MatchesFiniteDifferencesAndMaxStepKeepsVerticesAbove) {
+  // Four vertices 0.01 to 0.04 above a tilted plane (d̂ = 0.05), one far above it.
+  const Vec3 n = Vec3(0.2, 1.0, -0.3).normalized(), p(0.1, -0.2, 0.3);
+  Eigen::Matrix3Xd V(3, 5);
+  const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+  for (int i = 0; i < 5; ++i) V.col(i) = p + (0.3 * i) * t1 - (0.2 * i) * t2 + (i < 4 ? 0.01 * (i + 1) : 1.0) * n;
+  PlaneContactTerm term({0, 1, 2, 3, 4}, p, 7.0 * n, 0.05, 5.0);  // the normal's length does not matter
+  Problem problem(DofMap(std::vector<std::uint8_t>(15, 0)));
+  problem.add(term);
+  const Eigen::VectorXd x = flatten(V);
+  for (int i = 0; i < 5; ++i) EXPECT_NEAR(term.distance(x, i), i < 4 ? 0.01 * (i + 1) : 1.0, 1e-14);
+  EXPECT_GT(problem.energy(x), 0.0);
+  const FdErrors e = problem_fd_errors(problem, x);
+  EXPECT_LE(e.gradient, 1e-6);
+  EXPECT_LE(e.hessian, 1e-6);
+  // Below the plane: +∞. Random steps: after max_step every vertex keeps a tenth of its distance.
+  Eigen::VectorXd below = x;
+  below.segment<3>(0) -= 0.02 * n;
+  EXPECT_EQ(term.energy(below), INFINITY);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> g(0.0, 0.05);
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::VectorXd dx(15);
+    for (Eigen::Index i = 0; i < dx.size(); ++i) dx[i] = g(rng);
+    const double alpha = term.max_step(x, dx);
+    ASSERT_GT(alpha, 0.0);
+    ASSERT_LE(alpha, 1.0);
+    for (int i = 0; i < 5; ++i) EXPECT_GE(term.distance(x + alpha * dx, i), 0.1 * term.distance(x, i) * (1 - 1e-12));
+  }
+}
+
+TEST(ContactTerm, BadArgumentsThrow) {
+  const TwoTets tets(Eigen::Matrix<double, 3, 4>::Random() + Eigen::Matrix<double, 3, 4>::Constant(3.0));
+  EXPECT_THROW(ContactTerm(tets.F, tets.V, 0.0, 1.0), std::invalid_argument);
+  EXPECT_THROW(ContactTerm(tets.F, tets.V, 0.1, -1.0), std::invalid_argument);
+  EXPECT_THROW(ContactTerm(tets.F, tets.V, NAN, 1.0), std::invalid_argument);
+  Eigen::Matrix3Xi bad = tets.F;
+  bad(0, 0) = 8;
+  EXPECT_THROW(ContactTerm(bad, tets.V, 0.1, 1.0), std::invalid_argument);
+  bad(0, 0) = bad(1, 0);
+  EXPECT_THROW(ContactTerm(bad, tets.V, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(PlaneContactTerm({0}, Vec3::Zero(), Vec3::Zero(), 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(PlaneContactTerm({-1}, Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(PlaneContactTerm({0}, Vec3::Zero(), Vec3::UnitY(), 0.1, INFINITY), std::invalid_argument);
+}
+
+TEST(ContactTerm, IpcStiffnessFollowsItsFormula) {
+  // κ = 1e11 m̄ / (4 d₀ b''(d₀, ŝ)) / h², d₀ = (1e-8 · diagonal)², b'' written out here.
+  const double diagonal = 3.0, dhat = 0.02, mass = 30.0, h = 0.01;
+  const double d0 = 1e-16 * diagonal * diagonal, s_hat = dhat * dhat;
+  const double b2 = -2.0 * std::log(d0 / s_hat) - 4.0 * (d0 - s_hat) / d0 + (d0 - s_hat) * (d0 - s_hat) / (d0 * d0);
+  const double kappa = ipc_barrier_stiffness(diagonal, dhat, mass, h);
+  EXPECT_NEAR(kappa, 1e11 * mass / (4.0 * d0 * b2) / (h * h), 1e-12 * kappa);
+  EXPECT_NEAR(ipc_barrier_stiffness(diagonal, dhat, 2 * mass, h), 2 * kappa, 1e-12 * kappa);
+  EXPECT_NEAR(ipc_barrier_stiffness(diagonal, dhat, mass, 2 * h), kappa / 4, 1e-12 * kappa);
+  EXPECT_THROW((void)ipc_barrier_stiffness(0.0, dhat, mass, h), std::invalid_argument);
+  EXPECT_THROW((void)ipc_barrier_stiffness(diagonal, dhat, mass, NAN), std::invalid_argument);
+}
+
+// ---- dynamics with contact
+
+/// Elasticity, backward Euler with gravity, and optional contact terms over a mesh, free everywhere.
+struct Dynamics {
+  Dynamics(const VolumeMesh& m, double dt, const Vec3& gravity)
+      : elastic(m, make_material("stable_neo_hookean", {2e5, 2e6})),
+        dofs(std::vector<std::uint8_t>(3 * static_cast<std::size_t>(m.vertex_count()), 0)),
+        inertia(elastic, dofs, lumped_mass(elastic, 100.0), {.dt = dt, .gravity = gravity}),
+        problem(dofs),
+        dt(dt) {
+    problem.add(elastic);
+    problem.add(inertia);
+  }
+  /// One step from (x, v); returns the Newton report.
+  NewtonReport step(Eigen::VectorXd& x, Eigen::VectorXd& v) {
+    inertia.begin_step(x, v);
+    const Eigen::VectorXd x_n = x;  // Newton starts from x_n: the prediction x_n + h v may tunnel through
+    auto solver = make_linear_solver({.name = "ldlt"});
+    NewtonOptions options;
+    options.tolerance = 1e-2;  // absolute: forces here are 1e3 to 1e4 (weights, m v / h), so 1e-6 relative
+    const NewtonReport r = newton_solve(problem, x, *solver, options);
+    v = (x - x_n) / dt;
+    return r;
+  }
+  ElasticTerm elastic;
+  DofMap dofs;
+  TimeStepTerm inertia;
+  Problem problem;
+  double dt;
+};
+
+TEST(ContactTerm, NothingInRangeChangesNothingBitForBit) {
+  // A cube falling freely (far from the plane; no self pair within d̂): with and without the contact terms
+  // the same iterates, bit for bit.
+  const VolumeMesh m = box_tets(2);
+  const Eigen::Matrix3Xi F = boundary_triangles(m);
+  std::vector<int> surface(F.data(), F.data() + F.size());
+  std::sort(surface.begin(), surface.end());
+  surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
+  Dynamics plain(m, 0.01, Vec3(0, -9.8, 0)), with(m, 0.01, Vec3(0, -9.8, 0));
+  ContactTerm self(F, m.vertices, 0.01, 1e3);
+  PlaneContactTerm ground(surface, Vec3(0, -10, 0), Vec3(0, 1, 0), 0.01, 1e3);
+  with.problem.add(self);
+  with.problem.add(ground);
+  Eigen::VectorXd x1 = flatten(m.vertices), v1 = Eigen::VectorXd::Zero(x1.size());
+  v1(Eigen::seqN(0, m.vertex_count(), 3)).setConstant(0.3);  // a shear-free drift plus a spin-up below
+  for (Eigen::Index v = 0; v < m.vertex_count(); ++v) v1[3 * v + 2] += 0.5 * m.vertices(1, v);
+  Eigen::VectorXd x2 = x1, v2 = v1;
+  for (int s = 0; s < 5; ++s) {
+    const NewtonReport a = plain.step(x1, v1), b = with.step(x2, v2);
+    EXPECT_EQ(a.iterations, b.iterations);
+    ASSERT_EQ(x1, x2) << "step " << s;
+    EXPECT_TRUE(self.pairs(x2).empty());
+  }
+}
+
+TEST(ContactTerm, ACubeDroppedOnTheGroundComesToRestAboveIt) {
+  const VolumeMesh m = box_tets(1);  // [−1, 1]³
+  const Eigen::Matrix3Xi F = boundary_triangles(m);
+  std::vector<int> surface(F.data(), F.data() + F.size());
+  std::sort(surface.begin(), surface.end());
+  surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
+  const double dhat = 0.02, ground_y = -1.3;
+  Dynamics run(m, 0.01, Vec3(0, -9.8, 0));
+  ContactTerm self(F, m.vertices, dhat, 1e8);
+  PlaneContactTerm ground(surface, Vec3(0, ground_y, 0), Vec3(0, 1, 0), dhat, 1e8);
+  run.problem.add(self);
+  run.problem.add(ground);
+  Eigen::VectorXd x = flatten(m.vertices), v = Eigen::VectorXd::Zero(x.size());
+  double lowest = INFINITY;
+  for (int s = 0; s < 150; ++s) {
+    const NewtonReport r = run.step(x, v);
+    ASSERT_TRUE(r.converged) << "step " << s << ": " << r.failure;
+    for (Eigen::Index i = 0; i < m.vertex_count(); ++i) {
+      ASSERT_GT(x[3 * i + 1], ground_y) << "step " << s << ", vertex " << i;
+      lowest = std::min(lowest, x[3 * i + 1] - ground_y);
+    }
+  }
+  double bottom = INFINITY;
+  for (Eigen::Index i = 0; i < m.vertex_count(); ++i) bottom = std::min(bottom, x[3 * i + 1] - ground_y);
+  EXPECT_GT(bottom, 0.0);
+  EXPECT_LT(bottom, dhat);                           // resting on the barrier, not floating
+  EXPECT_LT(v.cwiseAbs().maxCoeff(), 0.05);          // at rest
+  std::cout << "lowest distance above the ground " << lowest << ", at rest " << bottom << "\n";
+}
+
+TEST(ContactTerm, TwoCubesThrownAtEachOtherBounceApartWithoutIntersecting) {
+  const TwoCubes cubes(1.0, Vec3(1.3, 0.2, 0.1));
+  const double dhat = 0.02;
+  Dynamics run(cubes.mesh, 0.01, Vec3::Zero());
+  ContactTerm self(cubes.F, cubes.mesh.vertices, dhat, 1e8);
+  run.problem.add(self);
+  const Eigen::Index n = cubes.mesh.vertex_count() / 2;
+  Eigen::VectorXd x = flatten(cubes.mesh.vertices), v = Eigen::VectorXd::Zero(x.size());
+  for (Eigen::Index i = 0; i < 2 * n; ++i) v[3 * i] = i < n ? 2.0 : -2.0;
+  double closest = INFINITY;
+  int contact_steps = 0;
+  for (int s = 0; s < 40; ++s) {
+    const NewtonReport r = run.step(x, v);
+    ASSERT_TRUE(r.converged) << "step " << s << ": " << r.failure;
+    const Eigen::Matrix3Xd V = unflatten(x);
+    ASSERT_FALSE(surface_intersects(cubes.F, V)) << "step " << s;
+    const double d = surface_min_distance(cubes.F, V);
+    ASSERT_GT(d, 0.0);
+    closest = std::min(closest, d);
+    if (!self.pairs(x).empty()) ++contact_steps;
+  }
+  EXPECT_GT(contact_steps, 0);
+  EXPECT_LT(closest, dhat);
+  // Bounced: the cubes' mean velocities now point away from each other.
+  const double va = v(Eigen::seqN(0, n, 3)).mean(), vb = v(Eigen::seqN(3 * n, n, 3)).mean();
+  EXPECT_LT(va, 0.0);
+  EXPECT_GT(vb, 0.0);
+  std::cout << "closest approach " << closest << ", steps in contact " << contact_steps << ", velocities " << va
+            << " " << vb << "\n";
+}
+
+TEST(ContactTerm, ASimulationsGuessDoesNotJumpThroughAContact) {
+  // Two cubes 0.3 apart at ±40 m/s with h = 0.01: the inertial prediction x_n + h v overlaps them by 0.5,
+  // an intersecting state of finite energy (no pair exactly at distance 0), from which Newton would never
+  // separate them. The Simulation bounds the guess by the contact term's CCD, so no step ever intersects.
+  const TwoCubes cubes(1.0, Vec3(1.3, 0.1, 0.05));
+  SimulationSetup setup;
+  setup.mesh = cubes.mesh;
+  setup.materials = {make_material("stable_neo_hookean", {2e5, 2e6})};
+  setup.density = 100.0;
+  setup.integrator = Integrator::backward_euler;
+  setup.dt = 0.01;
+  setup.newton.tolerance = 1e-2;
+  setup.linear.name = "ldlt";
+  setup.terms.push_back(std::make_shared<ContactTerm>(cubes.F, cubes.mesh.vertices, 0.02, 1e8));
+  Simulation sim(std::move(setup));
+  const Eigen::Index n = cubes.mesh.vertex_count() / 2;
+  SimulationState state = sim.state();
+  state.aux = Eigen::VectorXd::Zero(state.x.size());
+  for (Eigen::Index i = 0; i < 2 * n; ++i) state.aux[3 * i] = i < n ? 40.0 : -40.0;
+  sim.restore(state);
+  EXPECT_TRUE(surface_intersects(cubes.F, unflatten(state.x + 0.01 * state.aux)));  // the prediction would
+  for (int s = 1; s <= 10; ++s) {
+    const StepReport r = sim.step(0.01 * s);
+    ASSERT_TRUE(r.converged) << "step " << s << ": " << r.failure;
+    ASSERT_FALSE(surface_intersects(cubes.F, unflatten(sim.x()))) << "step " << s;
+  }
+}
+
+}  // namespace
+}  // namespace snh
