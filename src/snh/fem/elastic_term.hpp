@@ -58,7 +58,8 @@ class ElasticTerm final : public Term {
   }
 
   /// Loops over fewer quadrature points than this (a group of cells) run on one thread: for small meshes waking threads (and, when other processes compete for
-  /// the cores, waiting at barriers) costs more than the work. Default 2048; 0 makes every loop parallel.
+  /// the cores, waiting at barriers) costs more than the work. Default 2048 (an eighth of it for loops that
+  /// assemble a Hessian, 5-10x the work per point); 0 makes every loop parallel.
   void set_parallel_threshold(Eigen::Index t) { parallel_threshold_ = t; }
 
   /// det F and ψ at every quadrature point, in one pass: each element's minimum det F and mean energy
