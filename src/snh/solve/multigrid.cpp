@@ -223,6 +223,10 @@ struct MultigridPreconditioner::Impl {
   Eigen::VectorXd product_in, product_out;
   int parallel_nodes = 512;  ///< a level of fewer nodes runs on one thread (a parallel region costs more than it saves)
   [[nodiscard]] bool parallel(const Level& L) const { return L.nodes >= parallel_nodes; }
+  /// The sweeps: also at least parallel_nodes / 8 nodes per colour on average (a barrier after each colour).
+  [[nodiscard]] bool parallel_sweep(const Level& L) const {
+    return parallel(L) && L.nodes >= parallel_nodes / 8 * (static_cast<int>(L.colour_start.size()) - 1);
+  }
 };
 
 namespace {
@@ -950,7 +954,7 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
     return;
   }
   Level& C = levels[l + 1];
-  forward_sweep(L, parallel(L));
+  forward_sweep(L, parallel_sweep(L));
   smoother_residual(L, parallel(L));
   // Restriction Pᵀ r on the coarse free DOFs (by coarse rows), prolongation P e on the fine ones.
 #pragma omp parallel for schedule(static) if (parallel(C))
@@ -969,7 +973,7 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
     for (int a = 0; a < 3; ++a)
       if (L.free[3 * i + a]) L.x[3 * i + a] -= e[a];
   }
-  backward_sweep(L, parallel(L));
+  backward_sweep(L, parallel_sweep(L));
 }
 
 MultigridPreconditioner::MultigridPreconditioner(const VolumeMesh& mesh, const std::vector<int>& free_index, Coarsening how)
