@@ -91,9 +91,9 @@ struct Level {
   Transfer down;                        ///< P to the next level: the parents of each node
   std::vector<int> up_start, up_entry, up_fine;  ///< Pᵀ: per node of the next level, the entries of `down`
                                                  ///< that reach it and their fine nodes
-  // The smoother's colouring and the block rows that the smoother and the product read (sweep_rows()): no two
-  // coupled nodes share a colour; each node's off-diagonal blocks sorted by (colour, column node), the
-  // first `before` of them of lower colours, each a slot of A and the column node (> row: stored transposed).
+  // The smoother's colouring and block rows (sweep_rows()): no two coupled nodes share a colour; each node's
+  // off-diagonal blocks, both triangles, sorted by (colour, column node), the first `before` of them of
+  // lower colours, each a slot of A (to copy its values from) and the column node.
   std::vector<int> colour;              ///< per node
   std::vector<int> colour_start, by_colour;  ///< the nodes of each colour, ascending
   std::vector<int> row_start, row_slot, row_node, before;
