@@ -221,7 +221,7 @@ struct MultigridPreconditioner::Impl {
   void vcycle(std::size_t l);
   void product(const Eigen::VectorXd& p, Eigen::VectorXd& Ap);
   Eigen::VectorXd product_in, product_out;
-  int parallel_nodes = 512;  ///< a level of fewer nodes runs on one thread (a parallel region costs more than it saves)
+  int parallel_nodes = 4096;  ///< a level of fewer nodes runs on one thread (a parallel region costs more than it saves)
   [[nodiscard]] bool parallel(const Level& L) const { return L.nodes >= parallel_nodes; }
   /// The sweeps: also at least parallel_nodes / 8 nodes per colour on average (a barrier after each colour).
   [[nodiscard]] bool parallel_sweep(const Level& L) const {

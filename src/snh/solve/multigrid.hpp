@@ -18,7 +18,7 @@
 // when A is. Colours come from the matrix, never from the thread count: lattice levels the parity of the
 // lattice coordinates (8 colours) where no block couples two nodes of one parity, else (and on aggregation
 // levels) a greedy colouring in node order. The nodes of one colour, the rows of A x, of the restriction Pᵀ r
-// and of the prolongation P e run in parallel (OpenMP; levels of at least 512 nodes), each row's sum in a
+// and of the prolongation P e run in parallel (OpenMP; levels of at least 4 096 nodes), each row's sum in a
 // fixed order: results are bit-identical for any thread count.
 //
 // Smoothed aggregation (amg): levels from the matrix's nodal block graph, not from positions. Greedy
@@ -81,7 +81,7 @@ class MultigridPreconditioner final : public Preconditioner {
   /// couples (after compute(); for tests: no pair shares a colour).
   [[nodiscard]] const std::vector<int>& colours(int level) const;
   [[nodiscard]] std::vector<std::pair<int, int>> couplings(int level) const;
-  /// Levels of fewer nodes than this run on one thread (default 512; tests set 1 to run every level in parallel).
+  /// Levels of fewer nodes than this run on one thread (default 4 096; tests set 1 to run every level in parallel).
   void set_parallel_nodes(int nodes);
 
  private:
