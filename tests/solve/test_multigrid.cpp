@@ -7,6 +7,7 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -181,6 +182,54 @@ TEST(AlgebraicMultigrid, IterationsStayFlatAsTheTetMeshIsRefined) {
 
 TEST(AlgebraicMultigrid, WorksOnAPartialHexLatticeWithHolesAndTwoPiecesToo) {
   check_vcycle(partial_lattice(), 3, 40, Coarsening::aggregation);
+}
+
+/// The smoother's colouring is valid on every level (no two coupled nodes share a colour; lattices: the 8
+/// parities), and the V-cycle (built and applied) and the product are bit-identical with 1 and 2 threads,
+/// every level run in parallel.
+void check_threads(const VolumeMesh& mesh, Coarsening how) {
+  System s(mesh, pins(mesh), 11);
+  const SparseLower& A = s.H.matrix;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n;
+  Eigen::VectorXd r(A.rows());
+  for (Eigen::Index i = 0; i < A.rows(); ++i) r[i] = n(rng);
+  const int threads = omp_get_max_threads();
+  Eigen::VectorXd z[2], y[2];
+  for (int t : {1, 2}) {
+    omp_set_num_threads(t);
+    MultigridPreconditioner M(mesh, s.problem.dofs().free_index(), how);
+    M.set_parallel_nodes(1);
+    ASSERT_TRUE(M.compute(A));
+    ASSERT_GE(M.levels(), 2);
+    M.apply(r, z[t - 1]);
+    M.multiply(r, y[t - 1]);
+    if (t == 2) continue;
+    for (int l = 0; l < M.levels(); ++l) {
+      const std::vector<int>& colour = M.colours(l);
+      const auto pairs = M.couplings(l);
+      EXPECT_FALSE(pairs.empty()) << "level " << l;
+      int clashes = 0;
+      for (const auto& [i, j] : pairs) clashes += colour[i] == colour[j];
+      EXPECT_EQ(clashes, 0) << "level " << l << ": coupled nodes of one colour";
+      const int colours = *std::max_element(colour.begin(), colour.end()) + 1;
+      std::cout << "level " << l << ": " << colour.size() << " nodes, " << colours << " colours\n";
+      if (how == Coarsening::lattice) {
+        EXPECT_LE(colours, 8) << "level " << l;
+      }
+    }
+  }
+  omp_set_num_threads(threads);
+  ASSERT_EQ(z[0].size(), z[1].size());
+  EXPECT_EQ(std::memcmp(z[0].data(), z[1].data(), sizeof(double) * z[0].size()), 0) << "V-cycle";
+  EXPECT_EQ(std::memcmp(y[0].data(), y[1].data(), sizeof(double) * y[0].size()), 0) << "product";
+  EXPECT_LE((y[0] - (A.selfadjointView<Eigen::Lower>() * r)).norm(), 1e-12 * y[0].norm()) << "the product is A r";
+}
+
+TEST(Multigrid, ColouredSmootherIsValidAndTheSameForOneAndTwoThreads) { check_threads(partial_lattice(), Coarsening::lattice); }
+
+TEST(AlgebraicMultigrid, ColouredSmootherIsValidAndTheSameForOneAndTwoThreads) {
+  check_threads(box_tets(12), Coarsening::aggregation);
 }
 
 // amg keeps its coarse levels from an earlier Newton matrix while they serve: the V-cycle with old coarse

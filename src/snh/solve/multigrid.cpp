@@ -89,6 +89,21 @@ struct Level {
   std::vector<int> diagonal;            ///< per node, the slot of its diagonal block
   std::vector<double> inverse;          ///< 9 per node: the inverse of the free part of the diagonal block
   Transfer down;                        ///< P to the next level: the parents of each node
+  std::vector<int> up_start, up_entry, up_fine;  ///< Pᵀ: per node of the next level, the entries of `down`
+                                                 ///< that reach it and their fine nodes
+  // The smoother's colouring and block rows (sweep_rows()): no two coupled nodes share a colour; each node's
+  // off-diagonal blocks, both triangles, sorted by (colour, column node), the first `before` of them of
+  // lower colours, each a slot of A (to copy its values from) and the column node.
+  std::vector<int> colour;              ///< per node
+  std::vector<int> colour_start, by_colour;  ///< the nodes of each colour, ascending
+  std::vector<int> row_start, row_slot, row_node, before;
+  std::vector<float> row_val;           ///< the blocks A_ik of those rows, 9 each (row-major), in row order, in
+                                        ///< single precision (half the memory traffic; the smoother's alone)
+  // The product A x by a fixed number of row chunks (not the thread count): each chunk's rows i sum their
+  // blocks (i, k ≤ i) and spill the transposed ones into the chunk's own buffer, rows chunk_low .. its end.
+  std::vector<int> chunk_start, chunk_low;
+  std::vector<std::size_t> chunk_offset;  ///< each chunk's buffer in `spill` (3 per node)
+  std::vector<double> spill;
   Eigen::VectorXd x, b, r;              ///< work vectors (3 per node)
   Eigen::VectorXd power;                ///< aggregation: the last power iteration's vector for ρ(D⁻¹ A)
   [[nodiscard]] Eigen::Index unknowns() const { return std::count(free.begin(), free.end(), std::uint8_t{1}); }
@@ -200,13 +215,121 @@ struct MultigridPreconditioner::Impl {
   void structure(const SparseLower& A);
   bool values(const SparseLower& A, double shift, bool refresh);
   bool coarse_current = false;  ///< the coarse levels were made from a matrix of the current structure
-  bool invert_diagonal(Level& L);
+  bool prepare_smoother(Level& L);
   void smooth_prolongator(std::size_t l);
   void galerkin(Level& fine, Level& coarse_level);
   void vcycle(std::size_t l);
   void product(const Eigen::VectorXd& p, Eigen::VectorXd& Ap);
   Eigen::VectorXd product_in, product_out;
+  int parallel_nodes = 4096;  ///< a level of fewer nodes runs on one thread (a parallel region costs more than it saves)
+  [[nodiscard]] bool parallel(const Level& L) const { return L.nodes >= parallel_nodes; }
+  /// The sweeps: also at least parallel_nodes / 8 nodes per colour on average (a barrier after each colour).
+  [[nodiscard]] bool parallel_sweep(const Level& L) const {
+    return parallel(L) && L.nodes >= parallel_nodes / 8 * (static_cast<int>(L.colour_start.size()) - 1);
+  }
 };
+
+namespace {
+
+/// The smoother's colours and block rows of L (see Level), from its pattern. Lattice levels: the parity of the
+/// node's lattice coordinates (8 colours), used where it is valid — no block couples two nodes of one parity,
+/// as on 27-point stencils, which trilinear Galerkin products keep — else, and for aggregation levels, greedy
+/// colouring in node order (each node the smallest colour none of its lower neighbours has).
+void sweep_rows(Level& L) {
+  const int n = L.nodes;
+  L.row_start.assign(n + 1, 0);
+  for (int i = 0; i < n; ++i)
+    for (int s = L.A.start[i]; s + 1 < L.A.start[i + 1]; ++s) ++L.row_start[i + 1], ++L.row_start[L.A.col[s] + 1];
+  for (int i = 0; i < n; ++i) L.row_start[i + 1] += L.row_start[i];
+  L.row_node.resize(L.row_start[n]);
+  L.row_slot.resize(L.row_start[n]);
+  {
+    std::vector<int> next(L.row_start.begin(), L.row_start.end() - 1);
+    for (int i = 0; i < n; ++i)
+      for (int s = L.A.start[i]; s + 1 < L.A.start[i + 1]; ++s) {
+        const int k = L.A.col[s];
+        L.row_node[next[i]] = k, L.row_slot[next[i]++] = s;
+        L.row_node[next[k]] = i, L.row_slot[next[k]++] = s;
+      }
+  }
+  L.colour.assign(n, 0);
+  bool valid = !L.at.empty();
+  for (int i = 0; i < n && valid; ++i) {
+    const Eigen::Vector3i& a = L.at[i];
+    L.colour[i] = (a.x() & 1) | (a.y() & 1) << 1 | (a.z() & 1) << 2;
+  }
+  for (int i = 0; i < n && valid; ++i)
+    for (int s = L.A.start[i]; s + 1 < L.A.start[i + 1] && valid; ++s) valid = L.colour[L.A.col[s]] != L.colour[i];
+  if (!valid) {
+    std::vector<int> seen;  // seen[c] == i + 1: colour c is taken by a neighbour of i
+    for (int i = 0; i < n; ++i) {
+      for (int s = L.A.start[i]; s + 1 < L.A.start[i + 1]; ++s) {
+        const int c = L.colour[L.A.col[s]];
+        if (c >= static_cast<int>(seen.size())) seen.resize(c + 1, 0);
+        seen[c] = i + 1;
+      }
+      int c = 0;
+      while (c < static_cast<int>(seen.size()) && seen[c] == i + 1) ++c;
+      L.colour[i] = c;
+    }
+  }
+  const int colours = n ? *std::max_element(L.colour.begin(), L.colour.end()) + 1 : 0;
+  L.colour_start.assign(colours + 1, 0);
+  for (int i = 0; i < n; ++i) ++L.colour_start[L.colour[i] + 1];
+  for (int c = 0; c < colours; ++c) L.colour_start[c + 1] += L.colour_start[c];
+  L.by_colour.resize(n);
+  {
+    std::vector<int> next(L.colour_start.begin(), L.colour_start.end() - 1);
+    for (int i = 0; i < n; ++i) L.by_colour[next[L.colour[i]]++] = i;
+  }
+  L.before.assign(n, 0);
+  std::vector<std::pair<std::int64_t, int>> entries;
+  for (int i = 0; i < n; ++i) {
+    entries.clear();
+    for (int e = L.row_start[i]; e < L.row_start[i + 1]; ++e)
+      entries.emplace_back(static_cast<std::int64_t>(L.colour[L.row_node[e]]) * n + L.row_node[e], L.row_slot[e]);
+    std::sort(entries.begin(), entries.end());
+    for (std::size_t q = 0; q < entries.size(); ++q) {
+      const int e = L.row_start[i] + static_cast<int>(q), k = static_cast<int>(entries[q].first % n);
+      L.row_node[e] = k;
+      L.row_slot[e] = entries[q].second;
+      if (L.colour[k] < L.colour[i]) ++L.before[i];
+    }
+  }
+}
+
+/// The product's chunks of L (see Level): 16 at most, of at least 2048 nodes each.
+void product_chunks(Level& L) {
+  const int n = L.nodes, chunks = std::clamp(n / 2048, 1, 16);
+  L.chunk_start.resize(chunks + 1);
+  L.chunk_low.resize(chunks);
+  L.chunk_offset.assign(chunks + 1, 0);
+  for (int c = 0; c <= chunks; ++c) L.chunk_start[c] = static_cast<int>(static_cast<std::int64_t>(n) * c / chunks);
+  for (int c = 0; c < chunks; ++c) {
+    int low = L.chunk_start[c];
+    for (int i = L.chunk_start[c]; i < L.chunk_start[c + 1]; ++i) low = std::min(low, L.A.col[L.A.start[i]]);
+    L.chunk_low[c] = low;
+    L.chunk_offset[c + 1] = L.chunk_offset[c] + 3 * static_cast<std::size_t>(L.chunk_start[c + 1] - low);
+  }
+  L.spill.resize(L.chunk_offset[chunks]);
+}
+
+/// Pᵀ's index: per coarse node, the entries of `down` that reach it, in fine-node order.
+void transpose_transfer(Level& F, int coarse_nodes) {
+  F.up_start.assign(coarse_nodes + 1, 0);
+  for (int I : F.down.node) ++F.up_start[I + 1];
+  for (int I = 0; I < coarse_nodes; ++I) F.up_start[I + 1] += F.up_start[I];
+  F.up_entry.resize(F.down.node.size());
+  F.up_fine.resize(F.down.node.size());
+  std::vector<int> next(F.up_start.begin(), F.up_start.end() - 1);
+  for (int i = 0; i < F.nodes; ++i)
+    for (int p = F.down.start[i]; p < F.down.start[i + 1]; ++p) {
+      F.up_fine[next[F.down.node[p]]] = i;
+      F.up_entry[next[F.down.node[p]]++] = p;
+    }
+}
+
+}  // namespace
 
 MultigridPreconditioner::Impl::Impl(const VolumeMesh& mesh, const std::vector<int>& free_index, Coarsening how)
     : coarsening(how) {
@@ -502,7 +625,10 @@ void MultigridPreconditioner::Impl::structure(const SparseLower& A) {
     l.x.resize(3 * l.nodes);
     l.b.resize(3 * l.nodes);
     l.r.resize(3 * l.nodes);
+    sweep_rows(l);
+    product_chunks(l);
   }
+  for (std::size_t l = 0; l + 1 < levels.size(); ++l) transpose_transfer(levels[l], levels[l + 1].nodes);
   // The coarsest level's free DOFs as a lower-triangular scalar matrix (column c: rows r ≥ c in order).
   const Level& K = levels.back();
   std::vector<int> index(3 * static_cast<std::size_t>(K.nodes), -1);
@@ -597,9 +723,19 @@ void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
     }
 }
 
-/// The inverses of L's diagonal blocks' free parts (Cholesky: false where a block is not positive definite,
+/// The smoother's values for L's A: the rows' blocks in row order (read in a stream, each block as A_ik), and
+/// the inverses of the diagonal blocks' free parts (Cholesky: false where a block is not positive definite,
 /// which proves that A is not).
-bool MultigridPreconditioner::Impl::invert_diagonal(Level& L) {
+bool MultigridPreconditioner::Impl::prepare_smoother(Level& L) {
+  L.row_val.resize(9 * L.row_slot.size());
+#pragma omp parallel for schedule(static) if (parallel(L))
+  for (int i = 0; i < L.nodes; ++i)
+    for (int e = L.row_start[i]; e < L.row_start[i + 1]; ++e) {
+      const ConstBlock3 a(&L.A.val[9 * static_cast<std::size_t>(L.row_slot[e])]);
+      Eigen::Map<Eigen::Matrix<float, 3, 3, Eigen::RowMajor>> to(&L.row_val[9 * static_cast<std::size_t>(e)]);
+      if (L.row_node[e] < i) to = a.cast<float>();
+      else to = a.transpose().cast<float>();
+    }
   for (int i = 0; i < L.nodes; ++i) {
     Eigen::Matrix3d D = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&L.A.val[9 * static_cast<std::size_t>(L.diagonal[i])]);
     for (int a = 0; a < 3; ++a)
@@ -637,10 +773,10 @@ bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift, b
     for (int a = 0; a < 3; ++a)
       if (L0.free[3 * i + a]) d[4 * a] += shift;
   }
-  if (!refresh && coarse_current && levels.size() > 1) return invert_diagonal(L0);
+  if (!refresh && coarse_current && levels.size() > 1) return prepare_smoother(L0);
   coarse_current = false;
   for (std::size_t l = 0; l + 1 < levels.size(); ++l) {
-    if (!invert_diagonal(levels[l])) return false;
+    if (!prepare_smoother(levels[l])) return false;
     if (coarsening == Coarsening::aggregation) smooth_prolongator(l);
     galerkin(levels[l], levels[l + 1]);
   }
@@ -653,7 +789,8 @@ bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift, b
 namespace {
 
 /// y −= a x for a row-major 3×3 block a; yt −= aᵀ x.
-inline void subtract(const double* a, const double* x, double* y) {
+template <class T>
+inline void subtract(const T* a, const double* x, double* y) {
   y[0] -= a[0] * x[0] + a[1] * x[1] + a[2] * x[2];
   y[1] -= a[3] * x[0] + a[4] * x[1] + a[5] * x[2];
   y[2] -= a[6] * x[0] + a[7] * x[1] + a[8] * x[2];
@@ -672,49 +809,90 @@ inline void solve_diagonal(const Level& L, int i, const double* s, double* x) {
   x[2] = d[6] * s[0] + d[7] * s[1] + d[8] * s[2];
 }
 
-/// A forward nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0 (the blocks above the diagonal meet
-/// only zeros).
-void forward_sweep(Level& L) {
-  L.x.setZero();
-  const double* val = L.A.val.data();
+/// s −= Σ A_ik x_k over row i's off-diagonal blocks `from` .. `to` (sweep_rows()).
+inline void subtract_row(const Level& L, int from, int to, const double* x, double* s) {
+  const float* val = L.row_val.data();
+  for (int e = from; e < to; ++e) subtract(val + 9 * static_cast<std::size_t>(e), x + 3 * L.row_node[e], s);
+}
+
+/// x_i = D_i⁻¹ (b_i − Σ A_ik x_k) for the nodes i of colour c, all blocks of the row (whole = true) or those
+/// of lower colours (the others meet x = 0). Nodes of one colour are not coupled: they update in parallel,
+/// each row's sum in its fixed order, so the result does not depend on the thread count.
+void relax_colour(Level& L, int c, bool whole) {
   double* x = L.x.data();
+  const int first = L.colour_start[c], last = L.colour_start[c + 1];
+#pragma omp for schedule(static)
+  for (int q = first; q < last; ++q) {
+    const int i = L.by_colour[q];
+    double s[3] = {L.b[3 * i], L.b[3 * i + 1], L.b[3 * i + 2]};
+    subtract_row(L, L.row_start[i], whole ? L.row_start[i + 1] : L.row_start[i] + L.before[i], x, s);
+    solve_diagonal(L, i, s, x + 3 * i);
+  }
+}
+
+/// A forward multi-colour nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0, colour by colour.
+void forward_sweep(Level& L, bool parallel) {
+  L.x.setZero();
+  const int colours = static_cast<int>(L.colour_start.size()) - 1;
+#pragma omp parallel if (parallel)
+  for (int c = 0; c < colours; ++c) relax_colour(L, c, false);
+}
+
+/// The backward sweep on L.x: the colours in reverse order (the forward sweep's adjoint, so that the
+/// V-cycle is symmetric).
+void backward_sweep(Level& L, bool parallel) {
+  const int colours = static_cast<int>(L.colour_start.size()) - 1;
+#pragma omp parallel if (parallel)
+  for (int c = colours - 1; c >= 0; --c) relax_colour(L, c, true);
+}
+
+/// L.r = L.b − Ã L.x row by row in parallel, Ã the smoother's matrix (single-precision off-diagonal blocks):
+/// the sweeps' residuals are Ã's, so this one must be too for the V-cycle to stay symmetric.
+void smoother_residual(Level& L, bool parallel) {
+  const double* val = L.A.val.data();
+  const double* x = L.x.data();
+#pragma omp parallel for schedule(static) if (parallel)
   for (int i = 0; i < L.nodes; ++i) {
     double s[3] = {L.b[3 * i], L.b[3 * i + 1], L.b[3 * i + 2]};
-    for (int k = L.A.start[i]; k + 1 < L.A.start[i + 1]; ++k) subtract(val + 9 * static_cast<std::size_t>(k), x + 3 * L.A.col[k], s);
-    solve_diagonal(L, i, s, x + 3 * i);
+    subtract(val + 9 * static_cast<std::size_t>(L.diagonal[i]), x + 3 * i, s);
+    subtract_row(L, L.row_start[i], L.row_start[i + 1], x, s);
+    std::copy_n(s, 3, L.r.data() + 3 * i);
   }
 }
 
-/// A backward nodal-block Gauss–Seidel sweep on L.x: row i's blocks left of the diagonal meet the old x,
-/// the (transposed) blocks right of it the new values, gathered in L.r as each row is done.
-void backward_sweep(Level& L) {
-  L.r.setZero();
+/// y = b − A x (b may be null: y = −A x) from A's lower block triangle, by L's chunks in parallel: each
+/// chunk's rows in order, then each row's sum and the chunks' spills into it in chunk order (a fixed order:
+/// the result does not depend on the thread count).
+void subtract_product(Level& L, const double* x, const double* b, double* y, bool parallel) {
   const double* val = L.A.val.data();
-  double* x = L.x.data();
-  double* later = L.r.data();
-  for (int i = L.nodes - 1; i >= 0; --i) {
-    const int end = L.A.start[i + 1] - 1;  // the diagonal block
-    double s[3] = {L.b[3 * i] + later[3 * i], L.b[3 * i + 1] + later[3 * i + 1], L.b[3 * i + 2] + later[3 * i + 2]};
-    for (int k = L.A.start[i]; k < end; ++k) subtract(val + 9 * static_cast<std::size_t>(k), x + 3 * L.A.col[k], s);
-    solve_diagonal(L, i, s, x + 3 * i);
-    for (int k = L.A.start[i]; k < end; ++k)
-      subtract_transposed(val + 9 * static_cast<std::size_t>(k), x + 3 * i, later + 3 * L.A.col[k]);
-  }
-}
-
-/// y = b − A x with A's lower block triangle (b may be null: y = −A x).
-void subtract_product(const Level& L, const double* x, const double* b, double* y) {
-  const double* val = L.A.val.data();
-  for (int d = 0; d < 3 * L.nodes; ++d) y[d] = b ? b[d] : 0.0;
-  for (int i = 0; i < L.nodes; ++i) {
-    const int end = L.A.start[i + 1] - 1;
-    for (int k = L.A.start[i]; k < end; ++k) {
-      const double* a = val + 9 * static_cast<std::size_t>(k);
-      const int j = L.A.col[k];
-      subtract(a, x + 3 * j, y + 3 * i);
-      subtract_transposed(a, x + 3 * i, y + 3 * j);
+  const int chunks = static_cast<int>(L.chunk_low.size());
+#pragma omp parallel if (parallel)
+  {
+#pragma omp for schedule(static)
+    for (int c = 0; c < chunks; ++c) {
+      double* spill = L.spill.data() + L.chunk_offset[c];
+      const int low = L.chunk_low[c];
+      std::fill(spill, L.spill.data() + L.chunk_offset[c + 1], 0.0);
+      for (int i = L.chunk_start[c]; i < L.chunk_start[c + 1]; ++i) {
+        double s[3] = {b ? b[3 * i] : 0.0, b ? b[3 * i + 1] : 0.0, b ? b[3 * i + 2] : 0.0};
+        const int end = L.A.start[i + 1] - 1;  // the diagonal block
+        for (int k = L.A.start[i]; k < end; ++k) {
+          const double* a = val + 9 * static_cast<std::size_t>(k);
+          const int j = L.A.col[k];
+          subtract(a, x + 3 * j, s);
+          subtract_transposed(a, x + 3 * i, spill + 3 * (j - low));
+        }
+        subtract(val + 9 * static_cast<std::size_t>(end), x + 3 * i, s);
+        std::copy_n(s, 3, y + 3 * i);
+      }
     }
-    subtract(val + 9 * static_cast<std::size_t>(end), x + 3 * i, y + 3 * i);
+#pragma omp for schedule(static)
+    for (int i = 0; i < L.nodes; ++i)
+      for (int c = 0; c < chunks; ++c)
+        if (L.chunk_low[c] <= i && i < L.chunk_start[c + 1]) {
+          const double* spill = L.spill.data() + L.chunk_offset[c] + 3 * (i - L.chunk_low[c]);
+          for (int a = 0; a < 3; ++a) y[3 * i + a] += spill[a];
+        }
   }
 }
 
@@ -736,7 +914,7 @@ void MultigridPreconditioner::Impl::smooth_prolongator(std::size_t l) {
     const double norm = v.norm();
     if (!(norm > 0.0)) break;
     v /= norm;
-    subtract_product(F, v.data(), nullptr, w.data());  // −A v
+    subtract_product(F, v.data(), nullptr, w.data(), parallel(F));  // −A v
     for (int i = 0; i < F.nodes; ++i) solve_diagonal(F, i, w.data() + 3 * i, v.data() + 3 * i);
     rho = v.norm();
   }
@@ -776,15 +954,18 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
     return;
   }
   Level& C = levels[l + 1];
-  forward_sweep(L);
-  subtract_product(L, L.x.data(), L.b.data(), L.r.data());
-  // Restriction Pᵀ r on the coarse free DOFs, prolongation P e on the fine ones.
-  C.b.setZero();
-  for (int i = 0; i < L.nodes; ++i)
-    for (int p = L.down.start[i]; p < L.down.start[i + 1]; ++p)
-      subtract_transposed(&L.down.block[9 * static_cast<std::size_t>(p)], L.r.data() + 3 * i, C.b.data() + 3 * L.down.node[p]);
-  for (int d = 0; d < 3 * C.nodes; ++d) C.b[d] = C.free[d] ? -C.b[d] : 0.0;
+  forward_sweep(L, parallel_sweep(L));
+  smoother_residual(L, parallel(L));
+  // Restriction Pᵀ r on the coarse free DOFs (by coarse rows), prolongation P e on the fine ones.
+#pragma omp parallel for schedule(static) if (parallel(C))
+  for (int I = 0; I < C.nodes; ++I) {
+    double e[3] = {0.0, 0.0, 0.0};
+    for (int q = L.up_start[I]; q < L.up_start[I + 1]; ++q)
+      subtract_transposed(&L.down.block[9 * static_cast<std::size_t>(L.up_entry[q])], L.r.data() + 3 * L.up_fine[q], e);
+    for (int a = 0; a < 3; ++a) C.b[3 * I + a] = C.free[3 * I + a] ? -e[a] : 0.0;
+  }
   vcycle(l + 1);
+#pragma omp parallel for schedule(static) if (parallel(L))
   for (int i = 0; i < L.nodes; ++i) {
     double e[3] = {0.0, 0.0, 0.0};
     for (int p = L.down.start[i]; p < L.down.start[i + 1]; ++p)
@@ -792,7 +973,7 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
     for (int a = 0; a < 3; ++a)
       if (L.free[3 * i + a]) L.x[3 * i + a] -= e[a];
   }
-  backward_sweep(L);
+  backward_sweep(L, parallel_sweep(L));
 }
 
 MultigridPreconditioner::MultigridPreconditioner(const VolumeMesh& mesh, const std::vector<int>& free_index, Coarsening how)
@@ -816,11 +997,11 @@ bool MultigridPreconditioner::compute(const SparseLower& A, double shift, bool c
 void MultigridPreconditioner::multiply(const Eigen::VectorXd& p, Eigen::VectorXd& Ap) const { impl_->product(p, Ap); }
 
 void MultigridPreconditioner::Impl::product(const Eigen::VectorXd& p, Eigen::VectorXd& Ap) {
-  const Level& L0 = levels.front();
+  Level& L0 = levels.front();
   product_in.setZero(3 * L0.nodes);
   for (std::size_t k = 0; k < row_dof.size(); ++k) product_in[row_dof[k]] = p[static_cast<Eigen::Index>(k)];
   product_out.resize(3 * L0.nodes);
-  subtract_product(L0, product_in.data(), nullptr, product_out.data());
+  subtract_product(L0, product_in.data(), nullptr, product_out.data(), parallel(L0));
   Ap.resize(p.size());
   for (std::size_t k = 0; k < row_dof.size(); ++k) Ap[static_cast<Eigen::Index>(k)] = -product_out[row_dof[k]];
 }
@@ -838,6 +1019,19 @@ void MultigridPreconditioner::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z
 int MultigridPreconditioner::levels() const { return static_cast<int>(impl_->levels.size()); }
 
 Eigen::Index MultigridPreconditioner::unknowns(int level) const { return impl_->levels.at(level).unknowns(); }
+
+const std::vector<int>& MultigridPreconditioner::colours(int level) const { return impl_->levels.at(level).colour; }
+
+std::vector<std::pair<int, int>> MultigridPreconditioner::couplings(int level) const {
+  const Blocks& A = impl_->levels.at(level).A;
+  std::vector<std::pair<int, int>> out;
+  for (std::size_t i = 0; i + 1 < A.start.size(); ++i)
+    for (int s = A.start[i]; s < A.start[i + 1]; ++s)
+      if (A.col[s] != static_cast<int>(i)) out.emplace_back(static_cast<int>(i), A.col[s]);
+  return out;
+}
+
+void MultigridPreconditioner::set_parallel_nodes(int nodes) { impl_->parallel_nodes = nodes; }
 
 namespace {
 

@@ -13,9 +13,13 @@
 // coarse DOF is dropped where the fine vertex at its place is kinematic, or where it reaches no free fine
 // DOF). Coarse operators: Galerkin, A_c = Pᵀ A P, in 3×3 nodal blocks (lower triangle); the block patterns
 // and the transfer operators are built once and only the values are recomputed for each Newton matrix.
-// Smoother: one forward nodal-block Gauss–Seidel sweep before the coarse correction and one backward sweep
-// after it, so the V-cycle is symmetric, and positive definite when A is. Every loop runs in a fixed order
-// on one thread: results do not depend on the thread count.
+// Smoother: one forward multi-colour nodal-block Gauss–Seidel sweep before the coarse correction and one
+// backward sweep (the colours in reverse order) after it, so the V-cycle is symmetric, and positive definite
+// when A is. Colours come from the matrix, never from the thread count: lattice levels the parity of the
+// lattice coordinates (8 colours) where no block couples two nodes of one parity, else (and on aggregation
+// levels) a greedy colouring in node order. The nodes of one colour, the rows of A x, of the restriction Pᵀ r
+// and of the prolongation P e run in parallel (OpenMP; levels of at least 4 096 nodes), each row's sum in a
+// fixed order: results are bit-identical for any thread count.
 //
 // Smoothed aggregation (amg): levels from the matrix's nodal block graph, not from positions. Greedy
 // aggregation of the nodes with a free DOF (every block of the pattern a connection); a tentative
@@ -26,6 +30,8 @@
 // P = (I − ω D⁻¹ A) P_tent with ω = 4 / (3 ρ(D⁻¹ A)), recomputed with the Galerkin products for each
 // Newton matrix (aggregates and patterns: once per pattern).
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -71,6 +77,12 @@ class MultigridPreconditioner final : public Preconditioner {
   [[nodiscard]] int levels() const;
   /// Free DOFs of level l.
   [[nodiscard]] Eigen::Index unknowns(int level) const;
+  /// The smoother's colour of each node of level l, and the node pairs (i, j < i) that level l's matrix
+  /// couples (after compute(); for tests: no pair shares a colour).
+  [[nodiscard]] const std::vector<int>& colours(int level) const;
+  [[nodiscard]] std::vector<std::pair<int, int>> couplings(int level) const;
+  /// Levels of fewer nodes than this run on one thread (default 4 096; tests set 1 to run every level in parallel).
+  void set_parallel_nodes(int nodes);
 
  private:
   struct Impl;
