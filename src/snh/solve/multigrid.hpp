@@ -81,7 +81,8 @@ class MultigridPreconditioner final : public Preconditioner {
   /// couples (after compute(); for tests: no pair shares a colour).
   [[nodiscard]] const std::vector<int>& colours(int level) const;
   [[nodiscard]] std::vector<std::pair<int, int>> couplings(int level) const;
-  /// Levels of fewer nodes than this run on one thread (default 4 096; tests set 1 to run every level in parallel).
+  /// Levels of fewer nodes than this run on one thread with a lexicographic Gauss–Seidel smoother, larger
+  /// ones in parallel with the multi-colour smoother (default 16 384; tests set 1 to run every level so).
   void set_parallel_nodes(int nodes);
 
  private:
