@@ -109,6 +109,40 @@ TEST(SceneFile, ErrorsNameTheKey) {
   EXPECT_EQ(error_of(json::parse("[1, 2]")), "s.json: expected an object");
 }
 
+TEST(SceneFile, ContactNeedsASeparatedStart) {
+  // The default box spans [-1, 1]³: a plane through it is refused before the run, naming the vertex.
+  const std::string contact = R"("contact": {"dhat": 0.01, "stiffness": 1e3}, )";
+  const std::string error = error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0]}]})"));
+  EXPECT_EQ(error.substr(0, 39), "s.json: colliders[0]: vertex 0 of the m") << error;
+  EXPECT_NE(error.find("-1 from the plane, on or behind it at the start"), std::string::npos) << error;
+  // Touching the plane is refused too; just above it is fine.
+  EXPECT_NE(error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, -1, 0], "normal": [0, 1, 0]}]})")),
+            "");
+  EXPECT_NO_THROW(parse_scene(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, -1.001, 0], "normal": [0, 1, 0]}]})"),
+                              "s.json"));
+}
+
+TEST(SceneFile, SelfContactNeedsASurfaceThatDoesNotTouchItself) {
+  // Two tets, the second's apex at the first's vertex (3) but a vertex of its own (8): distance 0 at the start.
+  const auto dir = std::filesystem::temp_directory_path() / ("snh_test_scene_touch_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "touch.node") << "8 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"
+                                       "5 0 0 2\n6 1 0 2\n7 0 1 2\n8 0 0 1\n";
+  std::ofstream(dir / "touch.ele") << "2 4 0\n1 1 2 3 4\n2 5 7 6 8\n";
+  const std::string scene = R"({"mesh": {"file": "touch.ele"}, "contact": {"self": true, "dhat": 0.01, "stiffness": 1e3}})";
+  try {
+    (void)parse_scene(json::parse(scene), dir / "s.json");
+    ADD_FAILURE() << "no error";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("contact.self: the mesh's surface touches itself at the start"), std::string::npos) << e.what();
+  }
+  // Apart (the second tet lifted by 0.5), the same scene is accepted.
+  std::ofstream(dir / "touch.node") << "8 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"
+                                       "5 0 0 2.5\n6 1 0 2.5\n7 0 1 2.5\n8 0 0 1.5\n";
+  EXPECT_NO_THROW((void)parse_scene(json::parse(scene), dir / "s.json"));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(SceneFile, ContactKeysAreChecked) {
   const Scene s = parse_scene(json::parse(R"({"contact": {"self": true, "dhat": 0.01, "stiffness": 1e6},
     "colliders": [{"type": "plane", "point": [0, -2, 0], "normal": [0, 2, 0]}]})"), "s.json");

@@ -64,6 +64,31 @@ int checked_substeps(const TimeSpec& t, const std::string& file) {
   return static_cast<int>(per_frame);
 }
 
+/// Contact needs a separated start: every vertex of the mesh's boundary surface strictly above each plane
+/// collider, and (self-contact) no two of its primitives touching (a barrier is +∞ there, and Newton could
+/// only report a state that is not finite).
+void check_contact_start(const Scene& s, const VolumeMesh& mesh, const Eigen::VectorXd& x0, const std::string& file) {
+  if (!s.contact.enabled) return;
+  const Eigen::Matrix3Xi F = boundary_triangles(mesh);
+  std::vector<int> surface(F.data(), F.data() + F.size());
+  std::sort(surface.begin(), surface.end());
+  surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
+  for (std::size_t i = 0; i < s.contact.planes.size(); ++i) {
+    const PlaneColliderSpec& plane = s.contact.planes[i];
+    for (int v : surface) {
+      const double d = plane.normal.dot(x0.segment<3>(3 * v) - plane.point);
+      if (!(d > 0.0))
+        throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of the mesh's surface is {:g} from the plane, on or behind it at "
+                                     "the start (contact needs a separated start: move the plane or the mesh)",
+                                     file, i, v, d));
+    }
+  }
+  if (s.contact.self && !std::isfinite(ContactTerm(F, mesh.vertices, s.contact.dhat, 1.0).energy(x0)))
+    throw SceneError(fmt::format("{}: contact.self: the mesh's surface touches itself at the start (two of its triangles at "
+                                 "distance 0): contact needs a separated start",
+                                 file));
+}
+
 /// Two pin sets may share a vertex, each holding its own coordinates; a moving set must then not move the
 /// vertex along a coordinate that the other set holds elsewhere (a rotation about z, say, while another set holds
 /// y still): the two would drive the vertex in different ways. Checked at the motions' starts, ends and
@@ -184,6 +209,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
                                  source.string(), scene::max_magnitude, x0.array().abs().maxCoeff()));
   (void)as_scene_error([&] { return kinematic_dof_flags(scene_kinematics(s, s.loaded->mesh, x0), s.loaded->mesh.vertex_count()); });
   check_shared_pins(s, scene_kinematics(s, s.loaded->mesh, x0));
+  check_contact_start(s, s.loaded->mesh, x0, source.string());
   return s;
 }
 
