@@ -3,7 +3,6 @@
 #include <cmath>
 #include <limits>
 
-#include "snh/contact/barrier.hpp"
 #include "snh/contact/edge_edge_distance.hpp"
 #include "snh/contact/edge_edge_mollifier.hpp"
 #include "snh/contact/point_triangle_distance.hpp"
@@ -11,16 +10,6 @@
 
 namespace snh::contact {
 namespace {
-
-/// b∘s from the distance's derivatives (s.value < ŝ).
-Derivatives<12> barrier_of(const Derivatives<12>& s, double s_hat) {
-  Derivatives<12> b;
-  const double b1 = barrier_first_derivative(s.value, s_hat);
-  b.value = barrier(s.value, s_hat);
-  b.gradient = b1 * s.gradient;
-  b.hessian = barrier_second_derivative(s.value, s_hat) * s.gradient * s.gradient.transpose() + b1 * s.hessian;
-  return b;
-}
 
 /// The pair's energy when out of range (all zero), in contact (+∞) or at non-finite positions (NaN).
 Derivatives<12> outside(double s) {

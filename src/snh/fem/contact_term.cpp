@@ -33,16 +33,12 @@ void check_positive(const char* what, double value) {
 /// κ w b∘s from the distance's derivatives (s < ŝ; s ≤ 0 gives +∞).
 template <int N>
 Derivatives<N> weighted_barrier(const Derivatives<N>& s, double s_hat, double scale, bool project) {
-  Derivatives<N> b;
   if (!(s.value > 0.0)) {
-    b.value = std::isnan(s.value) ? std::numeric_limits<double>::quiet_NaN() : std::numeric_limits<double>::infinity();
-    return b;
+    Derivatives<N> touching;
+    touching.value = std::isnan(s.value) ? std::numeric_limits<double>::quiet_NaN() : std::numeric_limits<double>::infinity();
+    return touching;
   }
-  const double b1 = contact::barrier_first_derivative(s.value, s_hat);
-  b.value = scale * contact::barrier(s.value, s_hat);
-  b.gradient = (scale * b1) * s.gradient;
-  b.hessian = scale * (contact::barrier_second_derivative(s.value, s_hat) * s.gradient * s.gradient.transpose() +
-                       b1 * s.hessian);
+  Derivatives<N> b = contact::barrier_of(s, s_hat, scale);
   if (project) b.hessian = contact::project_psd(b.hessian);
   return b;
 }
@@ -203,40 +199,34 @@ double ContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
   for (const ContactPair& p : pairs(x)) {
     const double scale = kappa_ * p.weight;
     const auto& id = p.vertices;
+    // Scatters a pair's derivatives (where its energy is finite) and gives its energy.
+    const auto add = [&](const auto& d) {
+      if (std::isfinite(d.value)) scatter(d, id, gradient, hessian);
+      return d.value;
+    };
     double value = 0.0;
     switch (p.kind) {
-      case Kind::point_point: {
-        const auto d = weighted_barrier(contact::point_point_distance_derivatives(V.col(id[0]), V.col(id[1])), s_hat,
-                                        scale, project);
-        value = d.value;
-        if (std::isfinite(value)) scatter(d, id, gradient, hessian);
+      case Kind::point_point:
+        value = add(weighted_barrier(contact::point_point_distance_derivatives(V.col(id[0]), V.col(id[1])), s_hat, scale,
+                                     project));
         break;
-      }
-      case Kind::point_edge: {
-        const auto d = weighted_barrier(contact::point_edge_distance_derivatives(V.col(id[0]), V.col(id[1]), V.col(id[2]),
-                                                                                 contact::PointEdgeType::p_e),
-                                        s_hat, scale, project);
-        value = d.value;
-        if (std::isfinite(value)) scatter(d, id, gradient, hessian);
+      case Kind::point_edge:
+        value = add(weighted_barrier(contact::point_edge_distance_derivatives(V.col(id[0]), V.col(id[1]), V.col(id[2]),
+                                                                              contact::PointEdgeType::p_e),
+                                     s_hat, scale, project));
         break;
-      }
-      case Kind::point_triangle: {
-        const auto d = weighted_barrier(
-            contact::point_triangle_distance_derivatives(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3]),
-                                                         contact::PointTriangleType::p_t),
-            s_hat, scale, project);
-        value = d.value;
-        if (std::isfinite(value)) scatter(d, id, gradient, hessian);
+      case Kind::point_triangle:
+        value = add(weighted_barrier(contact::point_triangle_distance_derivatives(V.col(id[0]), V.col(id[1]), V.col(id[2]),
+                                                                                  V.col(id[3]), contact::PointTriangleType::p_t),
+                                     s_hat, scale, project));
         break;
-      }
       case Kind::edge_edge: {
         Derivatives<12> d = contact::edge_edge_barrier(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3]), s_hat,
                                                        p.mollifier_threshold, project);
         d.value *= scale;
         d.gradient *= scale;
         d.hessian *= scale;
-        value = d.value;
-        if (std::isfinite(value)) scatter(d, id, gradient, hessian);
+        value = add(d);
         break;
       }
     }
