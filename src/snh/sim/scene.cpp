@@ -64,15 +64,21 @@ int checked_substeps(const TimeSpec& t, const std::string& file) {
   return static_cast<int>(per_frame);
 }
 
+/// The vertices the triangles F use, ascending, each once (the plane colliders act on them).
+std::vector<int> vertices_of(const Eigen::Matrix3Xi& F) {
+  std::vector<int> out(F.data(), F.data() + F.size());
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 /// Contact needs a separated start: every vertex of the mesh's boundary surface strictly above each plane
 /// collider, and (self-contact) no two of its primitives touching (a barrier is +∞ there, and Newton could
 /// only report a state that is not finite).
 void check_contact_start(const Scene& s, const VolumeMesh& mesh, const Eigen::VectorXd& x0, const std::string& file) {
   if (!s.contact.enabled) return;
   const Eigen::Matrix3Xi F = boundary_triangles(mesh);
-  std::vector<int> surface(F.data(), F.data() + F.size());
-  std::sort(surface.begin(), surface.end());
-  surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
+  const std::vector<int> surface = vertices_of(F);
   for (std::size_t i = 0; i < s.contact.planes.size(); ++i) {
     const PlaneColliderSpec& plane = s.contact.planes[i];
     for (int v : surface) {
@@ -460,9 +466,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     }
     const Eigen::Matrix3Xi F = boundary_triangles(mesh);
     if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa));
-    std::vector<int> surface(F.data(), F.data() + F.size());
-    std::sort(surface.begin(), surface.end());
-    surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
+    const std::vector<int> surface = vertices_of(F);
     for (const PlaneColliderSpec& plane : s.contact.planes)
       setup.terms.push_back(
           std::make_shared<PlaneContactTerm>(surface, plane.point, plane.normal, s.contact.dhat, kappa));
