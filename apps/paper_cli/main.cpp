@@ -46,13 +46,6 @@ double parse_double(const std::string& program, const char* what, const char* te
   return v;
 }
 
-/// The paper's programs take no options: how to run the same test with PCG.
-std::string pcg_hint(const std::string& program, const snh::StretchConfig& c) {
-  return fmt::format(" ({} takes no options: snh stretch --element {} --res {} --material {} --mu {} --lambda {} --out {} "
-                     "--solver pcg runs the same test)",
-                     program, kHex ? "hex" : "tet", c.resolution, c.material, c.params.mu, c.params.lambda, c.out.string());
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -77,7 +70,7 @@ int main(int argc, char** argv) {
   }
   snh::StretchConfig config;
   config.program = program;
-  config.solver = "cholmod";  // the paper programs' runs as they were (snh stretch chooses by size: "auto")
+  config.solver = "pcg";  // the paper's programs solved with Jacobi-preconditioned CG (PAPER_CODE.md); snh stretch chooses by size
   config.command_line = snh::cli::quoted_command_line(argc, argv);
   config.element = kHex ? snh::CellType::hex8 : snh::CellType::tet4;
   config.resolution = parse_int(program, "resolution", argv[1]);
@@ -100,15 +93,15 @@ int main(int argc, char** argv) {
     std::cerr << program << ": error: " << e.what() << "\n";
     return 3;
   } catch (const snh::OutOfMemoryError& e) {  // one line, exit 1; the completed steps are kept
-    std::cerr << program << ": error: " << e.what() << pcg_hint(program, config) << "\n";
+    std::cerr << program << ": error: " << e.what() << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << program << ": error: "
               << snh::out_of_memory_message("the run", snh::lattice_size(config.resolution, config.element), config.solver)
-              << pcg_hint(program, config) << "\n";
+              << "\n";
     return 1;
   } catch (const snh::MemoryEstimateError& e) {  // refused before any work: exit 2
-    fail(program, e.what() + pcg_hint(program, config));
+    fail(program, e.what());
   } catch (const std::exception& e) {
     fail(program, e.what());
   }

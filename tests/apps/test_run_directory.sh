@@ -104,10 +104,10 @@ out="$("$SNH" stretch --res 2 --steps 4 --out "$d" --resume 2>&1)"; code=$?
 [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "damaged checkpoint (its checksum does not match" && ok ||
   bad "resume from a damaged checkpoint (exit $code): $out"
 
-# 5. tetcli and hexcli write checkpoints; `snh stretch` with the same settings resumes them.
+# 5. tetcli and hexcli write checkpoints; `snh stretch` with the same settings (their solver: pcg) resumes them.
 d="$work/tetcli"
 "$TETCLI" 3 stable_neo_hookean 1.0 10.0 "$d" > /dev/null 2>&1
-out="$("$SNH" stretch --element tet --res 3 --mu 1 --lambda 10 --out "$d" --resume 2>&1)"; code=$?
+out="$("$SNH" stretch --element tet --res 3 --mu 1 --lambda 10 --solver pcg --out "$d" --resume 2>&1)"; code=$?
 [ "$code" -eq 0 ] && printf '%s' "$out" | grep -q "^resuming after step 25" && printf '%s' "$out" | grep -q "converged every step" \
   && ok || bad "snh stretch --resume of a tetcli run (exit $code): $out"
 out="$("$SNH" stretch --element tet --res 3 --material neo_hookean --out "$d" --resume 2>&1)"; code=$?
