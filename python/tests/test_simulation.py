@@ -33,7 +33,8 @@ def test_stretch_equals_tetcli(tmp_path):
         g[:, 1] = 0.0 + (g[:, 1] - 0.0) * length(t)
         return g
 
-    sim = snh.Simulation(V, C, SNH, pinned, integrator="quasi_static", first_guess=first_guess)
+    sim = snh.Simulation(V, C, SNH, pinned, integrator="quasi_static", first_guess=first_guess,
+                         solver="pcg")  # tetcli's solver, as the paper's programs
     assert sim.pinned.tolist() == pinned.tolist()
     assert read_obj_vertices(out / "000.obj") == as_obj_text(sim.positions)
     for s in range(1, steps + 1):
