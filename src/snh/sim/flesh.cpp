@@ -173,6 +173,32 @@ std::shared_ptr<Term> soft_binding_term(std::shared_ptr<const Flesh> flesh, doub
                                           [carried](double t, Eigen::Matrix3Xd& out) { carried->at(t, out); });
 }
 
+std::function<void(double, std::vector<Eigen::Matrix<double, 3, 4>>&)> flesh_carrier(std::shared_ptr<const Flesh> flesh) {
+  // Each volume vertex takes the joints and weights of its nearest model vertex (at rest).
+  const Eigen::Matrix3Xd& X = flesh->volume.vertices;
+  const Eigen::Matrix3Xd& S = flesh->model.vertices;
+  const Eigen::Index n = X.cols();
+  auto joints = std::make_shared<Eigen::Matrix4Xi>(4, n);
+  auto weights = std::make_shared<Eigen::Matrix4Xd>(4, n);
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index v = 0; v < n; ++v) {
+    Eigen::Index nearest = 0;
+    (S.colwise() - X.col(v)).colwise().squaredNorm().minCoeff(&nearest);
+    joints->col(v) = flesh->model.joint_index.col(nearest);
+    weights->col(v) = flesh->model.joint_weight.col(nearest);
+  }
+  return [flesh, joints, weights](double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames) {
+    const std::vector<Eigen::Affine3d> world = joint_world(*flesh, t);
+    std::vector<Eigen::Matrix<double, 3, 4>> motion(world.size());
+    for (std::size_t j = 0; j < world.size(); ++j) motion[j] = (world[j] * flesh->rest_world[j].inverse()).matrix().topRows<3>();
+    const Eigen::Index n = joints->cols();
+    frames.assign(static_cast<std::size_t>(n), Eigen::Matrix<double, 3, 4>::Zero());
+    for (Eigen::Index v = 0; v < n; ++v)
+      for (int k = 0; k < 4; ++k)
+        if (const double w = (*weights)(k, v); w != 0.0) frames[static_cast<std::size_t>(v)] += w * motion[static_cast<std::size_t>((*joints)(k, v))];
+  };
+}
+
 std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t) {
   return flesh.model.skeleton.world(sample(flesh.clip, flesh.model.skeleton, t));
 }

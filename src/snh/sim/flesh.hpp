@@ -5,6 +5,8 @@
 // rest of the flesh is solved, and the render surface, embedded in the volume, follows it. Linear blend
 // skinning of the same surface with the model's own weights is the comparison.
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -98,6 +100,12 @@ struct Flesh {
 /// cell size × weight per vertex, toward the vertex's rest position carried rigidly by its bone's joint.
 [[nodiscard]] std::shared_ptr<Term> soft_binding_term(std::shared_ptr<const Flesh> flesh, double soft_stiffness,
                                                       double youngs);
+
+/// A frame per volume vertex that carries the flesh along with the bones (SimulationSetup::carrier): the
+/// joints' motions from rest, world(t)·rest⁻¹, blended with the skin weights of the model vertex nearest
+/// to the volume vertex at rest (linear blend skinning of the volume, used only to predict).
+[[nodiscard]] std::function<void(double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames)> flesh_carrier(
+    std::shared_ptr<const Flesh> flesh);
 
 /// The joints' world transforms at time t of the clip.
 [[nodiscard]] std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t);

@@ -453,6 +453,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   setup.mass_damping = s.forces.mass_damping;
   setup.stiffness_damping = s.forces.stiffness_damping;
   setup.kinematic = scene_kinematics(s, mesh, x0);
+  if (loaded->flesh && !dynamic) setup.carrier = flesh_carrier(loaded->flesh);  // guesses that follow the bones
   if (loaded->flesh)
     if (std::shared_ptr<Term> soft = soft_binding_term(loaded->flesh, s.flesh->soft_stiffness, youngs_modulus(s.material.params)))
       setup.terms.push_back(std::move(soft));

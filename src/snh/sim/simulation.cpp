@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/LU>
 #include <fmt/format.h>
 
 #include "snh/sim/output.hpp"
@@ -112,6 +113,54 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
     if (Eq < E || (!std::isfinite(E) && std::isfinite(Eq))) {
       guess = std::move(quadratic);
       E = Eq;
+    }
+  }
+  if (!dynamic() && setup_.carrier) {
+    // The same extrapolations in the carrier's frames (steps of equal length assumed, as above): the
+    // states at t_n, t_n − Δ, t_n − 2Δ (Δ = t − t_n) taken into the frames of their times, extrapolated
+    // there, and carried to t.
+    using Frame = Eigen::Matrix<double, 3, 4>;
+    const double delta = t - time_;
+    std::vector<Frame> at_t, at_n;
+    setup_.carrier(t, at_t);
+    setup_.carrier(time_, at_n);
+    const Eigen::Index nv = x_.size() / 3;
+    auto local = [nv](const std::vector<Frame>& frames, const Eigen::VectorXd& x) {
+      Eigen::VectorXd y(x.size());
+      for (Eigen::Index v = 0; v < nv; ++v) {
+        const Frame& f = frames[static_cast<std::size_t>(v)];
+        y.segment<3>(3 * v) = f.leftCols<3>().partialPivLu().solve(x.segment<3>(3 * v) - f.col(3));
+      }
+      return y;
+    };
+    auto carried = [nv, &at_t](const Eigen::VectorXd& y) {
+      Eigen::VectorXd x(y.size());
+      for (Eigen::Index v = 0; v < nv; ++v) {
+        const Frame& f = at_t[static_cast<std::size_t>(v)];
+        x.segment<3>(3 * v) = f.leftCols<3>() * y.segment<3>(3 * v) + f.col(3);
+      }
+      return x;
+    };
+    auto consider = [&](Eigen::VectorXd candidate) {
+      place_kinematic(candidate, t);
+      const double Ec = problem_.energy(candidate);
+      if (Ec < E || (!std::isfinite(E) && std::isfinite(Ec))) {
+        guess = std::move(candidate);
+        E = Ec;
+      }
+    };
+    const Eigen::VectorXd y0 = local(at_n, x_);
+    consider(carried(y0));
+    if (steps_ >= 1) {
+      std::vector<Frame> at_1;
+      setup_.carrier(time_ - delta, at_1);
+      const Eigen::VectorXd y1 = local(at_1, previous_);
+      consider(carried(2.0 * y0 - y1));
+      if (setup_.extrapolation >= 2 && steps_ >= 2 && previous2_.size() == x_.size()) {
+        std::vector<Frame> at_2;
+        setup_.carrier(time_ - 2.0 * delta, at_2);
+        consider(carried(3.0 * (y0 - y1) + local(at_2, previous2_)));
+      }
     }
   }
   {

@@ -52,6 +52,12 @@ struct SimulationSetup {
   /// the quadratic one from the last three, taken where its energy is lower (scenes and flesh: on the hand's
   /// fist 118 Newton and 1 098 CG iterations over 20 frames against 135 and 1 564).
   int extrapolation = 1;
+  /// Quasi-static, optional: an affine frame per vertex (3 by 4, x ↦ A x + b) that carries the solution
+  /// along at time t (flesh: the model's joints' motions from rest, blended per vertex with skin weights).
+  /// With it, the guesses also include the extrapolations made in these frames' coordinates (the last
+  /// state carried from its time to t; the linear and quadratic extrapolations of the carried states),
+  /// and the lowest energy among all decides: at a keyframe's kink the bones turn, and the flesh with them.
+  std::function<void(double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames)> carrier;
 };
 
 /// The kinematic flag of every DOF (3 #V) of these sets. Throws std::invalid_argument (one line, naming
