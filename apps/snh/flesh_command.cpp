@@ -62,7 +62,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                   "A ground plane y = Y (normal +y, glTF's up axis) that the render surface stays above; it must start above it");
   cmd->add_option("--dhat", o->dhat,
                   "Distance below which contact repels, model units (default: a quarter of the render surface's mean edge "
-                  "length)")
+                  "length, at most half its smallest distance at rest)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--contact-stiffness", o->contact_stiffness,
                   "Barrier stiffness kappa (default: Young's modulus x cell size / dhat^2, about one cell's stiffness)")

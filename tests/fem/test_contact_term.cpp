@@ -588,6 +588,25 @@ TEST(ContactTerm, IdentityWeightsGiveTheDirectTerm) {
   }
 }
 
+TEST(ContactTerm, BadEmbeddingsThrow) {
+  const TwoTets tets(Eigen::Matrix<double, 3, 4>::Identity() * 0.5);
+  const Eigen::MatrixXi ids = Eigen::RowVectorXi::LinSpaced(8, 0, 7);
+  const Eigen::MatrixXd ones = Eigen::RowVectorXd::Ones(8);
+  EXPECT_NO_THROW(ContactTerm(tets.F, ids, ones, tets.V, 0.1, 1.0));
+  EXPECT_THROW(ContactTerm(tets.F, ids, Eigen::MatrixXd::Ones(2, 8), tets.V, 0.1, 1.0), std::invalid_argument);  // shapes
+  Eigen::MatrixXi far = ids;
+  far(0, 3) = 8;  // beyond the volume's 8 vertices
+  EXPECT_THROW(ContactTerm(tets.F, far, ones, tets.V, 0.1, 1.0), std::invalid_argument);
+  Eigen::MatrixXd nan = ones;
+  nan(0, 2) = NAN;
+  EXPECT_THROW(ContactTerm(tets.F, ids, nan, tets.V, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(PlaneContactTerm(ids, nan, Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(PlaneContactTerm(ids, Eigen::MatrixXd::Ones(1, 7), Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
+  Eigen::MatrixXi negative = ids;
+  negative(0, 1) = -1;
+  EXPECT_THROW(PlaneContactTerm(negative, ones, Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
+}
+
 TEST(PlaneContactTerm, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights) {
   // A cube's 8 vertices (deformed at random) and 5 points in it by trilinear weights, 0.01 to 0.04 above a
   // tilted plane (d̂ = 0.05) or far above it.
