@@ -213,8 +213,19 @@ void ContactTerm::pair_volume_vertices(const std::array<int, 4>& ids, int arity,
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
+const std::vector<ContactPair>& ContactTerm::pairs_at(const Eigen::VectorXd& x, const Eigen::Matrix3Xd** P) const {
+  if (!(cache_x_.size() == x.size() && cache_x_ == x) || !x.allFinite()) {
+    cache_positions_ = positions(x);
+    cache_pairs_ = local_pairs(cache_positions_);
+    if (x.allFinite()) cache_x_ = x;
+    else cache_x_.resize(0);
+  }
+  if (P) *P = &cache_positions_;
+  return cache_pairs_;
+}
+
 std::vector<ContactPair> ContactTerm::pairs(const Eigen::VectorXd& x) const {
-  std::vector<ContactPair> merged = local_pairs(positions(x));
+  std::vector<ContactPair> merged = pairs_at(x);
   for (ContactPair& p : merged)
     for (int& v : p.vertices)
       if (v >= 0) v = surface_vertices_[static_cast<std::size_t>(v)];
@@ -223,7 +234,7 @@ std::vector<ContactPair> ContactTerm::pairs(const Eigen::VectorXd& x) const {
 
 int ContactTerm::active_pairs(const Eigen::VectorXd& x) const {
   if (!x.allFinite()) return 0;
-  return static_cast<int>(local_pairs(positions(x)).size());
+  return static_cast<int>(pairs_at(x).size());
 }
 
 std::vector<ContactPair> ContactTerm::local_pairs(const Eigen::Matrix3Xd& V) const {
@@ -308,11 +319,13 @@ double ContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
                              PsdProjection projection) const {
   const Timed timed(counters_.seconds);
   if (!x.allFinite()) return std::numeric_limits<double>::quiet_NaN();
-  const Eigen::Matrix3Xd V = positions(x);
+  const Eigen::Matrix3Xd* P = nullptr;
+  const std::vector<ContactPair>& pairs = pairs_at(x, &P);
+  const Eigen::Matrix3Xd& V = *P;
   const double s_hat = dhat_ * dhat_;
   const bool project = projection != PsdProjection::none;
   double e = 0.0;
-  for (const ContactPair& p : local_pairs(V)) {
+  for (const ContactPair& p : pairs) {
     const double scale = kappa_ * p.weight;
     const auto& id = p.vertices;
     // Scatters a pair's derivatives (where its energy is finite) and gives its energy.
@@ -364,7 +377,7 @@ void ContactTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
     return;
   }
   std::vector<int> volume;
-  for (const ContactPair& p : local_pairs(positions(x))) {
+  for (const ContactPair& p : pairs_at(x)) {
     pair_volume_vertices(p.vertices, p.arity(), volume);
     for (std::size_t i = 0; i < volume.size(); ++i)
       for (std::size_t j = i + 1; j < volume.size(); ++j) out.vertices.insert(out.vertices.end(), {volume[i], volume[j]});

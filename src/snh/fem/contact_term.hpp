@@ -135,6 +135,10 @@ class ContactTerm final : public ContactTermBase {
   [[nodiscard]] double stiffness() const { return kappa_; }
 
  private:
+  /// The surface positions (*P, when asked) and active pairs (local ids) at x, kept for the last finite x
+  /// asked: Newton asks the stencil, the derivatives and the energy at the same x, and the broad phase
+  /// then runs once (not thread-safe, as the counters: a problem evaluates its terms one after another).
+  const std::vector<ContactPair>& pairs_at(const Eigen::VectorXd& x, const Eigen::Matrix3Xd** P = nullptr) const;
   /// Numbers the surface's vertices (ids of F, increasing) and lists its edges.
   void number_surface(Eigen::Index id_count);
   /// The active pairs at the surface positions P, in local ids.
@@ -154,6 +158,9 @@ class ContactTerm final : public ContactTermBase {
   Eigen::MatrixXi vertex_;              ///< embedded: k by #surface vertices, volume vertex ids
   Eigen::MatrixXd weight_;              ///< embedded: their weights
   double dhat_, kappa_;
+  mutable Eigen::VectorXd cache_x_;     ///< pairs_at's last x (empty: none)
+  mutable Eigen::Matrix3Xd cache_positions_;
+  mutable std::vector<ContactPair> cache_pairs_;
 };
 
 /// IPC's automatic barrier stiffness (Li et al. 2020, §4.3 and its code's initial choice) when nothing is in
