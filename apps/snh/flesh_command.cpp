@@ -25,6 +25,8 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness;
     std::string joint_cells = to_string(FleshSpec{}.joint_cells);
     int threads = 0;
+    bool self_contact = false;
+    double ground = 0.0, dhat = 0.0, contact_stiffness = 0.0;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -53,6 +55,18 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                   "(released to the solve, so the joint's cells can give: a sharply bent fine lattice then converges), or "
                   "soft (released, and bound by springs of --soft-stiffness instead)")
       ->check(CLI::IsMember({"soft", "free", "hard"}));
+  cmd->add_flag("--self-contact", o->self_contact,
+                "Self-contact of the render surface (IPC barrier on the welded skin, embedded in the volume: no two of its "
+                "triangles pass through each other)");
+  cmd->add_option("--ground", o->ground,
+                  "A ground plane y = Y (normal +y, glTF's up axis) that the render surface stays above; it must start above it");
+  cmd->add_option("--dhat", o->dhat,
+                  "Distance below which contact repels, model units (default: a quarter of the render surface's mean edge "
+                  "length, at most half its smallest distance at rest)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--contact-stiffness", o->contact_stiffness,
+                  "Barrier stiffness kappa (default: Young's modulus x cell size / dhat^2, about one cell's stiffness)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params);
   auto* qs = cmd->add_flag("--quasi-static", o->quasi_static, "Quasi-static frames (the default, as the paper)");
@@ -96,6 +110,15 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
       j["integrator"] = "quasi_static";
     }
     j["solver"] = {{"linear", o->solver}};
+    const bool ground = cmd->count("--ground") > 0;
+    if (o->self_contact || ground) {
+      j["contact"] = {{"self", o->self_contact}};
+      if (cmd->count("--dhat")) j["contact"]["dhat"] = o->dhat;
+      if (cmd->count("--contact-stiffness")) j["contact"]["stiffness"] = o->contact_stiffness;
+      if (ground) j["colliders"] = {{{"type", "plane"}, {"point", {0.0, o->ground, 0.0}}, {"normal", {0.0, 1.0, 0.0}}}};
+    } else if (cmd->count("--dhat") || cmd->count("--contact-stiffness")) {
+      throw SceneError("snh flesh: --dhat and --contact-stiffness need --self-contact or --ground");
+    }
     j["output"] = {{"dir", o->out.empty() ? "output/" + std::filesystem::path(o->model).stem().string() : o->out}};
     // The clip's length (known once the model is read) and --fps decide the frames.
     Scene scene = parse_scene(j, "snh flesh");

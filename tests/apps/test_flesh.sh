@@ -37,6 +37,28 @@ python3 "$HERE/check_usda.py" "$work/broken.usda" > /dev/null 2>&1 && bad "check
   && grep -q '"stiffness": 5' "$work/soft/stats.json" && grep -q '"all_converged": true' "$work/soft/stats.json" \
   && ok || bad "soft binding: $(tail -2 "$work/soft.log")"
 
+# A ground plane the bending limb would pass below (its skin reaches y = -0.35 at the end without it): with
+# --ground -0.33 every frame's render surface stays above it, with contact pairs reported; self-contact on.
+"$SNH" flesh "$limb" --resolution 10 --out "$work/free" --no-report > "$work/free.log" 2>&1 || bad "limb without ground: $(tail -2 "$work/free.log")"
+"$SNH" flesh "$limb" --resolution 10 --ground -0.33 --self-contact --out "$work/ground" --no-report > "$work/ground.log" 2>&1 \
+  || bad "limb on the ground: $(tail -2 "$work/ground.log")"
+python3 - "$work/free" "$work/ground" <<'PY' && ok || bad "limb on the ground: the surface stays above it"
+import json, sys
+def lowest(run, f):
+    return min(float(l.split()[2]) for l in open(f"{run}/surface/{f:03d}.obj") if l.startswith("v "))
+free = min(lowest(sys.argv[1], f) for f in range(25))
+ground = [lowest(sys.argv[2], f) for f in range(25)]
+s = json.load(open(sys.argv[2] + "/stats.json"))
+pairs = [f["contact_pairs"] for f in s["frames"]]
+print(f"limb: lowest skin without ground {free:.4f}, with ground at -0.33 {min(ground):.4f}; contact pairs {pairs}")
+sys.exit(0 if free < -0.33 and min(ground) > -0.33 and s["all_converged"] and max(pairs) > 0 and s["contact"]["self"] else 1)
+PY
+grep -q ', [1-9][0-9]* contact pairs, min distance ' "$work/ground.log" && ok || bad "limb on the ground: progress line"
+expect_error ground_above 'colliders\[0\]: vertex [0-9]* of the render surface \(welded\) is .* on or behind it at the start' -- \
+  "$SNH" flesh "$limb" --resolution 10 --ground 0 --out "$work/bad_ground"
+expect_error dhat_alone 'dhat and --contact-stiffness need --self-contact or --ground' -- "$SNH" flesh "$limb" --dhat 0.1 --out "$work/bad_dhat"
+expect_error dhat_negative 'dhat' -- "$SNH" flesh "$limb" --self-contact --dhat -1 --out "$work/bad_dhat2"
+
 # The hand closing into a fist (scenes/hand_fist.json): every frame converges and the flesh keeps the volume
 # inside its render surface within 3 % at every frame, while skinning loses more.
 if "$SNH" run "$HERE/../../scenes/hand_fist.json" --out "$work/fist" --no-report > "$work/fist.log" 2>&1; then ok; else bad "hand_fist: $(tail -2 "$work/fist.log")"; fi

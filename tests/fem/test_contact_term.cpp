@@ -22,6 +22,7 @@
 #include "snh/sim/simulation.hpp"
 #include "snh/solve/linear_solver.hpp"
 #include "snh/solve/newton.hpp"
+#include "contact/surface_checks.hpp"
 #include "fem/problem_fd.hpp"
 
 namespace snh {
@@ -201,68 +202,6 @@ TEST(ContactTerm, EnergyIsContinuousAcrossAClosestFeatureChange) {
   EXPECT_TRUE(seen_triangle);
   EXPECT_TRUE(seen_edge_only);
   EXPECT_LT(largest_jump, 1e-3 * largest);  // a jump of one pair's barrier would be ~25% of it
-}
-
-// ---- an intersection test of our own: orientation signs, conservative (a sign too close to call counts as
-// zero, which can only report touching where there is none, never miss a crossing).
-
-int orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  const Vec3 u = b - a, v = c - a, w = d - a;
-  const double det = u.dot(v.cross(w));
-  const double bound = 1e-12 * u.norm() * v.norm() * w.norm();
-  return det > bound ? 1 : det < -bound ? -1 : 0;
-}
-
-/// Does segment pq touch triangle abc (up to the filter above)?
-bool segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const int sp = orient(a, b, c, p), sq = orient(a, b, c, q);
-  if (sp != 0 && sp == sq) return false;  // both strictly on one side
-  const int s0 = orient(p, q, a, b), s1 = orient(p, q, b, c), s2 = orient(p, q, c, a);
-  const bool has_pos = s0 > 0 || s1 > 0 || s2 > 0, has_neg = s0 < 0 || s1 < 0 || s2 < 0;
-  return !(has_pos && has_neg);  // the line through pq passes inside (or on the rim of) abc
-}
-
-bool triangles_intersect(const std::array<Vec3, 3>& s, const std::array<Vec3, 3>& t) {
-  for (int i = 0; i < 3; ++i) {
-    if (segment_hits_triangle(s[i], s[(i + 1) % 3], t[0], t[1], t[2])) return true;
-    if (segment_hits_triangle(t[i], t[(i + 1) % 3], s[0], s[1], s[2])) return true;
-  }
-  return false;
-}
-
-/// True if two triangles of F that share no vertex intersect at x (every pair checked).
-bool surface_intersects(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& V) {
-  for (Eigen::Index i = 0; i < F.cols(); ++i)
-    for (Eigen::Index j = i + 1; j < F.cols(); ++j) {
-      bool shared = false;
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) shared = shared || F(a, i) == F(b, j);
-      if (shared) continue;
-      if (triangles_intersect({V.col(F(0, i)), V.col(F(1, i)), V.col(F(2, i))},
-                              {V.col(F(0, j)), V.col(F(1, j)), V.col(F(2, j))}))
-        return true;
-    }
-  return false;
-}
-
-/// The smallest distance between a vertex and a triangle, or two edges, of F that share no vertex.
-double surface_min_distance(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& V) {
-  double s = INFINITY;
-  for (Eigen::Index i = 0; i < F.cols(); ++i)
-    for (Eigen::Index j = 0; j < F.cols(); ++j) {
-      if (i == j) continue;
-      for (int a = 0; a < 3; ++a) {
-        const int v = F(a, i);
-        if (v != F(0, j) && v != F(1, j) && v != F(2, j))
-          s = std::min(s, contact::point_triangle_distance(V.col(v), V.col(F(0, j)), V.col(F(1, j)), V.col(F(2, j))));
-        for (int b = 0; b < 3; ++b) {
-          const int a0 = F(a, i), a1 = F((a + 1) % 3, i), b0 = F(b, j), b1 = F((b + 1) % 3, j);
-          if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) continue;
-          s = std::min(s, contact::edge_edge_distance(V.col(a0), V.col(a1), V.col(b0), V.col(b1)));
-        }
-      }
-    }
-  return std::sqrt(s);
 }
 
 /// Two cubes of side `side` (box_tets(1) scaled), the second shifted by `offset`, as one mesh.
@@ -508,6 +447,207 @@ TEST(ContactTerm, ASimulationsGuessDoesNotJumpThroughAContact) {
     const StepReport r = sim.step(0.01 * s);
     ASSERT_TRUE(r.converged) << "step " << s << ": " << r.failure;
     ASSERT_FALSE(surface_intersects(cubes.F, unflatten(sim.x()))) << "step " << s;
+  }
+}
+
+// ---- surfaces embedded in a volume (a flesh's render surface): the same pairs on p = W x, derivatives
+// through the weights.
+
+/// TwoTets' 8 vertices as points embedded in a volume: two hexes (trilinear weights, 16 vertices) or two
+/// tets (barycentric, 8 vertices), one cell around each small tet, the volume then deformed at random so
+/// that the map x → p is not affine (hexes).
+struct EmbeddedTwoTets {
+  Eigen::Matrix3Xd rest;  ///< the volume at rest
+  Eigen::MatrixXi vertex;
+  Eigen::MatrixXd weight;
+  Eigen::VectorXd x;      ///< the volume deformed
+  EmbeddedTwoTets(const TwoTets& tets, bool hexes, unsigned seed) {
+    const int k = hexes ? 8 : 4;
+    rest.resize(3, 2 * k);
+    vertex.resize(k, 8);
+    weight.resize(k, 8);
+    for (int c = 0; c < 2; ++c) {  // cell c around the small tet's vertices 4c … 4c + 3
+      const Eigen::Matrix<double, 3, 4> small = tets.V.middleCols<4>(4 * c);
+      const Vec3 center = small.rowwise().mean();
+      if (hexes) {
+        const Vec3 lo = small.rowwise().minCoeff().array() - 0.3;
+        const double side = (small.rowwise().maxCoeff() - small.rowwise().minCoeff()).maxCoeff() + 0.6;
+        for (int corner = 0; corner < 8; ++corner)
+          rest.col(8 * c + corner) = lo + side * Vec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        for (int i = 0; i < 4; ++i) {
+          const Vec3 u = (small.col(i) - lo) / side;
+          for (int corner = 0; corner < 8; ++corner) {
+            vertex(corner, 4 * c + i) = 8 * c + corner;
+            weight(corner, 4 * c + i) = ((corner & 1) ? u[0] : 1 - u[0]) * (((corner >> 1) & 1) ? u[1] : 1 - u[1]) *
+                                        (((corner >> 2) & 1) ? u[2] : 1 - u[2]);
+          }
+        }
+      } else {
+        const Eigen::Matrix<double, 3, 4> big = (2.0 * (small.colwise() - center)).colwise() + center;
+        rest.middleCols<4>(4 * c) = big;
+        Eigen::Matrix3d edges;
+        for (int a = 0; a < 3; ++a) edges.col(a) = big.col(a + 1) - big.col(0);
+        for (int i = 0; i < 4; ++i) {
+          const Vec3 b = edges.inverse() * (small.col(i) - big.col(0));
+          const Eigen::Vector4d w(1 - b.sum(), b[0], b[1], b[2]);
+          for (int a = 0; a < 4; ++a) {
+            vertex(a, 4 * c + i) = 4 * c + a;
+            weight(a, 4 * c + i) = w[a];
+          }
+        }
+      }
+    }
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-0.005, 0.005);
+    x = flatten(rest);
+    for (Eigen::Index i = 0; i < x.size(); ++i) x[i] += u(rng);
+  }
+};
+
+/// The dense Hessian (both halves) and the gradient of a problem over every DOF of x, all free.
+std::pair<Eigen::MatrixXd, Eigen::VectorXd> assembled(Term& term, const Eigen::VectorXd& x, PsdProjection projection) {
+  Problem problem(DofMap(std::vector<std::uint8_t>(static_cast<std::size_t>(x.size()), 0)));
+  problem.add(term);
+  Eigen::VectorXd g;
+  HessianMatrix H;
+  problem.evaluate(x, g, &H, projection);
+  return {Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>(), g};
+}
+
+TEST(ContactTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesThroughItsWeights) {
+  Eigen::Matrix<double, 3, 4> B;  // as VertexTriangleAndEdgeEdgePairsMatchFiniteDifferences
+  B << 0.5, 0.5, 0.3, 0.8,  //
+      -0.3, 0.3, 0.0, 0.0,  //
+      0.04, 0.04, 1.0, 1.0;
+  for (const bool hexes : {true, false})
+    for (unsigned seed : {11u, 12u}) {
+      SCOPED_TRACE(hexes ? "hexes" : "tets");
+      const TwoTets tets(jitter(B, seed));
+      const EmbeddedTwoTets e(tets, hexes, seed);
+      ContactTerm term(tets.F, e.vertex, e.weight, e.rest, 0.1, 10.0);
+      const Eigen::Matrix3Xd P = term.positions(e.x);
+      const auto pairs = term.pairs(e.x);
+      EXPECT_TRUE(has_kind(pairs, Kind::point_triangle));
+      EXPECT_TRUE(has_kind(pairs, Kind::edge_edge));
+      Problem problem(DofMap(std::vector<std::uint8_t>(static_cast<std::size_t>(e.x.size()), 0)));
+      problem.add(term);
+      EXPECT_GT(problem.energy(e.x), 0.0);
+      const FdErrors fd = problem_fd_errors(problem, e.x);
+      EXPECT_LE(fd.gradient, 1e-6);
+      EXPECT_LE(fd.hessian, 1e-6);
+      // The projected Hessian (pairs projected before the chain rule) is PSD.
+      const Eigen::MatrixXd Hp = assembled(term, e.x, PsdProjection::clamp).first;
+      EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Hp).eigenvalues().minCoeff(), -1e-9 * Hp.norm());
+      // The same surface given directly at the points p = W x: the same energy, pairs, max_step, and the
+      // gradient pulled back by Wᵀ.
+      Eigen::Matrix3Xd point_rest(3, 8);
+      for (int i = 0; i < 8; ++i) {
+        point_rest.col(i).setZero();
+        for (Eigen::Index c = 0; c < e.vertex.rows(); ++c) point_rest.col(i) += e.weight(c, i) * e.rest.col(e.vertex(c, i));
+      }
+      ContactTerm direct(tets.F, point_rest, 0.1, 10.0);
+      EXPECT_NEAR(term.energy(e.x), direct.energy(flatten(P)), 1e-12 * direct.energy(flatten(P)));
+      EXPECT_EQ(term.pairs(e.x).size(), direct.pairs(flatten(P)).size());
+      const Eigen::VectorXd gp = assembled(direct, flatten(P), PsdProjection::none).second;
+      Eigen::VectorXd gx = Eigen::VectorXd::Zero(e.x.size());
+      for (int i = 0; i < 8; ++i)
+        for (Eigen::Index c = 0; c < e.vertex.rows(); ++c) gx.segment<3>(3 * e.vertex(c, i)) += e.weight(c, i) * gp.segment<3>(3 * i);
+      EXPECT_LE((assembled(term, e.x, PsdProjection::none).second - gx).norm(), 1e-12 * gx.norm());
+      std::mt19937_64 rng(seed);
+      std::normal_distribution<double> g(0.0, 0.3);
+      for (int trial = 0; trial < 10; ++trial) {
+        Eigen::VectorXd dx(e.x.size());
+        for (Eigen::Index i = 0; i < dx.size(); ++i) dx[i] = g(rng);
+        const double t = term.max_step(e.x, dx);
+        EXPECT_EQ(t, direct.max_step(flatten(P), flatten(term.positions(dx))));
+        EXPECT_GT(t, 0.0);
+        EXPECT_FALSE(surface_intersects(tets.F, term.positions(e.x + t * dx))) << "trial " << trial;
+      }
+    }
+}
+
+// The direct term keeps its own path (plain gathers and scatters); the embedded path with one weight 1 per
+// point agrees with it up to the last bits (a pair Hessian's blocks are added in the other orientation where
+// the volume ids are in the other order, and its symmetry holds to rounding only).
+TEST(ContactTerm, IdentityWeightsGiveTheDirectTerm) {
+  Eigen::Matrix<double, 3, 4> B;
+  B << 0.2, 0.8, 0.3, 0.7,     //
+      -0.02, -0.01, -0.4, -0.4,  //
+      0.05, 0.05, 1.0, 1.0;
+  const TwoTets tets(jitter(B, 4));
+  ContactTerm direct(tets.F, tets.V, 0.1, 10.0);
+  ContactTerm embedded(tets.F, Eigen::RowVectorXi::LinSpaced(8, 0, 7), Eigen::RowVectorXd::Ones(8), tets.V, 0.1, 10.0);
+  const Eigen::VectorXd x = flatten(tets.V);
+  EXPECT_EQ(direct.energy(x), embedded.energy(x));
+  for (const PsdProjection p : {PsdProjection::none, PsdProjection::clamp}) {
+    const auto [Hd, gd] = assembled(direct, x, p);
+    const auto [He, ge] = assembled(embedded, x, p);
+    EXPECT_EQ(gd, ge);
+    EXPECT_LE((Hd - He).norm(), 1e-14 * Hd.norm());
+    EXPECT_GT(Hd.norm(), 0.0);
+  }
+}
+
+TEST(ContactTerm, BadEmbeddingsThrow) {
+  const TwoTets tets(Eigen::Matrix<double, 3, 4>::Identity() * 0.5);
+  const Eigen::MatrixXi ids = Eigen::RowVectorXi::LinSpaced(8, 0, 7);
+  const Eigen::MatrixXd ones = Eigen::RowVectorXd::Ones(8);
+  EXPECT_NO_THROW(ContactTerm(tets.F, ids, ones, tets.V, 0.1, 1.0));
+  EXPECT_THROW(ContactTerm(tets.F, ids, Eigen::MatrixXd::Ones(2, 8), tets.V, 0.1, 1.0), std::invalid_argument);  // shapes
+  Eigen::MatrixXi far = ids;
+  far(0, 3) = 8;  // beyond the volume's 8 vertices
+  EXPECT_THROW(ContactTerm(tets.F, far, ones, tets.V, 0.1, 1.0), std::invalid_argument);
+  Eigen::MatrixXd nan = ones;
+  nan(0, 2) = NAN;
+  EXPECT_THROW(ContactTerm(tets.F, ids, nan, tets.V, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(PlaneContactTerm(ids, nan, Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(PlaneContactTerm(ids, Eigen::MatrixXd::Ones(1, 7), Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
+  Eigen::MatrixXi negative = ids;
+  negative(0, 1) = -1;
+  EXPECT_THROW(PlaneContactTerm(negative, ones, Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
+}
+
+TEST(PlaneContactTerm, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights) {
+  // A cube's 8 vertices (deformed at random) and 5 points in it by trilinear weights, 0.01 to 0.04 above a
+  // tilted plane (d̂ = 0.05) or far above it.
+  const Vec3 n = Vec3(0.2, 1.0, -0.3).normalized(), p(0.1, -0.2, 0.3);
+  const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+  Eigen::Matrix3Xd cube(3, 8);
+  for (int c = 0; c < 8; ++c)
+    cube.col(c) = p - 0.5 * n + ((c & 1) ? 1.5 : -0.5) * t1 + (((c >> 1) & 1) ? 1.5 : -0.5) * t2 + (((c >> 2) & 1) ? 2.0 : 0.0) * n;
+  Eigen::MatrixXi vertex(8, 5);
+  Eigen::MatrixXd weight(8, 5);
+  for (int i = 0; i < 5; ++i) {
+    const Vec3 u(0.1 + 0.15 * i, 0.6 - 0.1 * i, (0.5 + (i < 4 ? 0.01 * (i + 1) : 1.0)) / 2.0);
+    for (int c = 0; c < 8; ++c) {
+      vertex(c, i) = c;
+      weight(c, i) = ((c & 1) ? u[0] : 1 - u[0]) * (((c >> 1) & 1) ? u[1] : 1 - u[1]) * (((c >> 2) & 1) ? u[2] : 1 - u[2]);
+    }
+  }
+  PlaneContactTerm term(vertex, weight, p, n, 0.05, 5.0);
+  const Eigen::VectorXd x = flatten(cube);
+  for (int i = 0; i < 5; ++i) EXPECT_NEAR(term.distance(x, i), i < 4 ? 0.01 * (i + 1) : 1.0, 1e-14);
+  EXPECT_EQ(term.active_pairs(x), 4);
+  EXPECT_NEAR(term.min_distance(x), 0.01, 1e-14);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-0.002, 0.002);
+  Eigen::VectorXd y = x;
+  for (Eigen::Index i = 0; i < y.size(); ++i) y[i] += u(rng);
+  Problem problem(DofMap(std::vector<std::uint8_t>(24, 0)));
+  problem.add(term);
+  EXPECT_GT(problem.energy(y), 0.0);
+  const FdErrors e = problem_fd_errors(problem, y);
+  EXPECT_LE(e.gradient, 1e-6);
+  EXPECT_LE(e.hessian, 1e-6);
+  const Eigen::MatrixXd Hp = assembled(term, y, PsdProjection::clamp).first;
+  EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Hp).eigenvalues().minCoeff(), -1e-9 * Hp.norm());
+  std::normal_distribution<double> g(0.0, 0.05);
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::VectorXd dx(24);
+    for (Eigen::Index i = 0; i < dx.size(); ++i) dx[i] = g(rng);
+    const double alpha = term.max_step(y, dx);
+    ASSERT_GT(alpha, 0.0);
+    for (int i = 0; i < 5; ++i) EXPECT_GE(term.distance(y + alpha * dx, i), 0.1 * term.distance(y, i) * (1 - 1e-9));
   }
 }
 

@@ -44,12 +44,12 @@ for _scene in SCENES:
     CASES["scene_" + _scene] = ["{snh}", "run", "{root}/scenes/" + _scene + ".json", "--out", "{out}"]
 
 # Fields of stats.json / lab.json that differ between identical runs, or name paths.
-VARYING = {"wall_seconds", "assembly_seconds", "solve_seconds", "total_seconds", "peak_memory_mib", "command_line",
+VARYING = {"wall_seconds", "assembly_seconds", "solve_seconds", "contact_seconds", "total_seconds", "peak_memory_mib", "command_line",
            "scene", "mesh_file", "model"}
-CSV_VARYING = {"wall_seconds", "assembly_seconds", "solve_seconds"}
+CSV_VARYING = {"wall_seconds", "assembly_seconds", "solve_seconds", "contact_seconds"}
 # Compared only on a machine like the recording one: counts that a last-bit difference may change.
 COUNTS = {"newton_iterations", "line_search_steps", "linear_iterations", "factorizations", "true_hessian_steps",
-          "residual", "residual_history"}
+          "residual", "residual_history", "ccd_calls", "ccd_tests"}
 NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 RTOL = 1e-5
 

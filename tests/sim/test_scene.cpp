@@ -304,6 +304,16 @@ TEST(SceneRun, ACubeFallsOntoAPlaneColliderAndStaysAboveIt) {
   for (Eigen::Index v = 0; v < r.final_positions.size() / 3; ++v) bottom = std::min(bottom, r.final_positions[3 * v + 1]);
   EXPECT_GT(bottom, ground) << stiffness;
   EXPECT_LT(bottom, ground + dhat) << stiffness;  // resting on the ground (it fell 0.3)
+  // The contact statistics: nothing in range at the start, the resting cube's bottom vertices in range at
+  // the end (a distance in (0, d̂)), CCD run in between.
+  EXPECT_EQ(r.frames.front().contact_pairs, 0);
+  EXPECT_GT(r.frames.back().contact_pairs, 0);
+  EXPECT_GT(r.frames.back().min_contact_distance, 0.0);
+  EXPECT_LT(r.frames.back().min_contact_distance, dhat);
+  EXPECT_NEAR(r.frames.back().min_contact_distance, bottom - ground, 1e-12);
+  int ccd = 0;
+  for (const FrameStats& f : r.frames) ccd += f.ccd_calls;
+  EXPECT_GT(ccd, 0);
   }
 }
 

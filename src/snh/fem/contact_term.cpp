@@ -1,6 +1,7 @@
 #include "snh/fem/contact_term.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -43,10 +44,23 @@ Derivatives<N> weighted_barrier(const Derivatives<N>& s, double s_hat, double sc
   return b;
 }
 
+/// Adds the wall time of its scope to a counter.
+class Timed {
+ public:
+  explicit Timed(double& seconds) : seconds_(seconds), start_(std::chrono::steady_clock::now()) {}
+  ~Timed() { seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  Timed(const Timed&) = delete;
+  Timed& operator=(const Timed&) = delete;
+
+ private:
+  double& seconds_;
+  std::chrono::steady_clock::time_point start_;
+};
+
 /// Adds a pair's energy derivatives (over its `N/3` vertices) to the gradient and the Hessian.
 template <int N>
-void scatter(const Derivatives<N>& d, const std::array<int, 4>& ids, Eigen::VectorXd* gradient,
-             const HessianValues* hessian) {
+void scatter_direct(const Derivatives<N>& d, const std::array<int, 4>& ids, Eigen::VectorXd* gradient,
+                    const HessianValues* hessian) {
   constexpr int M = N / 3;
   if (gradient)
     for (int i = 0; i < M; ++i) gradient->segment<3>(3 * ids[i]) += d.gradient.template segment<3>(3 * i);
@@ -74,15 +88,45 @@ ContactPair point_edge(int v, int e0, int e1, double s) {
 }  // namespace
 
 ContactTerm::ContactTerm(Eigen::Matrix3Xi F, Eigen::Matrix3Xd rest, double dhat, double stiffness)
-    : F_(std::move(F)), rest_(std::move(rest)), dhat_(dhat), kappa_(stiffness) {
+    : F_(std::move(F)), volume_vertices_(rest.cols()), dhat_(dhat), kappa_(stiffness) {
   check_positive("dhat", dhat_);
   check_positive("stiffness", kappa_);
-  if (!rest_.allFinite()) throw std::invalid_argument("contact: the rest positions are not all finite");
+  if (!rest.allFinite()) throw std::invalid_argument("contact: the rest positions are not all finite");
+  number_surface(rest.cols());
+  surface_rest_ = positions(Eigen::Map<const Eigen::VectorXd>(rest.data(), rest.size()));
+}
+
+ContactTerm::ContactTerm(Eigen::Matrix3Xi F, Eigen::MatrixXi vertex, Eigen::MatrixXd weight,
+                         const Eigen::Matrix3Xd& volume_rest, double dhat, double stiffness)
+    : F_(std::move(F)), volume_vertices_(volume_rest.cols()), embedded_(true), dhat_(dhat), kappa_(stiffness) {
+  check_positive("dhat", dhat_);
+  check_positive("stiffness", kappa_);
+  if (!volume_rest.allFinite()) throw std::invalid_argument("contact: the rest positions are not all finite");
+  if (vertex.rows() != weight.rows() || vertex.cols() != weight.cols() || vertex.rows() < 1)
+    throw std::invalid_argument(fmt::format("contact: embedded vertex ids ({} by {}) and weights ({} by {}) differ in shape",
+                                            vertex.rows(), vertex.cols(), weight.rows(), weight.cols()));
+  if (!weight.allFinite()) throw std::invalid_argument("contact: the embedding's weights are not all finite");
+  for (Eigen::Index i = 0; i < vertex.size(); ++i)
+    if (vertex.data()[i] < 0 || vertex.data()[i] >= volume_vertices_)
+      throw std::invalid_argument(fmt::format("contact: embedded point {} has volume vertex id {} outside [0, {})",
+                                              i / vertex.rows(), vertex.data()[i], volume_vertices_));
+  number_surface(vertex.cols());
+  // Only the points the triangles use, in the local order.
+  vertex_.resize(vertex.rows(), static_cast<Eigen::Index>(surface_vertices_.size()));
+  weight_.resize(weight.rows(), vertex_.cols());
+  for (Eigen::Index i = 0; i < vertex_.cols(); ++i) {
+    vertex_.col(i) = vertex.col(surface_vertices_[static_cast<std::size_t>(i)]);
+    weight_.col(i) = weight.col(surface_vertices_[static_cast<std::size_t>(i)]);
+  }
+  surface_rest_ = positions(Eigen::Map<const Eigen::VectorXd>(volume_rest.data(), volume_rest.size()));
+}
+
+void ContactTerm::number_surface(Eigen::Index id_count) {
   for (Eigen::Index t = 0; t < F_.cols(); ++t) {
     for (int k = 0; k < 3; ++k)
-      if (F_(k, t) < 0 || F_(k, t) >= rest_.cols())
+      if (F_(k, t) < 0 || F_(k, t) >= id_count)
         throw std::invalid_argument(
-            fmt::format("contact: triangle {} has vertex id {} outside [0, {})", t, F_(k, t), rest_.cols()));
+            fmt::format("contact: triangle {} has vertex id {} outside [0, {})", t, F_(k, t), id_count));
     if (F_(0, t) == F_(1, t) || F_(1, t) == F_(2, t) || F_(2, t) == F_(0, t))
       throw std::invalid_argument(fmt::format("contact: triangle {} repeats a vertex", t));
   }
@@ -92,7 +136,7 @@ ContactTerm::ContactTerm(Eigen::Matrix3Xi F, Eigen::Matrix3Xd rest, double dhat,
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   surface_vertices_ = ids;
-  std::vector<int> local(static_cast<std::size_t>(rest_.cols()), -1);
+  std::vector<int> local(static_cast<std::size_t>(id_count), -1);
   for (std::size_t i = 0; i < ids.size(); ++i) local[static_cast<std::size_t>(ids[i])] = static_cast<int>(i);
   local_F_ = F_.unaryExpr([&](int v) { return local[static_cast<std::size_t>(v)]; });
   local_E_ = contact::surface_edges(local_F_);
@@ -100,15 +144,100 @@ ContactTerm::ContactTerm(Eigen::Matrix3Xi F, Eigen::Matrix3Xd rest, double dhat,
 }
 
 Eigen::Matrix3Xd ContactTerm::positions(const Eigen::VectorXd& x) const {
-  if (x.size() != 3 * rest_.cols())
-    throw std::logic_error(fmt::format("contact: {} DOFs for {} vertices", x.size(), rest_.cols()));
+  if (x.size() != 3 * volume_vertices_)
+    throw std::logic_error(fmt::format("contact: {} DOFs for {} vertices", x.size(), volume_vertices_));
   Eigen::Matrix3Xd V(3, static_cast<Eigen::Index>(surface_vertices_.size()));
-  for (Eigen::Index i = 0; i < V.cols(); ++i) V.col(i) = x.segment<3>(3 * surface_vertices_[static_cast<std::size_t>(i)]);
+  if (!embedded_) {
+    for (Eigen::Index i = 0; i < V.cols(); ++i) V.col(i) = x.segment<3>(3 * surface_vertices_[static_cast<std::size_t>(i)]);
+    return V;
+  }
+  for (Eigen::Index i = 0; i < V.cols(); ++i) {
+    Vec3 p = Vec3::Zero();
+    for (Eigen::Index k = 0; k < vertex_.rows(); ++k) p += weight_(k, i) * x.segment<3>(3 * vertex_(k, i));
+    V.col(i) = p;
+  }
   return V;
 }
 
+template <int N>
+void ContactTerm::scatter(const Derivatives<N>& d, const std::array<int, 4>& ids, Eigen::VectorXd* gradient,
+                          const HessianValues* hessian) const {
+  constexpr int M = N / 3;
+  if (!embedded_) {
+    std::array<int, 4> global = ids;
+    for (int i = 0; i < M; ++i) global[i] = surface_vertices_[static_cast<std::size_t>(ids[i])];
+    scatter_direct(d, global, gradient, hessian);
+    return;
+  }
+  const Eigen::Index k = vertex_.rows();
+  if (gradient)
+    for (int i = 0; i < M; ++i)
+      for (Eigen::Index c = 0; c < k; ++c)
+        gradient->segment<3>(3 * vertex_(c, ids[i])) += weight_(c, ids[i]) * d.gradient.template segment<3>(3 * i);
+  if (!hessian) return;
+  // J (N by 3U): the pair's coordinates as linear functions of its U distinct volume vertices; H_x = Jᵀ H J.
+  std::vector<int> volume;
+  pair_volume_vertices(ids, M, volume);
+  const auto U = static_cast<Eigen::Index>(volume.size());
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(M, U);  // C(i, u): point i's weight on volume vertex u
+  for (int i = 0; i < M; ++i)
+    for (Eigen::Index c = 0; c < k; ++c) {
+      const auto u = std::lower_bound(volume.begin(), volume.end(), vertex_(c, ids[i])) - volume.begin();
+      C(i, u) += weight_(c, ids[i]);
+    }
+  Eigen::MatrixXd HJ(N, 3 * U);  // H J
+  for (int i = 0; i < M; ++i)
+    for (Eigen::Index u = 0; u < U; ++u) {
+      Mat3 sum = Mat3::Zero();
+      for (int j = 0; j < M; ++j) sum += C(j, u) * d.hessian.template block<3, 3>(3 * i, 3 * j);
+      HJ.block<3, 3>(3 * i, 3 * u) = sum;
+    }
+  for (Eigen::Index u = 0; u < U; ++u)
+    for (Eigen::Index v = u; v < U; ++v) {
+      Mat3 block = Mat3::Zero();
+      for (int i = 0; i < M; ++i) block += C(i, u) * HJ.block<3, 3>(3 * i, 3 * v);
+      hessian->add_block(volume[static_cast<std::size_t>(u)], volume[static_cast<std::size_t>(v)], block);
+    }
+}
+
+void ContactTerm::pair_volume_vertices(const std::array<int, 4>& ids, int arity, std::vector<int>& out) const {
+  out.clear();
+  for (int i = 0; i < arity; ++i) {
+    const int p = ids[static_cast<std::size_t>(i)];
+    if (embedded_)
+      for (Eigen::Index c = 0; c < vertex_.rows(); ++c) out.push_back(vertex_(c, p));
+    else
+      out.push_back(surface_vertices_[static_cast<std::size_t>(p)]);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+const std::vector<ContactPair>& ContactTerm::pairs_at(const Eigen::VectorXd& x, const Eigen::Matrix3Xd** P) const {
+  if (!(cache_x_.size() == x.size() && cache_x_ == x) || !x.allFinite()) {
+    cache_positions_ = positions(x);
+    cache_pairs_ = local_pairs(cache_positions_);
+    if (x.allFinite()) cache_x_ = x;
+    else cache_x_.resize(0);
+  }
+  if (P) *P = &cache_positions_;
+  return cache_pairs_;
+}
+
 std::vector<ContactPair> ContactTerm::pairs(const Eigen::VectorXd& x) const {
-  const Eigen::Matrix3Xd V = positions(x);
+  std::vector<ContactPair> merged = pairs_at(x);
+  for (ContactPair& p : merged)
+    for (int& v : p.vertices)
+      if (v >= 0) v = surface_vertices_[static_cast<std::size_t>(v)];
+  return merged;
+}
+
+int ContactTerm::active_pairs(const Eigen::VectorXd& x) const {
+  if (!x.allFinite()) return 0;
+  return static_cast<int>(pairs_at(x).size());
+}
+
+std::vector<ContactPair> ContactTerm::local_pairs(const Eigen::Matrix3Xd& V) const {
   const contact::Candidates c = contact::broad_phase(V, V, local_F_, local_E_, dhat_);
   const double s_hat = dhat_ * dhat_;
   std::vector<ContactPair> raw;  // in local vertex ids (same order as the global ones)
@@ -142,7 +271,7 @@ std::vector<ContactPair> ContactTerm::pairs(const Eigen::VectorXd& x) const {
     const contact::EdgeEdgeType type = contact::edge_edge_distance_type(pa0, pa1, pb0, pb1);
     const double s = contact::edge_edge_distance(pa0, pa1, pb0, pb1, type);
     if (!(s < s_hat)) continue;
-    const auto rest = [&](int v) { return Vec3(rest_.col(surface_vertices_[static_cast<std::size_t>(v)])); };
+    const auto rest = [&](int v) { return Vec3(surface_rest_.col(v)); };
     const double eps = contact::edge_edge_mollifier_threshold(rest(a0), rest(a1), rest(b0), rest(b1));
     const double cross = (pa1 - pa0).cross(pb1 - pb0).squaredNorm();
     using T = contact::EdgeEdgeType;
@@ -181,9 +310,6 @@ std::vector<ContactPair> ContactTerm::pairs(const Eigen::VectorXd& x) const {
     p.weight = 1;
     merged.push_back(p);
   }
-  for (ContactPair& p : merged)
-    for (int& v : p.vertices)
-      if (v >= 0) v = surface_vertices_[static_cast<std::size_t>(v)];
   return merged;
 }
 
@@ -191,12 +317,15 @@ double ContactTerm::energy(const Eigen::VectorXd& x) const { return evaluate(x, 
 
 double ContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                              PsdProjection projection) const {
+  const Timed timed(counters_.seconds);
   if (!x.allFinite()) return std::numeric_limits<double>::quiet_NaN();
-  const auto V = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3);
+  const Eigen::Matrix3Xd* P = nullptr;
+  const std::vector<ContactPair>& pairs = pairs_at(x, &P);
+  const Eigen::Matrix3Xd& V = *P;
   const double s_hat = dhat_ * dhat_;
   const bool project = projection != PsdProjection::none;
   double e = 0.0;
-  for (const ContactPair& p : pairs(x)) {
+  for (const ContactPair& p : pairs) {
     const double scale = kappa_ * p.weight;
     const auto& id = p.vertices;
     // Scatters a pair's derivatives (where its energy is finite) and gives its energy.
@@ -237,12 +366,22 @@ double ContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
 }
 
 void ContactTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
+  const Timed timed(counters_.seconds);
   out.arity = 2;
   out.vertices.clear();
   if (!x.allFinite()) return;
-  for (const ContactPair& p : pairs(x))
-    for (int i = 0; i < p.arity(); ++i)
-      for (int j = i + 1; j < p.arity(); ++j) out.vertices.insert(out.vertices.end(), {p.vertices[i], p.vertices[j]});
+  if (!embedded_) {
+    for (const ContactPair& p : pairs(x))
+      for (int i = 0; i < p.arity(); ++i)
+        for (int j = i + 1; j < p.arity(); ++j) out.vertices.insert(out.vertices.end(), {p.vertices[i], p.vertices[j]});
+    return;
+  }
+  std::vector<int> volume;
+  for (const ContactPair& p : pairs_at(x)) {
+    pair_volume_vertices(p.vertices, p.arity(), volume);
+    for (std::size_t i = 0; i < volume.size(); ++i)
+      for (std::size_t j = i + 1; j < volume.size(); ++j) out.vertices.insert(out.vertices.end(), {volume[i], volume[j]});
+  }
 }
 
 double ContactTerm::min_distance(const Eigen::VectorXd& x) const {
@@ -252,10 +391,13 @@ double ContactTerm::min_distance(const Eigen::VectorXd& x) const {
 }
 
 double ContactTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  const Timed timed(counters_.seconds);
+  ++counters_.ccd_calls;
   if (!x.allFinite() || !dx.allFinite()) return 1.0;  // the line search rejects what follows
-  const Eigen::Matrix3Xd V0 = positions(x), D = positions(dx);
+  const Eigen::Matrix3Xd V0 = positions(x), D = positions(dx);  // D = W dx: the points move linearly too
   const Eigen::Matrix3Xd V1 = V0 + D;
   const contact::Candidates c = contact::broad_phase(V0, V1, local_F_, local_E_, 0.0);
+  counters_.ccd_tests += static_cast<long long>(c.vertex_triangle.size() + c.edge_edge.size());
   double t = 1.0;
   for (const auto& [v, f] : c.vertex_triangle) {
     const int a = local_F_(0, f), b = local_F_(1, f), d = local_F_(2, f);
@@ -287,21 +429,37 @@ double ipc_barrier_stiffness(double bbox_diagonal, double dhat, double average_m
 
 PlaneContactTerm::PlaneContactTerm(std::vector<int> vertices, const Eigen::Vector3d& point,
                                    const Eigen::Vector3d& normal, double dhat, double stiffness)
-    : vertices_(std::move(vertices)), point_(point), dhat_(dhat), kappa_(stiffness) {
+    : PlaneContactTerm(Eigen::Map<const Eigen::RowVectorXi>(vertices.data(), static_cast<Eigen::Index>(vertices.size())),
+                       Eigen::MatrixXd::Ones(1, static_cast<Eigen::Index>(vertices.size())), point, normal, dhat, stiffness) {}
+
+PlaneContactTerm::PlaneContactTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const Eigen::Vector3d& point,
+                                   const Eigen::Vector3d& normal, double dhat, double stiffness)
+    : vertex_(std::move(vertex)), weight_(std::move(weight)), point_(point), dhat_(dhat), kappa_(stiffness) {
   check_positive("dhat", dhat_);
   check_positive("stiffness", kappa_);
   if (!point.allFinite()) throw std::invalid_argument("contact: the plane's point is not finite");
   if (!normal.allFinite() || !(normal.norm() > 0.0))
     throw std::invalid_argument("contact: the plane's normal must be finite and non-zero");
   normal_ = normal.normalized();
-  for (const int v : vertices_)
-    if (v < 0) throw std::invalid_argument(fmt::format("contact: plane vertex id {} is negative", v));
+  if (vertex_.rows() != weight_.rows() || vertex_.cols() != weight_.cols() || (vertex_.rows() < 1 && vertex_.cols() > 0))
+    throw std::invalid_argument(fmt::format("contact: plane vertex ids ({} by {}) and weights ({} by {}) differ in shape",
+                                            vertex_.rows(), vertex_.cols(), weight_.rows(), weight_.cols()));
+  if (!weight_.allFinite()) throw std::invalid_argument("contact: the plane's point weights are not all finite");
+  for (Eigen::Index i = 0; i < vertex_.size(); ++i)
+    if (vertex_.data()[i] < 0) throw std::invalid_argument(fmt::format("contact: plane vertex id {} is negative", vertex_.data()[i]));
 }
 
-double PlaneContactTerm::distance(const Eigen::VectorXd& x, int v) const {
-  if (3 * static_cast<Eigen::Index>(v) + 3 > x.size())
-    throw std::logic_error(fmt::format("plane contact: vertex {} is beyond the {} DOFs given", v, x.size()));
-  return normal_.dot(x.segment<3>(3 * v) - point_);
+double PlaneContactTerm::distance(const Eigen::VectorXd& x, Eigen::Index i) const { return normal_.dot(point_at(x, i) - point_); }
+
+Eigen::Vector3d PlaneContactTerm::point_at(const Eigen::VectorXd& x, Eigen::Index i) const {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (Eigen::Index k = 0; k < vertex_.rows(); ++k) {
+    const int v = vertex_(k, i);
+    if (3 * static_cast<Eigen::Index>(v) + 3 > x.size())
+      throw std::logic_error(fmt::format("plane contact: vertex {} is beyond the {} DOFs given", v, x.size()));
+    p += weight_(k, i) * x.segment<3>(3 * v);
+  }
+  return p;
 }
 
 double PlaneContactTerm::energy(const Eigen::VectorXd& x) const {
@@ -310,34 +468,67 @@ double PlaneContactTerm::energy(const Eigen::VectorXd& x) const {
 
 double PlaneContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                                   PsdProjection projection) const {
+  const Timed timed(counters_.seconds);
   const double s_hat = dhat_ * dhat_;
   double e = 0.0;
-  for (const int v : vertices_) {
-    const double d = distance(x, v);
+  for (Eigen::Index i = 0; i < vertex_.cols(); ++i) {
+    const double d = distance(x, i);
     if (std::isnan(d)) return std::numeric_limits<double>::quiet_NaN();
     if (d <= 0.0) return std::numeric_limits<double>::infinity();
     const double s = d * d;
     if (!(s < s_hat)) continue;
     const double b1 = contact::barrier_first_derivative(s, s_hat);
     e += kappa_ * contact::barrier(s, s_hat);
-    if (gradient) gradient->segment<3>(3 * v) += (kappa_ * b1 * 2.0 * d) * normal_;
+    // Through the weights: ∂p/∂x_a = w_a I, so g_a = w_a g_p and H_ab = w_a w_b H_pp (a rank-one c n nᵀ).
+    if (gradient)
+      for (Eigen::Index k = 0; k < vertex_.rows(); ++k)
+        gradient->segment<3>(3 * vertex_(k, i)) += (weight_(k, i) * (kappa_ * b1 * 2.0 * d)) * normal_;
     if (hessian) {
       double c = kappa_ * (4.0 * s * contact::barrier_second_derivative(s, s_hat) + 2.0 * b1);
       if (projection != PsdProjection::none) c = std::max(c, 0.0);  // clamped, as the pairs' projection
-      hessian->add_block(v, v, c * normal_ * normal_.transpose());
+      for (Eigen::Index a = 0; a < vertex_.rows(); ++a)
+        for (Eigen::Index b = a; b < vertex_.rows(); ++b) {
+          // Two weights on one vertex (not in a cell, but allowed) add their cross terms to its diagonal block.
+          const double w = weight_(a, i) * weight_(b, i) * (a != b && vertex_(a, i) == vertex_(b, i) ? 2.0 : 1.0);
+          hessian->add_block(vertex_(a, i), vertex_(b, i), (w * c) * normal_ * normal_.transpose());
+        }
     }
   }
   return e;
 }
 
+void PlaneContactTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) const {
+  out.vertices.clear();
+  out.arity = 0;
+  if (vertex_.rows() < 2) return;  // plain vertices: a diagonal Hessian
+  out.arity = static_cast<int>(vertex_.rows());
+  out.vertices.assign(vertex_.data(), vertex_.data() + vertex_.size());
+}
+
 double PlaneContactTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  const Timed timed(counters_.seconds);
+  ++counters_.ccd_calls;
+  counters_.ccd_tests += vertex_.cols();
   double t = 1.0;
-  for (const int v : vertices_) {
-    const double d = distance(x, v), approach = -normal_.dot(dx.segment<3>(3 * v));
+  for (Eigen::Index i = 0; i < vertex_.cols(); ++i) {
+    const double d = distance(x, i), approach = -normal_.dot(point_at(dx, i));  // the point moves by W dx
     // d + t·(−approach) ≥ d/10  ⇔  t ≤ 0.9 d / approach (exact for the linear motion)
     if (d > 0.0 && approach > 0.0) t = std::min(t, 0.9 * d / approach);
   }
   return t;
+}
+
+int PlaneContactTerm::active_pairs(const Eigen::VectorXd& x) const {
+  int n = 0;
+  for (Eigen::Index i = 0; i < vertex_.cols(); ++i)
+    if (distance(x, i) < dhat_) ++n;
+  return n;
+}
+
+double PlaneContactTerm::min_distance(const Eigen::VectorXd& x) const {
+  double m = dhat_;
+  for (Eigen::Index i = 0; i < vertex_.cols(); ++i) m = std::min(m, distance(x, i));
+  return m;
 }
 
 }  // namespace snh

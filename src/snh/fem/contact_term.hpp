@@ -37,20 +37,52 @@
 // pairs appear). max_step: the broad phase of the swept boxes (x to x + dx, d̂ = 0) and additive CCD
 // (contact/ccd.hpp) of every vertex–triangle and edge–edge candidate: the smallest t, in (0, 1] for a
 // separated x.
+//
+// Embedded surfaces (a flesh's render surface inside its lattice or tets): the second constructor takes the
+// surface's vertices as points of the volume, p_i = Σ_k W(k, i) x_{I(k, i)} (k = 8 trilinear or 4 barycentric
+// weights). Everything above then runs on the points p = W x: candidates, pairs (adjacency by the surface's
+// own vertex ids), merging, barriers. The pair's derivatives over its points (its 2 to 4 points, 6 to 12
+// coordinates) are PSD-projected first (when asked) and then pulled back to the volume by the chain rule:
+// g_x = Jᵀ g_p and H_x = Jᵀ H_p J with J the pair's weights (so H_x stays PSD); the stencil couples every
+// volume vertex of the pair's cells (up to 32); max_step runs CCD on the points' motion dp = W dx, which is
+// exactly linear in the step. The direct constructor is the case of one weight 1 per point, kept on its own
+// path (plain gathers and scatters, bit-identical to before).
 #include <array>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "snh/contact/distance_core.hpp"
 #include "snh/fem/term.hpp"
 
 namespace snh {
+
+/// What a contact term did since its counters were last reset (statistics per frame).
+struct ContactCounters {
+  double seconds = 0.0;     ///< wall time in energy, evaluate, stencil and max_step
+  long long ccd_calls = 0;  ///< max_step evaluations
+  long long ccd_tests = 0;  ///< primitive pairs (self-contact) or points (plane) max_step tested
+};
+
+/// What the contact terms share for statistics: counters, and the active pairs and smallest distance at x.
+class ContactTermBase : public Term {
+ public:
+  /// Active pairs at x (self-contact: merged pairs with s < ŝ; plane: points closer than d̂).
+  [[nodiscard]] virtual int active_pairs(const Eigen::VectorXd& x) const = 0;
+  /// The smallest distance of an active pair at x; d̂ if there is none.
+  [[nodiscard]] virtual double min_distance(const Eigen::VectorXd& x) const = 0;
+  [[nodiscard]] const ContactCounters& counters() const { return counters_; }
+  void reset_counters() { counters_ = {}; }
+
+ protected:
+  mutable ContactCounters counters_;
+};
 
 /// One contact pair of ContactTerm (exposed for tests and statistics).
 struct ContactPair {
   enum class Kind { point_point, point_edge, point_triangle, edge_edge };
   Kind kind = Kind::point_triangle;
-  /// Vertex ids (volume mesh): point–point (v, w), point–edge (v, e0, e1), point–triangle (v, t0, t1, t2),
+  /// Vertex ids (volume mesh; an embedded surface's: its point ids): point–point (v, w), point–edge (v, e0, e1), point–triangle (v, t0, t1, t2),
   /// edge–edge (a0, a1, b0, b1); unused entries −1.
   std::array<int, 4> vertices{-1, -1, -1, -1};
   int weight = 0;                  ///< candidates merged into this pair
@@ -59,7 +91,7 @@ struct ContactPair {
   [[nodiscard]] int arity() const { return kind == Kind::point_point ? 2 : kind == Kind::point_edge ? 3 : 4; }
 };
 
-class ContactTerm final : public Term {
+class ContactTerm final : public ContactTermBase {
  public:
   /// F          3 by #F triangles of the contact surface, vertex ids of the volume mesh (e.g.
   ///            boundary_triangles(mesh))
@@ -69,6 +101,16 @@ class ContactTerm final : public Term {
   /// Throws std::invalid_argument (one line) for a vertex id out of range, a degenerate triangle (a
   /// repeated vertex), d̂ or κ not finite and > 0, or non-finite rest positions.
   ContactTerm(Eigen::Matrix3Xi F, Eigen::Matrix3Xd rest, double dhat, double stiffness);
+  /// An embedded surface:
+  /// F            3 by #F triangles over the points (ids into the columns of vertex and weight)
+  /// vertex       k by #p: the volume vertices point i is interpolated from (k ≥ 1)
+  /// weight       k by #p: their weights
+  /// volume_rest  3 by #V rest positions of the volume (the points' rest positions W X give the mollifier
+  ///              thresholds)
+  /// Throws std::invalid_argument (one line) as above, and for a volume vertex id out of range, a
+  /// non-finite weight or vertex and weight of different shapes.
+  ContactTerm(Eigen::Matrix3Xi F, Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const Eigen::Matrix3Xd& volume_rest,
+              double dhat, double stiffness);
 
   [[nodiscard]] std::string_view name() const override { return "contact"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
@@ -80,8 +122,12 @@ class ContactTerm final : public Term {
 
   /// The active pairs at x (s < ŝ), merged and sorted as described above.
   [[nodiscard]] std::vector<ContactPair> pairs(const Eigen::VectorXd& x) const;
+  [[nodiscard]] int active_pairs(const Eigen::VectorXd& x) const override;
   /// The smallest distance (not squared) over all candidate pairs within d̂ at x; d̂ if there is none.
-  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const;
+  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const override;
+  /// The surface's vertex positions at x (3 by #surface vertices: the direct surface's vertices in
+  /// increasing id order, an embedded surface's points that F uses, in increasing order).
+  [[nodiscard]] Eigen::Matrix3Xd positions(const Eigen::VectorXd& x) const;
 
   [[nodiscard]] const Eigen::Matrix3Xi& triangles() const { return F_; }
   [[nodiscard]] const Eigen::Matrix2Xi& edges() const { return E_; }
@@ -89,13 +135,32 @@ class ContactTerm final : public Term {
   [[nodiscard]] double stiffness() const { return kappa_; }
 
  private:
-  /// The surface's vertices at x (3 by #surface vertices, in surface_vertices_ order).
-  Eigen::Matrix3Xd positions(const Eigen::VectorXd& x) const;
-  Eigen::Matrix3Xi F_, local_F_;        ///< triangles in volume-mesh ids and in surface ids
+  /// The surface positions (*P, when asked) and active pairs (local ids) at x, kept for the last finite x
+  /// asked: Newton asks the stencil, the derivatives and the energy at the same x, and the broad phase
+  /// then runs once (not thread-safe, as the counters: a problem evaluates its terms one after another).
+  const std::vector<ContactPair>& pairs_at(const Eigen::VectorXd& x, const Eigen::Matrix3Xd** P = nullptr) const;
+  /// Numbers the surface's vertices (ids of F, increasing) and lists its edges.
+  void number_surface(Eigen::Index id_count);
+  /// The active pairs at the surface positions P, in local ids.
+  std::vector<ContactPair> local_pairs(const Eigen::Matrix3Xd& P) const;
+  /// Adds a pair's derivatives (over its local points `ids`) to the volume's gradient and Hessian.
+  template <int N>
+  void scatter(const contact::Derivatives<N>& d, const std::array<int, 4>& ids, Eigen::VectorXd* gradient,
+               const HessianValues* hessian) const;
+  /// The volume vertices of a pair's points (local ids), each once.
+  void pair_volume_vertices(const std::array<int, 4>& ids, int arity, std::vector<int>& out) const;
+  Eigen::Matrix3Xi F_, local_F_;        ///< triangles in the given ids and in surface ids
   Eigen::Matrix2Xi E_, local_E_;        ///< edges likewise
-  std::vector<int> surface_vertices_;   ///< volume-mesh id of each surface vertex, increasing
-  Eigen::Matrix3Xd rest_;
+  std::vector<int> surface_vertices_;   ///< the given id of each surface vertex, increasing
+  Eigen::Matrix3Xd surface_rest_;       ///< rest positions of the surface vertices
+  Eigen::Index volume_vertices_ = 0;    ///< #V of the x the term is given
+  bool embedded_ = false;
+  Eigen::MatrixXi vertex_;              ///< embedded: k by #surface vertices, volume vertex ids
+  Eigen::MatrixXd weight_;              ///< embedded: their weights
   double dhat_, kappa_;
+  mutable Eigen::VectorXd cache_x_;     ///< pairs_at's last x (empty: none)
+  mutable Eigen::Matrix3Xd cache_positions_;
+  mutable std::vector<ContactPair> cache_pairs_;
 };
 
 /// IPC's automatic barrier stiffness (Li et al. 2020, §4.3 and its code's initial choice) when nothing is in
@@ -108,12 +173,13 @@ class ContactTerm final : public Term {
 /// that is not finite and > 0.
 [[nodiscard]] double ipc_barrier_stiffness(double bbox_diagonal, double dhat, double average_mass, double dt);
 
-/// A fixed plane n·x = n·p that vertices stay above (on the side n points to): for each vertex at signed
+/// A fixed plane n·x = n·p that vertices (or embedded points p = Σ w x, the second constructor) stay above (on the side n points to): for each vertex at signed
 /// distance d = n·(x − p) (n of unit length) with d² < d̂², the energy κ b(d², d̂²); a vertex at or below the
 /// plane makes the energy +∞. The Hessian per vertex is κ(4d²b'' + 2b') n nᵀ (rank one; its projection
 /// clamps the coefficient at 0). max_step: each vertex moving towards the plane keeps at least a tenth of
-/// its distance (exact: the motion is linear), min 1.
-class PlaneContactTerm final : public Term {
+/// its distance (exact: the motion is linear), min 1. An embedded point's derivatives go through its weights
+/// (gradient w_a g, Hessian w_a w_b c n nᵀ: still PSD once c is clamped), its stencil its cell's vertices.
+class PlaneContactTerm final : public ContactTermBase {
  public:
   /// vertices   the vertex ids that collide with the plane (each once; e.g. the surface's vertices)
   /// point, normal  a point of the plane and its normal (any non-zero length: it is normalised)
@@ -121,17 +187,27 @@ class PlaneContactTerm final : public Term {
   /// not finite and > 0, or a negative vertex id.
   PlaneContactTerm(std::vector<int> vertices, const Eigen::Vector3d& point, const Eigen::Vector3d& normal, double dhat,
                    double stiffness);
+  /// Embedded points: vertex and weight k by #p (each column a point: its volume vertices and weights).
+  /// Throws as above, and for shapes that differ or a non-finite weight.
+  PlaneContactTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const Eigen::Vector3d& point,
+                   const Eigen::Vector3d& normal, double dhat, double stiffness);
 
   [[nodiscard]] std::string_view name() const override { return "plane"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                   PsdProjection projection) const override;
+  void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
   [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
-  /// Signed distance of vertex v above the plane at x.
-  [[nodiscard]] double distance(const Eigen::VectorXd& x, int v) const;
+  [[nodiscard]] int active_pairs(const Eigen::VectorXd& x) const override;
+  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const override;
+  /// Signed distance of point i (the i-th vertex given, or the i-th embedded point) above the plane at x.
+  [[nodiscard]] double distance(const Eigen::VectorXd& x, Eigen::Index i) const;
 
  private:
-  std::vector<int> vertices_;
+  /// Point i for positions x (or its motion for a step x): Σ_k w(k, i) x_{vertex(k, i)}.
+  [[nodiscard]] Eigen::Vector3d point_at(const Eigen::VectorXd& x, Eigen::Index i) const;
+  Eigen::MatrixXi vertex_;  ///< k by #p (k = 1 for plain vertices)
+  Eigen::MatrixXd weight_;
   Eigen::Vector3d point_, normal_;
   double dhat_, kappa_;
 };

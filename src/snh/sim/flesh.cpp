@@ -9,6 +9,7 @@
 #include "snh/embed/lattice.hpp"
 #include "snh/embed/winding_number.hpp"
 #include "snh/fem/attachment_term.hpp"
+#include "snh/fem/contact_term.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/rig/skinning.hpp"
@@ -206,6 +207,49 @@ std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t) {
 Eigen::Matrix3Xd flesh_surface(const Flesh& flesh, const Eigen::VectorXd& x) { return flesh.embedding.apply(x); }
 
 Eigen::Matrix3Xd skinned_surface(const Flesh& flesh, double t) { return skin_vertices(flesh.model, joint_world(flesh, t)); }
+
+EmbeddedSurface contact_surface(const Flesh& flesh) {
+  const RiggedModel& m = flesh.model;
+  EmbeddedSurface s;
+  s.triangles = m.surface_triangles;
+  const auto welded = static_cast<Eigen::Index>(m.surface_vertices.cols());
+  s.vertex.resize(flesh.embedding.vertex.rows(), welded);
+  s.weight.resize(flesh.embedding.weight.rows(), welded);
+  std::vector<bool> seen(static_cast<std::size_t>(welded), false);
+  for (std::size_t v = 0; v < m.weld.size(); ++v) {
+    const int w = m.weld[v];
+    if (seen[static_cast<std::size_t>(w)]) continue;
+    seen[static_cast<std::size_t>(w)] = true;
+    s.vertex.col(w) = flesh.embedding.vertex.col(static_cast<Eigen::Index>(v));
+    s.weight.col(w) = flesh.embedding.weight.col(static_cast<Eigen::Index>(v));
+  }
+  return s;
+}
+
+Eigen::Matrix3Xd EmbeddedSurface::positions(const Eigen::VectorXd& x) const {
+  Eigen::Matrix3Xd P = Eigen::Matrix3Xd::Zero(3, vertex.cols());
+  for (Eigen::Index i = 0; i < vertex.cols(); ++i)
+    for (Eigen::Index k = 0; k < vertex.rows(); ++k) P.col(i) += weight(k, i) * x.segment<3>(3 * vertex(k, i));
+  return P;
+}
+
+double flesh_contact_dhat(const Flesh& flesh) {
+  const Eigen::Matrix3Xd& X = flesh.model.surface_vertices;
+  const Eigen::Matrix3Xi& F = flesh.model.surface_triangles;
+  double sum = 0.0;
+  for (Eigen::Index t = 0; t < F.cols(); ++t)
+    for (int k = 0; k < 3; ++k) sum += (X.col(F(k, t)) - X.col(F((k + 1) % 3, t))).norm();
+  const double quarter = F.cols() > 0 ? 0.25 * sum / (3.0 * static_cast<double>(F.cols())) : 0.1 * flesh.cell_size;
+  // At most half the surface's smallest distance at rest (pairs that share no vertex), so that nothing is in
+  // contact at the start: fingers lying close together at rest are not pushed apart by the barrier.
+  const EmbeddedSurface surface = contact_surface(flesh);
+  const VolumeMesh& volume = flesh.volume;
+  const ContactTerm probe(surface.triangles, surface.vertex, surface.weight, volume.vertices, quarter, 1.0);
+  const double closest = probe.min_distance(Eigen::Map<const Eigen::VectorXd>(volume.vertices.data(), volume.vertices.size()));
+  return closest > 0.0 ? std::min(quarter, 0.5 * closest) : quarter;
+}
+
+double flesh_contact_stiffness(const Flesh& flesh, double youngs, double dhat) { return youngs * flesh.cell_size / (dhat * dhat); }
 
 double surface_volume(const Flesh& flesh, const Eigen::Matrix3Xd& positions) {
   return enclosed_volume(positions, flesh.model.triangles);

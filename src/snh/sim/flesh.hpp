@@ -107,6 +107,29 @@ struct Flesh {
 [[nodiscard]] std::function<void(double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames)> flesh_carrier(
     std::shared_ptr<const Flesh> flesh);
 
+/// The render surface as contact sees it: the model's welded, closed surface (surface_triangles over its
+/// welded vertices), each welded vertex embedded in the volume as its first model vertex is (vertex and
+/// weight: k by #welded, k = 8 in a lattice, 4 in tets).
+struct EmbeddedSurface {
+  Eigen::Matrix3Xi triangles;
+  Eigen::MatrixXi vertex;
+  Eigen::MatrixXd weight;
+  /// The welded vertices at volume positions x (3 by #welded).
+  [[nodiscard]] Eigen::Matrix3Xd positions(const Eigen::VectorXd& x) const;
+};
+[[nodiscard]] EmbeddedSurface contact_surface(const Flesh& flesh);
+
+/// Contact's defaults for flesh. d̂: a quarter of the render surface's mean edge length at rest (contact
+/// acts at the scale of the surface's own detail, well inside a cell), but at most half the surface's
+/// smallest distance at rest (so that no pair is in range at the start: the rest pose stays the
+/// solution of the first frame). κ = E h / d̂² (E Young's modulus, h
+/// the cell size): the barrier's curvature near d̂/2 is then of the order of one cell's stiffness E h (its
+/// Hessian in distance is κ d̂² times an O(1) factor), so a quasi-static solve sees neither a negligible
+/// barrier (pairs squeezed to tiny distances, ill-conditioned) nor one that dominates the flesh. IPC's
+/// automatic κ needs masses and a time step, which quasi-static flesh has not.
+[[nodiscard]] double flesh_contact_dhat(const Flesh& flesh);
+[[nodiscard]] double flesh_contact_stiffness(const Flesh& flesh, double youngs, double dhat);
+
 /// The joints' world transforms at time t of the clip.
 [[nodiscard]] std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t);
 /// The render surface (model order, 3 by #v) embedded in the volume at positions x (3 #V).

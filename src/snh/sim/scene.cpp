@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <random>
 #include <sstream>
@@ -77,6 +78,26 @@ std::vector<int> vertices_of(const Eigen::Matrix3Xi& F) {
 /// only report a state that is not finite).
 void check_contact_start(const Scene& s, const VolumeMesh& mesh, const Eigen::VectorXd& x0, const std::string& file) {
   if (!s.contact.enabled) return;
+  if (s.loaded && s.loaded->flesh) {  // the render surface, embedded in the volume
+    const EmbeddedSurface surface = contact_surface(*s.loaded->flesh);
+    const Eigen::Matrix3Xd P = surface.positions(x0);
+    for (std::size_t i = 0; i < s.contact.planes.size(); ++i) {
+      const PlaneColliderSpec& plane = s.contact.planes[i];
+      for (Eigen::Index v = 0; v < P.cols(); ++v)
+        if (const double d = plane.normal.dot(P.col(v) - plane.point); !(d > 0.0))
+          throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of the render surface (welded) is {:g} from the plane, on or "
+                                       "behind it at the start (contact needs a separated start: move the plane)",
+                                       file, i, v, d));
+    }
+    if (s.contact.self) {
+      const ContactTerm self(surface.triangles, surface.vertex, surface.weight, mesh.vertices, s.contact.dhat, 1.0);
+      if (!std::isfinite(self.energy(x0)))
+        throw SceneError(fmt::format("{}: contact.self: the render surface touches itself at the start (two of its triangles at "
+                                     "distance 0): contact needs a separated start",
+                                     file));
+    }
+    return;
+  }
   const Eigen::Matrix3Xi F = boundary_triangles(mesh);
   const std::vector<int> surface = vertices_of(F);
   for (std::size_t i = 0; i < s.contact.planes.size(); ++i) {
@@ -201,6 +222,11 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
     }
   }
   if (s.flesh) (void)checked_substeps(s.time, source.string());
+  if (s.loaded->flesh && s.contact.enabled) {  // contact's defaults at the flesh's scale
+    if (s.contact.dhat == 0.0) s.contact.dhat = flesh_contact_dhat(*s.loaded->flesh);
+    if (s.contact.stiffness == 0.0)
+      s.contact.stiffness = flesh_contact_stiffness(*s.loaded->flesh, youngs_modulus(s.material.params), s.contact.dhat);
+  }
   // Coordinates in range: a mesh file's (a box's are, from its checked corners), then after the initial operations.
   const Eigen::Matrix3Xd& X = s.loaded->mesh.vertices;
   for (Eigen::Index v = 0; v < X.cols(); ++v)
@@ -430,6 +456,33 @@ void add_flesh_output(const Flesh& flesh, const Scene& s, const Simulation& sim,
   };
 }
 
+/// The contact terms' statistics in every frame's record (contact_table): active pairs and the smallest
+/// distance at the frame's solution, and what the terms counted during its solve (their counters are then
+/// reset); the progress line gets the pairs and the distance.
+void add_contact_statistics(const std::vector<std::shared_ptr<ContactTermBase>>& terms, const Simulation& sim, RunPlan& plan) {
+  plan.table = &contact_table(*plan.table);
+  const auto base_fill = plan.fill;
+  plan.fill = [terms, &sim, base_fill](StepRecord& r, const StepReport* rep) {
+    if (base_fill) base_fill(r, rep);
+    r.min_contact_distance = std::numeric_limits<double>::quiet_NaN();
+    for (const std::shared_ptr<ContactTermBase>& t : terms) {
+      const int pairs = t->active_pairs(sim.x());
+      r.contact_pairs += pairs;
+      if (pairs > 0) r.min_contact_distance = std::fmin(r.min_contact_distance, t->min_distance(sim.x()));
+      r.ccd_calls += static_cast<int>(t->counters().ccd_calls);
+      r.ccd_tests += static_cast<int>(std::min<long long>(t->counters().ccd_tests, std::numeric_limits<int>::max()));
+      r.contact_seconds += t->counters().seconds;
+      t->reset_counters();
+    }
+  };
+  const auto base_line = plan.line;
+  plan.line = [base_line](const StepRecord& r) {
+    return base_line(r) + (r.contact_pairs > 0 ? fmt::format(", {} contact pairs, min distance {:.3g}", r.contact_pairs,
+                                                             r.min_contact_distance)
+                                               : std::string(", no contact pairs"));
+  };
+}
+
 }  // namespace
 
 SceneResult run_scene(const Scene& s, std::ostream& log) {
@@ -458,6 +511,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     if (std::shared_ptr<Term> soft = soft_binding_term(loaded->flesh, s.flesh->soft_stiffness, youngs_modulus(s.material.params)))
       setup.terms.push_back(std::move(soft));
   double kappa = s.contact.stiffness;
+  std::vector<std::shared_ptr<ContactTermBase>> contact;  // the contact terms, for the statistics
   if (s.contact.enabled) {
     if (kappa == 0.0) {  // "auto": IPC's choice on the mesh's size, its average vertex mass and the substep
       const Eigen::Matrix3Xd& X = mesh.vertices;
@@ -465,13 +519,25 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
       const double mass = s.material.density * std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.vertex_count());
       kappa = as_scene_error([&] { return ipc_barrier_stiffness(diagonal, s.contact.dhat, mass, h); });
     }
-    const Eigen::Matrix3Xi F = boundary_triangles(mesh);
-    if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa));
-    const std::vector<int> surface = vertices_of(F);
-    for (const PlaneColliderSpec& plane : s.contact.planes)
-      setup.terms.push_back(
-          std::make_shared<PlaneContactTerm>(surface, plane.point, plane.normal, s.contact.dhat, kappa));
+    if (loaded->flesh) {  // on the render surface, embedded in the volume
+      const EmbeddedSurface surface = contact_surface(*loaded->flesh);
+      if (s.contact.self)
+        setup.terms.push_back(std::make_shared<ContactTerm>(surface.triangles, surface.vertex, surface.weight, mesh.vertices,
+                                                            s.contact.dhat, kappa));
+      for (const PlaneColliderSpec& plane : s.contact.planes)
+        setup.terms.push_back(
+            std::make_shared<PlaneContactTerm>(surface.vertex, surface.weight, plane.point, plane.normal, s.contact.dhat, kappa));
+    } else {
+      const Eigen::Matrix3Xi F = boundary_triangles(mesh);
+      if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa));
+      const std::vector<int> surface = vertices_of(F);
+      for (const PlaneColliderSpec& plane : s.contact.planes)
+        setup.terms.push_back(
+            std::make_shared<PlaneContactTerm>(surface, plane.point, plane.normal, s.contact.dhat, kappa));
+    }
   }
+  for (const std::shared_ptr<Term>& t : setup.terms)
+    if (auto c = std::dynamic_pointer_cast<ContactTermBase>(t)) contact.push_back(std::move(c));
   setup.initial = x0;
   setup.linear.name = s.solver.linear;
   setup.linear.reuse_factor = !s.solver.refactorize;
@@ -576,6 +642,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   };
 
   if (const std::shared_ptr<const Flesh> flesh = loaded->flesh) add_flesh_output(*flesh, s, sim, plan);
+  if (!contact.empty()) add_contact_statistics(contact, sim, plan);
   if (s.run.check_only) {
     plan.header(log);
     log << fmt::format("checked: {} {}, {} vertices, {} free DOFs; no frame run\n", mesh.cell_count(), cells, mesh.vertex_count(),

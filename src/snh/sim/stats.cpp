@@ -105,6 +105,28 @@ const RecordTable& flesh_table() {
   return table;
 }
 
+namespace {
+
+RecordTable with_contact(RecordTable t) {
+  t.fields.insert(t.fields.end() - 1,
+                  {{"contact_pairs", &R::contact_pairs, "{}", "active pairs", "contact"},
+                   {"min_contact_distance", &R::min_contact_distance, "{:.6e}", "smallest distance", "contact_distance"},
+                   {"ccd_calls", &R::ccd_calls, "{}", nullptr, nullptr, true},
+                   {"ccd_tests", &R::ccd_tests, "{}", nullptr, nullptr, true},
+                   {"contact_seconds", &R::contact_seconds, "{:.6f}", "contact terms", "wall", true}});
+  t.plots.push_back({"contact", "Active contact pairs", "pairs"});
+  t.plots.push_back({"contact_distance", "Smallest contact distance", "distance", true});
+  return t;
+}
+
+}  // namespace
+
+const RecordTable& contact_table(const RecordTable& base) {
+  static const RecordTable scene = with_contact(scene_table()), flesh = with_contact(flesh_table());
+  if (&base == &flesh_table() || &base == &flesh) return flesh;
+  return scene;
+}
+
 const RecordTable* table_for(std::string_view records) {
   for (const RecordTable* t : {&stretch_table(), &scene_table()})
     if (records == t->records) return t;

@@ -30,6 +30,12 @@ struct StepRecord {
   double volume_ratio = 1.0;    ///< deformed / rest volume
   double surface_volume_ratio = 1.0;  ///< flesh: the volume inside the embedded render surface / at rest
   double lbs_volume_ratio = 1.0;      ///< flesh: the same for the surface posed by linear blend skinning
+  // Contact (runs with contact terms; contact_table): at the frame's solution, and during its solve.
+  int contact_pairs = 0;              ///< active pairs (self-contact pairs and points near a plane)
+  double min_contact_distance = 0.0;  ///< smallest distance of an active pair; NaN (null) with none
+  int ccd_calls = 0;                  ///< max_step evaluations of the contact terms (CCD)
+  int ccd_tests = 0;                  ///< primitive pairs (and plane points) those tested
+  double contact_seconds = 0.0;       ///< wall time in the contact terms (energy, derivatives, stencil, CCD)
   std::vector<double> residuals;  ///< ‖g‖ at each Newton iteration of every substep
   std::string failure;
 };
@@ -71,6 +77,10 @@ struct RecordTable {
 /// A flesh scene's frames (snh flesh, snh run with "flesh"): a scene's, with the render surface's volume
 /// for the simulated flesh and for linear blend skinning.
 [[nodiscard]] const RecordTable& flesh_table();
+/// A scene's or flesh scene's table (`base`) with the contact fields (contact_pairs, min_contact_distance,
+/// ccd_calls, ccd_tests, contact_seconds: the last three also as run totals) and their plots, for runs with
+/// contact; runs without keep `base` (their files unchanged).
+[[nodiscard]] const RecordTable& contact_table(const RecordTable& base);
 /// The table whose `records` array is `name`; nullptr if none.
 [[nodiscard]] const RecordTable* table_for(std::string_view records);
 

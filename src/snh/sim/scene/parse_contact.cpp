@@ -8,12 +8,17 @@ ContactSpec parse_contact(Keys& top, Integrator integrator) {
     Keys k(*c, "contact", top.file());
     s.enabled = true;
     s.self = k.boolean("self", s.self);
-    if (!k.has("dhat")) k.fail("required: the distance below which surfaces repel (> 0)", "dhat");
-    s.dhat = k.positive("dhat", 0.0);
-    if (!k.has("stiffness")) k.fail("required: the barrier's stiffness kappa (> 0, or \"auto\")", "stiffness");
-    if (const json* st = k.get("stiffness"); st->is_string()) {
+    // A flesh scene may leave dhat and stiffness to its defaults (flesh_contact_dhat and _stiffness, set
+    // once the flesh is built): 0 here.
+    const bool flesh = top.has("flesh");
+    if (!k.has("dhat") && !flesh) k.fail("required: the distance below which surfaces repel (> 0)", "dhat");
+    s.dhat = k.has("dhat") ? k.positive("dhat", 0.0) : 0.0;
+    if (!k.has("stiffness") && !flesh) k.fail("required: the barrier's stiffness kappa (> 0, or \"auto\")", "stiffness");
+    if (const json* st = k.get("stiffness"); !st) {
+      s.stiffness = 0.0;
+    } else if (st->is_string()) {
       if (st->get<std::string>() != "auto") k.fail("expected a number > 0 or \"auto\", got " + st->dump(), "stiffness");
-      if (integrator != Integrator::backward_euler)
+      if (integrator != Integrator::backward_euler && !flesh)
         k.fail("\"auto\" needs backward_euler (its masses and time step set the scale): give a number", "stiffness");
       s.stiffness = 0.0;  // auto: chosen on the mesh (ipc_barrier_stiffness)
     } else {
