@@ -88,11 +88,89 @@ std::vector<bool> Simulation::kinematic_vertices() const {
   return out;
 }
 
+namespace {
+
+/// Adds a solve's Newton counts and times to a sum over several solves.
+void accumulate(NewtonReport& sum, const NewtonReport& r) {
+  sum.iterations += r.iterations;
+  sum.line_search_steps += r.line_search_steps;
+  sum.linear_iterations += r.linear_iterations;
+  sum.factorizations += r.factorizations;
+  sum.true_hessian_steps += r.true_hessian_steps;
+  sum.residual = std::max(sum.residual, r.residual);
+  sum.energy = r.energy;
+  sum.assembly_seconds += r.assembly_seconds;
+  sum.solve_seconds += r.solve_seconds;
+  sum.residuals.insert(sum.residuals.end(), r.residuals.begin(), r.residuals.end());
+}
+
+}  // namespace
+
+double Simulation::clearance(double from, double to) {
+  double alpha = 1.0;
+  for (const std::shared_ptr<Term>& term : setup_.terms) alpha = std::min(alpha, term->sweep(x_, from, to));
+  if (alpha < 1.0 || setup_.kinematic.empty() || setup_.terms.empty()) return alpha;
+  // The pins' jump from where they are to their targets at `to`, the colliders at their pose there.
+  Eigen::VectorXd moved = x_;
+  place_kinematic(moved, to);
+  const Eigen::VectorXd jump = moved - x_;
+  if (jump.isZero(0.0)) return alpha;
+  for (const std::shared_ptr<Term>& term : setup_.terms) term->at_time(to);
+  for (const std::shared_ptr<Term>& term : setup_.terms) alpha = std::min(alpha, term->max_step(x_, jump));
+  return alpha;
+}
+
 StepReport Simulation::step(double t, const NewtonOptions* newton) {
+  const double t0 = time_, h = setup_.dt;
+  if (!(t > t0) || clearance(t0, t) >= 1.0) return solve(t, h, newton);
+  // Not clear: shorten the part to the fraction found clear (checked again: the poses between are not
+  // linear) until it is, solve it, and go on from there.
+  const SimulationState start = state();
+  StepReport total;
+  double from = t0;
+  for (;;) {
+    double to = t;
+    for (double alpha = clearance(from, to); alpha < 1.0; alpha = clearance(from, to)) {
+      to = from + alpha * (to - from);
+      ++total.splits;
+      if (!(alpha > 0.0) || !((to - from) > 1e-6 * (t - t0))) {
+        restore(start);
+        total.converged = false;
+        total.substeps = 1;
+        total.failed_substep = 1;
+        total.failed_time = t;
+        total.failure = fmt::format("contact: a collider or pinned vertex cannot move from t = {:.9g} towards {:.9g} without reaching "
+                                    "the surface (the step was split {} times): does a script drive the surface into a collider?",
+                                    from, t, total.splits);
+        return total;
+      }
+    }
+    const double part = dynamic() ? h * (to - from) / (t - t0) : h;
+    inertia_.set_dt(part);
+    const StepReport r = solve(to, part, newton);
+    inertia_.set_dt(h);
+    accumulate(total.newton, r.newton);
+    if (r.interrupted || !r.converged) {
+      if (r.interrupted) restore(start);
+      // The failing part's report, with the Newton sums and the splits of the whole step.
+      NewtonReport sum = std::move(total.newton);
+      const int splits = total.splits;
+      total = r;
+      total.newton = std::move(sum);
+      total.splits = splits;
+      return total;
+    }
+    if (to == t) break;
+    from = to;
+  }
+  total.substeps = 1;
+  return total;
+}
+
+StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
   StepReport report;
   report.substeps = 1;
   const Eigen::VectorXd x_n = x_, previous_n = previous_, previous2_n = previous2_;
-  const double h = setup_.dt;
   // The guess: the inertial prediction (backward Euler), a linear extrapolation from the last two
   // solutions, or for the first quasi-static step the setup's (the current state by default).
   Eigen::VectorXd guess;
@@ -176,17 +254,8 @@ StepReport Simulation::advance(double t_start, double h, int substeps, const New
       return frame;
     }
     frame.substeps = sub;
-    NewtonReport& sum = frame.newton;
-    sum.iterations += r.newton.iterations;
-    sum.line_search_steps += r.newton.line_search_steps;
-    sum.linear_iterations += r.newton.linear_iterations;
-    sum.factorizations += r.newton.factorizations;
-    sum.true_hessian_steps += r.newton.true_hessian_steps;
-    sum.residual = std::max(sum.residual, r.newton.residual);
-    sum.energy = r.newton.energy;
-    sum.assembly_seconds += r.newton.assembly_seconds;
-    sum.solve_seconds += r.newton.solve_seconds;
-    sum.residuals.insert(sum.residuals.end(), r.newton.residuals.begin(), r.newton.residuals.end());
+    frame.splits += r.splits;
+    accumulate(frame.newton, r.newton);
     if (!r.converged) {
       frame.converged = false;
       frame.failed_substep = sub;
