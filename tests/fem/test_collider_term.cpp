@@ -364,6 +364,68 @@ TEST(MeshColliderTerm, ASlabPressingACubeNeverPassesIntoIt) {
   std::cout << "splits " << splits << ", Newton iterations " << iterations << ", closest " << closest << "\n";
 }
 
+TEST(ShapeColliderTerm, AMovingWallHitsACubeInSubStepsOfBackwardEuler) {
+  // Backward Euler, no gravity: a wall (a box 1 thick) 0.1 from a cube at rest moves at 3 m/s, 0.03 a step
+  // of h = 0.01, more than the gap the barrier leaves: its whole step would carry the cube's face vertices
+  // into it. The step is cut into sub-steps of a part of h, each clear; the cube is struck away. (At 10 m/s
+  // the sub-steps shrink below a millionth of h and the step fails with its one line: README, "Moving
+  // colliders within a run".)
+  const VolumeMesh m = box_tets(3);
+  SimulationSetup setup = cube_setup(m, Integrator::backward_euler);
+  const ColliderPose pose = [](double t) { return Eigen::Affine3d(Eigen::Translation3d(-3.0 * t, 0, 0)); };
+  auto wall = std::make_shared<ShapeColliderTerm>(surface_of(m), ColliderShape{Kind::box, Vec3(1.6, 0, 0), Vec3(0.5, 3, 3), 0.0}, pose,
+                                                  0.02, 1e8);
+  setup.terms.push_back(wall);
+  setup.newton.step_tolerance = 1e-9;  // as scenes do: forces reach m v / h' ~ 1e8 on the shortest sub-steps h'
+  Simulation sim(std::move(setup));
+  int splits = 0;
+  for (int s = 1; s <= 20; ++s) {
+    const StepReport r = sim.step(0.01 * s);
+    ASSERT_TRUE(r.converged) << "step " << s << ": " << r.failure;
+    splits += r.splits;
+    ASSERT_NEAR(sim.time(), 0.01 * s, 1e-15);
+    ASSERT_GT(wall->min_distance(sim.x()), 0.0) << "step " << s;  // at the wall's pose at the step's time
+  }
+  EXPECT_GT(splits, 0);
+  EXPECT_LT(sim.v()(Eigen::seqN(0, m.vertex_count(), 3)).mean(), -3.0);  // struck: moving away faster than the wall
+  EXPECT_EQ(sim.inertia().terms().dt, 0.01);                              // the time step restored
+  std::cout << "splits " << splits << ", mean x velocity " << sim.v()(Eigen::seqN(0, m.vertex_count(), 3)).mean() << "\n";
+}
+
+TEST(ShapeColliderTerm, PinsDrivingTheSurfaceIntoAColliderStopTheRunWithOneLine) {
+  // The cube's bottom face pinned and moved down 0.5 onto a plane 0.1 below it: no split can keep the
+  // pinned vertices clear; the step fails with the reason, the state stays finite and separated.
+  const VolumeMesh m = box_tets(2);
+  SimulationSetup setup = cube_setup(m, Integrator::quasi_static);
+  KinematicSet bottom;
+  bottom.name = "bottom";
+  Eigen::Matrix3Xd base(3, 0);
+  for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
+    if (m.vertices(1, v) == -1.0) {
+      bottom.vertices.push_back(static_cast<int>(v));
+      base.conservativeResize(3, base.cols() + 1);
+      base.col(base.cols() - 1) = m.vertices.col(v);
+    }
+  bottom.provider = std::make_shared<ScriptedMotion>(base, std::vector<Motion>{Translate{Vec3(0, -0.5, 0), 0.0, 1.0}});
+  setup.kinematic.push_back(bottom);
+  auto ground = std::make_shared<ShapeColliderTerm>(surface_of(m), ColliderShape{Kind::plane, Vec3(0, -1.1, 0), Vec3(0, 1, 0), 0.0},
+                                                    ColliderPose{}, 0.02, 1e4);
+  setup.terms.push_back(ground);
+  Simulation sim(std::move(setup));
+  bool failed = false;
+  for (int s = 1; s <= 5 && !failed; ++s) {
+    const StepReport r = sim.step(0.2 * s);
+    if (!r.converged) {
+      failed = true;
+      EXPECT_NE(r.failure.find("cannot move from t = "), std::string::npos) << r.failure;
+      EXPECT_GT(r.splits, 0);
+    }
+    ASSERT_TRUE(sim.x().allFinite());
+    ASSERT_GT(ground->min_distance(sim.x()), 0.0) << "step " << s;
+  }
+  EXPECT_TRUE(failed);
+}
+
 TEST(MeshColliderTerm, CollidersOutOfRangeChangeNothingBitForBit) {
   // A spinning, falling cube with a moving sphere, box and slab far away: the same states as without.
   const VolumeMesh m = box_tets(2);
