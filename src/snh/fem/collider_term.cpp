@@ -187,12 +187,12 @@ double ShapeColliderTerm::max_step(const Eigen::VectorXd& x, const Eigen::Vector
   return t;
 }
 
-double ShapeColliderTerm::sweep(const Eigen::VectorXd& x, double t0, double t1) const {
+double ShapeColliderTerm::sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const {
   if (!pose_) return 1.0;
   const Frame f0 = frame_at(t0), f1 = frame_at(t1);
   double t = 1.0;
   for (const int v : vertices_) {
-    const Vec3 q0 = f0.to_base(x.segment<3>(3 * v)), q1 = f1.to_base(x.segment<3>(3 * v));
+    const Vec3 q0 = f0.to_base(x.segment<3>(3 * v)), q1 = f1.to_base(x.segment<3>(3 * v) + dx.segment<3>(3 * v));
     t = std::min(t, shape_step(shape_, q0, q1 - q0));
   }
   return t;
@@ -346,14 +346,10 @@ double MeshColliderTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorX
   return ccd(V0, D);
 }
 
-double MeshColliderTerm::sweep(const Eigen::VectorXd& x, double t0, double t1) const {
-  if (!pose_ || !x.allFinite()) return 1.0;
+double MeshColliderTerm::sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const {
+  if (!pose_ || !x.allFinite() || !dx.allFinite()) return 1.0;
   const Eigen::Matrix3Xd P0 = placed_at(t0), P1 = placed_at(t1);
-  if (P0 == P1) return 1.0;
-  const Eigen::Matrix3Xd V0 = combined(x, P0);
-  Eigen::Matrix3Xd D = Eigen::Matrix3Xd::Zero(3, V0.cols());
-  D.rightCols(P0.cols()) = P1 - P0;
-  return ccd(V0, D);
+  return ccd(combined(x, P0), combined(dx, P1 - P0));
 }
 
 }  // namespace snh

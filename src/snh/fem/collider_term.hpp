@@ -28,12 +28,12 @@
 // (contact/ccd.hpp) of the swept candidates, the collider fixed during the solve.
 //
 // Motion: each term holds a pose, a function of time mapping its base geometry (as given, at t = 0) to
-// world space; at_time(t) moves it there. sweep(x, t0, t1) says which fraction of the collider's motion
-// from its pose at t0 to its pose at t1 keeps clear of a state x, each vertex keeping a tenth of its
-// distance: the simulation splits a step whose collider sweep is not free (simulation.cpp). The motion
-// between the two poses is taken as linear: for a mesh, each collider vertex moving on the straight line
-// between its two places (CCD); for a shape, each simulated vertex moving on the straight line between
-// its two places in the shape's own frame (exact for a translation; for a rotation the chord of the arc).
+// world space; at_time(t) moves it there. sweep(x, dx, t0, t1) says which fraction of the joint motion —
+// the state from x to x + dx while the collider goes from its pose at t0 to its pose at t1 — keeps clear,
+// each distance keeping a tenth of itself: the simulation splits a step whose sweep is not clear
+// (simulation.cpp). The motion is taken as linear: for a mesh, every vertex of both bodies on the straight
+// line between its two places (CCD); for a shape, each simulated vertex on the straight line between its
+// two places in the shape's own frame (exact for a translation; for a rotation the chord of the arc).
 #include <array>
 #include <functional>
 #include <vector>
@@ -86,7 +86,8 @@ class ShapeColliderTerm final : public Term {
                   PsdProjection projection) const override;
   [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
   void at_time(double t) override;
-  [[nodiscard]] double sweep(const Eigen::VectorXd& x, double t0, double t1) const override;
+  [[nodiscard]] bool moving() const override { return static_cast<bool>(pose_); }
+  [[nodiscard]] double sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const override;
 
   /// The distance of vertex v from the shape at its current pose (negative inside).
   [[nodiscard]] double distance(const Eigen::VectorXd& x, int v) const;
@@ -126,7 +127,8 @@ class MeshColliderTerm final : public Term {
   [[nodiscard]] bool stencil_varies() const override { return true; }
   [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
   void at_time(double t) override;
-  [[nodiscard]] double sweep(const Eigen::VectorXd& x, double t0, double t1) const override;
+  [[nodiscard]] bool moving() const override { return static_cast<bool>(pose_); }
+  [[nodiscard]] double sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const override;
 
   /// The collider's vertices at the current pose (3 by #V of the collider).
   [[nodiscard]] const Eigen::Matrix3Xd& collider_vertices() const { return placed_; }

@@ -106,23 +106,32 @@ void accumulate(NewtonReport& sum, const NewtonReport& r) {
 
 }  // namespace
 
-double Simulation::clearance(double from, double to) {
-  double alpha = 1.0;
-  for (const std::shared_ptr<Term>& term : setup_.terms) alpha = std::min(alpha, term->sweep(x_, from, to));
-  if (alpha < 1.0 || setup_.kinematic.empty() || setup_.terms.empty()) return alpha;
-  // The pins' jump from where they are to their targets at `to`, the colliders at their pose there.
+double Simulation::clearance(double from, double to, double h) {
+  if (setup_.terms.empty()) return 1.0;
+  // The pins' jump to their targets at `to` (and, for backward Euler, the free DOFs' inertial prediction:
+  // the guess the solve starts from).
   Eigen::VectorXd moved = x_;
+  if (dynamic()) moved += h * v_;
   place_kinematic(moved, to);
-  const Eigen::VectorXd jump = moved - x_;
+  const Eigen::VectorXd dx = moved - x_;
+  double alpha = 1.0;
+  for (const std::shared_ptr<Term>& term : setup_.terms)
+    if (term->moving()) alpha = std::min(alpha, term->sweep(x_, dx, from, to));
+  if (alpha < 1.0 || setup_.kinematic.empty()) return alpha;
+  // The other contact terms: the pins' jump alone (the free DOFs' move is the guess's, bounded in solve()).
+  Eigen::VectorXd jump = x_;
+  place_kinematic(jump, to);
+  jump -= x_;
   if (jump.isZero(0.0)) return alpha;
   for (const std::shared_ptr<Term>& term : setup_.terms) term->at_time(to);
-  for (const std::shared_ptr<Term>& term : setup_.terms) alpha = std::min(alpha, term->max_step(x_, jump));
+  for (const std::shared_ptr<Term>& term : setup_.terms)
+    if (!term->moving()) alpha = std::min(alpha, term->max_step(x_, jump));
   return alpha;
 }
 
 StepReport Simulation::step(double t, const NewtonOptions* newton) {
   const double t0 = time_, h = setup_.dt;
-  if (!(t > t0) || clearance(t0, t) >= 1.0) return solve(t, h, newton);
+  if (!(t > t0) || clearance(t0, t, h) >= 1.0) return solve(t, h, newton);
   // Not clear: shorten the part to the fraction found clear (checked again: the poses between are not
   // linear) until it is, solve it, and go on from there.
   const SimulationState start = state();
@@ -130,7 +139,8 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
   double from = t0;
   for (;;) {
     double to = t;
-    for (double alpha = clearance(from, to); alpha < 1.0; alpha = clearance(from, to)) {
+    const auto part_of = [&](double end) { return dynamic() ? h * (end - from) / (t - t0) : h; };
+    for (double alpha = clearance(from, to, part_of(to)); alpha < 1.0; alpha = clearance(from, to, part_of(to))) {
       to = from + alpha * (to - from);
       ++total.splits;
       if (!(alpha > 0.0) || !((to - from) > 1e-6 * (t - t0))) {
@@ -145,7 +155,7 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
         return total;
       }
     }
-    const double part = dynamic() ? h * (to - from) / (t - t0) : h;
+    const double part = part_of(to);
     inertia_.set_dt(part);
     const StepReport r = solve(to, part, newton);
     inertia_.set_dt(h);
@@ -200,7 +210,13 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
     for (Eigen::Index d = 0; d < base.size(); ++d)
       if (!dofs_.is_free(d)) base[d] = guess[d];  // the kinematic DOFs as placed (providers asked once a step)
     const Eigen::VectorXd dx = dofs_.gather_free(guess) - dofs_.gather_free(base);
-    const double alpha = problem_.max_step(base, dx);
+    // A moving collider's bound is its sweep from (x_n, its pose at the last time) to (the guess, its pose
+    // at t), which step() found clear for backward Euler's prediction (base itself may be inside it at t);
+    // quasi-statically base is clear of it (step() checked the pins' jump) and its max_step applies.
+    double alpha = 1.0;
+    const Eigen::VectorXd dx_full = dofs_.expand(dx);
+    for (const std::shared_ptr<Term>& term : setup_.terms)
+      alpha = std::min(alpha, dynamic() && term->moving() ? term->sweep(x_n, guess - x_n, time_, t) : term->max_step(base, dx_full));
     if (alpha < 1.0) {
       guess = base + alpha * dofs_.expand(dx);
       E = problem_.energy(guess);

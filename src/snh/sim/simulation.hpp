@@ -135,8 +135,10 @@ class Simulation {
  private:
   /// One solve to time t over a time step h (backward Euler; ignored quasi-statically).
   StepReport solve(double t, double h, const NewtonOptions* newton);
-  /// The smallest fraction of the step from `from` to `to` that the terms' sweeps and the pins' jump keep clear.
-  double clearance(double from, double to);
+  /// The smallest fraction of the step from `from` to `to` (over h, backward Euler) that the moving terms'
+  /// sweeps (against the pins' jump and the inertial prediction) and the other terms' bounds on the pins'
+  /// jump keep clear.
+  double clearance(double from, double to, double h);
   SimulationSetup setup_;
   ElasticTerm elastic_;
   DofMap dofs_;
