@@ -170,10 +170,10 @@ TEST(SceneFile, ContactKeysAreChecked) {
   const std::string contact = R"("contact": {"dhat": 0.1, "stiffness": 1}, )";
   EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": {"type": "plane"}})")),
             "s.json: colliders: expected an array of colliders, got {\"type\":\"plane\"}");
-  EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "sphere"}]})")),
-            "s.json: colliders[0].type: expected one of plane, got \"sphere\"");
+  EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "cone"}]})")),
+            "s.json: colliders[0].type: expected one of plane, sphere, capsule, box, mesh, got \"cone\"");
   EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"point": [0, 0, 0], "normal": [0, 1, 0]}]})")),
-            "s.json: colliders[0].type: required: the collider's type (plane)");
+            "s.json: colliders[0].type: required: the collider's type (plane, sphere, capsule, box or mesh)");
   EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "normal": [0, 1, 0]}]})")),
             "s.json: colliders[0].point: required: a point of the plane, 3 numbers");
   EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, 0, 0]}]})")),
@@ -183,11 +183,73 @@ TEST(SceneFile, ContactKeysAreChecked) {
   EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, 0], "normal": [0, 1, 0]}]})")),
             "s.json: colliders[0].point: expected 3 numbers, got [0,0]");
   EXPECT_EQ(error_of(json::parse("{" + contact +
-                                 R"("colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "motion": []}]})"))
+                                 R"("colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "spin": []}]})"))
 ,
-            "s.json: colliders[0].motion: unknown key (known here: normal, point, type)");
+            "s.json: colliders[0].spin: unknown key (known here: motion, normal, point, type)");
   EXPECT_EQ(error_of(json::parse(R"({"colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0]}]})")),
             "s.json: colliders: colliders need a \"contact\" section (its dhat and stiffness)");
+}
+
+TEST(SceneFile, ShapeAndMeshCollidersAreCheckedKeyByKeyAndNeedASeparatedStart) {
+  const std::string contact = R"("contact": {"dhat": 0.1, "stiffness": 1}, )";
+  const auto colliders = [&](const std::string& list) { return json::parse("{" + contact + R"("colliders": )" + list + "}"); };
+  // Accepted: each type away from the box [-1, 1]³, with motions.
+  const auto obj = std::filesystem::temp_directory_path() / ("snh_collider_" + std::to_string(::getpid()) + ".obj");
+  {
+    std::ofstream f(obj);
+    f << "v -3 2 -3\nv 3 2 -3\nv 3 2 3\nv -3 2 3\nf 1 2 3\nf 1 3 4\n";
+  }
+  const Scene s = parse_scene(colliders(R"([{"type": "sphere", "center": [0, 3, 0], "radius": 1.5,
+      "motion": [{"type": "translate", "by": [0, -1, 0]}]},
+    {"type": "capsule", "a": [-3, 0, 0], "b": [-3, 0, 2], "radius": 0.5},
+    {"type": "box", "center": [3, 0, 0], "size": [1, 2, 3], "motion": [{"type": "rotate", "axis": [0, 1, 0], "degrees": 30}]},
+    {"type": "plane", "point": [0, -2, 0], "normal": [0, 1, 0], "motion": [{"type": "translate", "by": [0, 0.5, 0]}]},
+    {"type": "plane", "point": [0, -3, 0], "normal": [0, 1, 0]},
+    {"type": "mesh", "file": ")" + obj.string() + R"(", "motion": [{"type": "scale", "factors": [1, 2, 1]}]}])"),
+                              "s.json");
+  ASSERT_EQ(s.contact.colliders.size(), 5u);
+  ASSERT_EQ(s.contact.planes.size(), 1u);
+  EXPECT_EQ(s.contact.planes[0].index, 4);
+  EXPECT_EQ(s.contact.colliders[2].b, Eigen::Vector3d(0.5, 1, 1.5));  // half of the size
+  EXPECT_EQ(s.contact.colliders[4].triangles.cols(), 2);
+  EXPECT_EQ(s.contact.colliders[0].motions.size(), 1u);
+  // Every key's refusal names it.
+  EXPECT_EQ(error_of(colliders(R"([{"type": "sphere", "radius": 1}])")), "s.json: colliders[0].center: required: the sphere's centre, 3 numbers");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "sphere", "center": [0, 5, 0]}])")), "s.json: colliders[0].radius: required: the sphere's radius (> 0)");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "sphere", "center": [0, 5, 0], "radius": -1}])")), "s.json: colliders[0].radius: must be > 0, got -1");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "capsule", "a": [0, 5, 0], "radius": 1}])")),
+            "s.json: colliders[0].b: required: the other end of the capsule's segment, 3 numbers");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "box", "center": [0, 5, 0], "size": [1, 0, 1]}])")),
+            "s.json: colliders[0].size: expected 3 edge lengths > 0, got [1, 0, 1]");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "box", "center": [0, 5, 0], "size": [1, 1, 1], "half_extents": [1, 1, 1]}])")),
+            "s.json: colliders[0].half_extents: unknown key (known here: center, motion, size, type)");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "sphere", "center": [0, 5, 0], "radius": 1, "motion": [{"type": "scale", "factors": [1, 2, 1]}]}])")),
+            "s.json: colliders[0].motion[0].factors: a sphere collider scales only with three equal factors (a mesh collider takes any)");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "sphere", "center": [0, 5, 0], "radius": 1, "motion": [{"type": "spin"}]}])")),
+            "s.json: colliders[0].motion[0].type: expected one of translate, rotate, scale, got \"spin\"");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "mesh"}])")),
+            "s.json: colliders[0].file: required: the collider's surface file (.obj, .off, .ply or .stl)");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "mesh", "file": "plate.txt"}])")),
+            "s.json: colliders[0].file: expected a .obj, .off, .ply or .stl file, got \"plate.txt\"");
+  EXPECT_EQ(error_of(colliders(R"([{"type": "mesh", "file": "/nonexistent/plate.obj"}])")).substr(0, 48),
+            "s.json: colliders[0].file: /nonexistent/plate.ob");
+  // A start that is not separated, for each type (the box's surface vertices are on its faces).
+  const auto starts_inside = [&](const std::string& collider, const std::string& what) {
+    const std::string e = error_of(colliders("[" + collider + "]"));
+    EXPECT_NE(e.find(what), std::string::npos) << e;
+    EXPECT_EQ(e.substr(0, 22), "s.json: colliders[0]: ") << e;
+  };
+  starts_inside(R"({"type": "sphere", "center": [0, 1.5, 0], "radius": 0.6})", "from the sphere, on or inside it at the start");
+  starts_inside(R"({"type": "capsule", "a": [-3, 0, 0], "b": [3, 0, 0], "radius": 0.2})", "from the capsule, on or inside it at the start");
+  starts_inside(R"({"type": "box", "center": [1.5, 1.5, 0], "size": [1.2, 1.2, 1]})", "from the box, on or inside it at the start");
+  starts_inside(R"({"type": "plane", "point": [0, -1, 0], "normal": [0, 1, 0], "motion": [{"type": "translate", "by": [0, 1, 0]}]})",
+                "from the plane, on or inside it at the start");
+  {
+    std::ofstream f(obj);  // a triangle through the top face's corner (1, 1, 1)
+    f << "v 1 1 1\nv 3 1 1\nv 1 3 1\nf 1 2 3\n";
+  }
+  starts_inside(R"({"type": "mesh", "file": ")" + obj.string() + R"("})", "the mesh's surface touches the collider's");
+  std::filesystem::remove(obj);
 }
 
 TEST(SceneFile, UnreadableAndMalformedFiles) {

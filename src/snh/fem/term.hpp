@@ -45,6 +45,15 @@ class Term {
   /// Called before each solve with the time it solves for: a term whose data follow a script (a soft
   /// binding's targets carried by bones, a moving collider) updates them here.
   virtual void at_time(double /*t*/) {}
+  /// True for a term whose data move with time (a moving collider).
+  [[nodiscard]] virtual bool moving() const { return false; }
+  /// A moving term: the largest fraction α ∈ [0, 1] of the joint motion — the state from x to x + dx (every
+  /// DOF) while the term's data move from where they are at t0 to where they are at t1 — that keeps clear
+  /// (its distances kept above a fraction of their start); 0 when x is not clear at t0. 1 by default.
+  [[nodiscard]] virtual double sweep(const Eigen::VectorXd& /*x*/, const Eigen::VectorXd& /*dx*/, double /*t0*/,
+                                     double /*t1*/) const {
+    return 1.0;
+  }
 };
 
 }  // namespace snh

@@ -51,6 +51,8 @@ class TimeStepTerm final : public Term {
   void bind(const HessianLayout& layout) override;
 
   [[nodiscard]] const StepTerms& terms() const { return terms_; }
+  /// A different time step h > 0 from the next begin_step on (a step split in time); the caller sets it back.
+  void set_dt(double h) { terms_.dt = h; }
   [[nodiscard]] const Eigen::VectorXd& mass() const { return mass_; }
   /// ½ Σ m v² over all DOFs.
   [[nodiscard]] double kinetic_energy(const Eigen::VectorXd& v) const;

@@ -14,6 +14,30 @@ double progress(const M& m, double t) {
 
 }  // namespace
 
+Eigen::Affine3d motion_transform(const std::vector<Motion>& motions, const Eigen::Vector3d& centroid, double t) {
+  Eigen::Affine3d A = Eigen::Affine3d::Identity();
+  for (const Motion& motion : motions)
+    std::visit(
+        [&](const auto& m) {
+          using M = std::decay_t<decltype(m)>;
+          const double p = progress(m, t);
+          if constexpr (std::is_same_v<M, Translate>) {
+            A.pretranslate(p * m.by);
+          } else {
+            const Eigen::Vector3d c = m.center.value_or(A * centroid);
+            Eigen::Matrix3d L;
+            if constexpr (std::is_same_v<M, Rotate>) L = Eigen::AngleAxisd(p * m.radians, m.axis).toRotationMatrix();
+            else L = (Eigen::Vector3d::Ones() + p * (m.factors - Eigen::Vector3d::Ones())).asDiagonal();
+            Eigen::Affine3d about_c = Eigen::Affine3d::Identity();  // x ↦ L(x − c) + c, after what came before
+            about_c.linear() = L;
+            about_c.translation() = c - L * c;
+            A = about_c * A;
+          }
+        },
+        motion);
+  return A;
+}
+
 void ScriptedMotion::targets(double t, Eigen::Matrix3Xd& P) const {
   P = base_;
   for (const Motion& motion : motions_)

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace snh {
 
@@ -46,6 +47,12 @@ struct Scale {
   double start = 0.0, end = 0.0;
 };
 using Motion = std::variant<Translate, Rotate, Scale>;
+
+/// The map the motions make of space at time t, composed in order as ScriptedMotion moves its points: a
+/// rotation or scale without a centre turns about the moving centroid of base points whose centroid is
+/// `centroid` (so applying it to those points gives ScriptedMotion's targets). Rotations and translations
+/// only (and scales with equal factors) give a similarity.
+[[nodiscard]] Eigen::Affine3d motion_transform(const std::vector<Motion>& motions, const Eigen::Vector3d& centroid, double t);
 
 /// Base positions moved by each motion in turn.
 class ScriptedMotion final : public KinematicProvider {

@@ -17,6 +17,7 @@
 #include "snh/io/mesh_read.hpp"
 #include "snh/io/obj.hpp"
 #include "snh/io/surface_read.hpp"
+#include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
 #include "snh/io/usda.hpp"
 #include "snh/material/registry.hpp"
@@ -73,6 +74,35 @@ std::vector<int> vertices_of(const Eigen::Matrix3Xi& F) {
   return out;
 }
 
+/// The term of a sphere, capsule, box, mesh or moving plane collider over the surface F of the mesh (rest
+/// positions `rest`), its pose following its motions.
+std::shared_ptr<Term> collider_term(const ColliderSpec& c, const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, double dhat,
+                                    double kappa) {
+  using T = ColliderSpec::Type;
+  ColliderPose pose;
+  if (!c.motions.empty()) {
+    const Eigen::Vector3d centroid = c.type == T::mesh      ? Eigen::Vector3d(c.vertices.rowwise().mean())
+                                     : c.type == T::capsule ? Eigen::Vector3d(0.5 * (c.a + c.b))
+                                                            : c.a;
+    pose = [motions = c.motions, centroid](double t) { return motion_transform(motions, centroid, t); };
+  }
+  if (c.type == T::mesh) return std::make_shared<MeshColliderTerm>(F, rest, c.vertices, c.triangles, pose, dhat, kappa);
+  ColliderShape shape;
+  shape.kind = c.type == T::plane    ? ColliderShape::Kind::plane
+               : c.type == T::sphere ? ColliderShape::Kind::sphere
+               : c.type == T::capsule ? ColliderShape::Kind::capsule
+                                      : ColliderShape::Kind::box;
+  shape.a = c.a;
+  shape.b = c.b;
+  shape.radius = c.radius;
+  return std::make_shared<ShapeColliderTerm>(vertices_of(F), shape, pose, dhat, kappa);
+}
+
+std::string_view type_name(ColliderSpec::Type t) {
+  constexpr std::string_view names[] = {"plane", "sphere", "capsule", "box", "mesh"};
+  return names[static_cast<int>(t)];
+}
+
 /// Contact needs a separated start: every vertex of the mesh's boundary surface strictly above each plane
 /// collider, and (self-contact) no two of its primitives touching (a barrier is +∞ there, and Newton could
 /// only report a state that is not finite).
@@ -107,7 +137,21 @@ void check_contact_start(const Scene& s, const VolumeMesh& mesh, const Eigen::Ve
       if (!(d > 0.0))
         throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of the mesh's surface is {:g} from the plane, on or behind it at "
                                      "the start (contact needs a separated start: move the plane or the mesh)",
-                                     file, i, v, d));
+                                     file, plane.index, v, d));
+    }
+  }
+  for (const ColliderSpec& c : s.contact.colliders) {
+    const std::shared_ptr<Term> term = collider_term(c, F, mesh.vertices, s.contact.dhat, 1.0);
+    if (const auto* shape = dynamic_cast<const ShapeColliderTerm*>(term.get())) {
+      for (int v : surface)
+        if (const double d = shape->distance(x0, v); !(d > 0.0))
+          throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of the mesh's surface is {:g} from the {}, on or inside it at the "
+                                       "start (contact needs a separated start: move the collider or the mesh)",
+                                       file, c.index, v, d, type_name(c.type)));
+    } else if (!std::isfinite(term->energy(x0))) {
+      throw SceneError(fmt::format("{}: colliders[{}]: the mesh's surface touches the collider's ({}) at the start (distance 0): "
+                                   "contact needs a separated start",
+                                   file, c.index, c.file.string()));
     }
   }
   if (s.contact.self && !std::isfinite(ContactTerm(F, mesh.vertices, s.contact.dhat, 1.0).energy(x0)))
@@ -195,7 +239,7 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
   s.pins = scene::parse_pins(top, s.time.end_time);
   s.initial = scene::parse_initial(top);
   s.solver = scene::parse_solver(top);
-  s.contact = scene::parse_contact(top, s.time.integrator);
+  s.contact = scene::parse_contact(top, s.time.integrator, source, s.time.end_time);
   s.output = scene::parse_output(top, source);
   top.finish();
   s.settings = j.dump();  // object keys sorted: the same text for the same scene
@@ -519,6 +563,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
       const double mass = s.material.density * std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.vertex_count());
       kappa = as_scene_error([&] { return ipc_barrier_stiffness(diagonal, s.contact.dhat, mass, h); });
     }
+    const Eigen::Matrix3Xi F = boundary_triangles(mesh);
     if (loaded->flesh) {  // on the render surface, embedded in the volume
       const EmbeddedSurface surface = contact_surface(*loaded->flesh);
       if (s.contact.self)
@@ -528,13 +573,14 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
         setup.terms.push_back(
             std::make_shared<PlaneContactTerm>(surface.vertex, surface.weight, plane.point, plane.normal, s.contact.dhat, kappa));
     } else {
-      const Eigen::Matrix3Xi F = boundary_triangles(mesh);
       if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa));
       const std::vector<int> surface = vertices_of(F);
       for (const PlaneColliderSpec& plane : s.contact.planes)
         setup.terms.push_back(
             std::make_shared<PlaneContactTerm>(surface, plane.point, plane.normal, s.contact.dhat, kappa));
     }
+    // Shapes and meshes act on the volume's boundary (a flesh's lattice encloses its skin: the skin stays out too).
+    for (const ColliderSpec& c : s.contact.colliders) setup.terms.push_back(collider_term(c, F, mesh.vertices, s.contact.dhat, kappa));
   }
   for (const std::shared_ptr<Term>& t : setup.terms)
     if (auto c = std::dynamic_pointer_cast<ContactTermBase>(t)) contact.push_back(std::move(c));
@@ -579,7 +625,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     for (const PlaneColliderSpec& p : s.contact.planes)
       planes.push_back({{"point", {p.point[0], p.point[1], p.point[2]}}, {"normal", {p.normal[0], p.normal[1], p.normal[2]}}});
     settings["contact"] = {{"self", s.contact.self}, {"dhat", s.contact.dhat}, {"stiffness", kappa},
-                           {"stiffness_auto", s.contact.stiffness == 0.0}, {"planes", planes}};
+                           {"stiffness_auto", s.contact.stiffness == 0.0}, {"planes", planes},
+                           {"colliders", s.contact.planes.size() + s.contact.colliders.size()}};
   }
 
   RunPlan plan;

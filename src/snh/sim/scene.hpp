@@ -136,13 +136,28 @@ struct SolverSpec {
 struct PlaneColliderSpec {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  ///< unit length; the surface stays on its side
+  int index = 0;                                      ///< in "colliders" (messages)
+};
+/// A sphere, capsule, box or mesh collider, or a plane with a motion (fem/collider_term.hpp).
+struct ColliderSpec {
+  enum class Type { plane, sphere, capsule, box, mesh };
+  Type type = Type::sphere;
+  /// plane: point, unit normal; sphere: centre (a); capsule: the segment a–b; box: centre (a), half extents (b)
+  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+  double radius = 0.0;                  ///< sphere, capsule
+  std::filesystem::path file;           ///< mesh: the file read
+  Eigen::Matrix3Xd vertices;            ///< mesh: its vertices and triangles
+  Eigen::Matrix3Xi triangles;
+  std::vector<Motion> motions;          ///< composed in order from the pose at t = 0
+  int index = 0;                        ///< in "colliders" (messages)
 };
 struct ContactSpec {
   bool enabled = false;    ///< a "contact" section was given
   bool self = false;       ///< self-contact of the boundary surface
   double dhat = 0.0;       ///< the distance below which the barrier acts
   double stiffness = 0.0;  ///< κ; 0: "auto" (ipc_barrier_stiffness on the mesh, its mass and time step)
-  std::vector<PlaneColliderSpec> planes;
+  std::vector<PlaneColliderSpec> planes;  ///< fixed planes
+  std::vector<ColliderSpec> colliders;     ///< every other collider (a moving plane too)
 };
 
 /// "output".

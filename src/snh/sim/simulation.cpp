@@ -89,11 +89,99 @@ std::vector<bool> Simulation::kinematic_vertices() const {
   return out;
 }
 
+namespace {
+
+/// Adds a solve's Newton counts and times to a sum over several solves.
+void accumulate(NewtonReport& sum, const NewtonReport& r) {
+  sum.iterations += r.iterations;
+  sum.line_search_steps += r.line_search_steps;
+  sum.linear_iterations += r.linear_iterations;
+  sum.factorizations += r.factorizations;
+  sum.true_hessian_steps += r.true_hessian_steps;
+  sum.residual = std::max(sum.residual, r.residual);
+  sum.energy = r.energy;
+  sum.assembly_seconds += r.assembly_seconds;
+  sum.solve_seconds += r.solve_seconds;
+  sum.residuals.insert(sum.residuals.end(), r.residuals.begin(), r.residuals.end());
+}
+
+}  // namespace
+
+double Simulation::clearance(double from, double to, double h) {
+  if (setup_.terms.empty()) return 1.0;
+  // The pins' jump to their targets at `to` (and, for backward Euler, the free DOFs' inertial prediction:
+  // the guess the solve starts from).
+  Eigen::VectorXd moved = x_;
+  if (dynamic()) moved += h * v_;
+  place_kinematic(moved, to);
+  const Eigen::VectorXd dx = moved - x_;
+  double alpha = 1.0;
+  for (const std::shared_ptr<Term>& term : setup_.terms)
+    if (term->moving()) alpha = std::min(alpha, term->sweep(x_, dx, from, to));
+  if (alpha < 1.0 || setup_.kinematic.empty()) return alpha;
+  // The other contact terms: the pins' jump alone (the free DOFs' move is the guess's, bounded in solve()).
+  Eigen::VectorXd jump = x_;
+  place_kinematic(jump, to);
+  jump -= x_;
+  if (jump.isZero(0.0)) return alpha;
+  for (const std::shared_ptr<Term>& term : setup_.terms) term->at_time(to);
+  for (const std::shared_ptr<Term>& term : setup_.terms)
+    if (!term->moving()) alpha = std::min(alpha, term->max_step(x_, jump));
+  return alpha;
+}
+
 StepReport Simulation::step(double t, const NewtonOptions* newton) {
+  const double t0 = time_, h = setup_.dt;
+  if (!(t > t0) || clearance(t0, t, h) >= 1.0) return solve(t, h, newton);
+  // Not clear: shorten the part to the fraction found clear (checked again: the poses between are not
+  // linear) until it is, solve it, and go on from there.
+  const SimulationState start = state();
+  StepReport total;
+  double from = t0;
+  for (;;) {
+    double to = t;
+    const auto part_of = [&](double end) { return dynamic() ? h * (end - from) / (t - t0) : h; };
+    for (double alpha = clearance(from, to, part_of(to)); alpha < 1.0; alpha = clearance(from, to, part_of(to))) {
+      to = from + alpha * (to - from);
+      ++total.splits;
+      if (!(alpha > 0.0) || !((to - from) > 1e-6 * (t - t0))) {
+        restore(start);
+        total.converged = false;
+        total.substeps = 1;
+        total.failed_substep = 1;
+        total.failed_time = t;
+        total.failure = fmt::format("contact: a collider or pinned vertex cannot move from t = {:.9g} towards {:.9g} without reaching "
+                                    "the surface (the step was split {} times): does a script drive the surface into a collider?",
+                                    from, t, total.splits);
+        return total;
+      }
+    }
+    const double part = part_of(to);
+    inertia_.set_dt(part);
+    const StepReport r = solve(to, part, newton);
+    inertia_.set_dt(h);
+    accumulate(total.newton, r.newton);
+    if (r.interrupted || !r.converged) {
+      if (r.interrupted) restore(start);
+      // The failing part's report, with the Newton sums and the splits of the whole step.
+      NewtonReport sum = std::move(total.newton);
+      const int splits = total.splits;
+      total = r;
+      total.newton = std::move(sum);
+      total.splits = splits;
+      return total;
+    }
+    if (to == t) break;
+    from = to;
+  }
+  total.substeps = 1;
+  return total;
+}
+
+StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
   StepReport report;
   report.substeps = 1;
   const Eigen::VectorXd x_n = x_, previous_n = previous_, previous2_n = previous2_;
-  const double h = setup_.dt;
   // The guess: the inertial prediction (backward Euler), a linear extrapolation from the last two
   // solutions, or for the first quasi-static step the setup's (the current state by default).
   Eigen::VectorXd guess;
@@ -171,7 +259,13 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
     for (Eigen::Index d = 0; d < base.size(); ++d)
       if (!dofs_.is_free(d)) base[d] = guess[d];  // the kinematic DOFs as placed (providers asked once a step)
     const Eigen::VectorXd dx = dofs_.gather_free(guess) - dofs_.gather_free(base);
-    const double alpha = problem_.max_step(base, dx);
+    // A moving collider's bound is its sweep from (x_n, its pose at the last time) to (the guess, its pose
+    // at t), which step() found clear for backward Euler's prediction (base itself may be inside it at t);
+    // quasi-statically base is clear of it (step() checked the pins' jump) and its max_step applies.
+    double alpha = 1.0;
+    const Eigen::VectorXd dx_full = dofs_.expand(dx);
+    for (const std::shared_ptr<Term>& term : setup_.terms)
+      alpha = std::min(alpha, dynamic() && term->moving() ? term->sweep(x_n, guess - x_n, time_, t) : term->max_step(base, dx_full));
     if (alpha < 1.0) {
       guess = base + alpha * dofs_.expand(dx);
       E = problem_.energy(guess);
@@ -225,17 +319,8 @@ StepReport Simulation::advance(double t_start, double h, int substeps, const New
       return frame;
     }
     frame.substeps = sub;
-    NewtonReport& sum = frame.newton;
-    sum.iterations += r.newton.iterations;
-    sum.line_search_steps += r.newton.line_search_steps;
-    sum.linear_iterations += r.newton.linear_iterations;
-    sum.factorizations += r.newton.factorizations;
-    sum.true_hessian_steps += r.newton.true_hessian_steps;
-    sum.residual = std::max(sum.residual, r.newton.residual);
-    sum.energy = r.newton.energy;
-    sum.assembly_seconds += r.newton.assembly_seconds;
-    sum.solve_seconds += r.newton.solve_seconds;
-    sum.residuals.insert(sum.residuals.end(), r.newton.residuals.begin(), r.newton.residuals.end());
+    frame.splits += r.splits;
+    accumulate(frame.newton, r.newton);
     if (!r.converged) {
       frame.converged = false;
       frame.failed_substep = sub;

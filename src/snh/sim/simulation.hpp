@@ -69,6 +69,9 @@ struct StepReport {
   bool converged = true;
   bool interrupted = false;     ///< NewtonOptions::should_stop stopped it; the state is back where it started
   int substeps = 0;             ///< substeps completed (or tried, for a failure)
+  /// Times a step was cut short because a moving collider's sweep or a scripted pin's jump to the step's
+  /// time was not clear of the surface (each half solved on its own; summed over the substeps).
+  int splits = 0;
   /// Newton's counts and times summed over the substeps, with the largest final residual, the last
   /// solve's energy and every residual, substep after substep.
   NewtonReport newton;
@@ -98,6 +101,12 @@ class Simulation {
 
   /// One solve to time t: backward Euler over dt from the current state, or a quasi-static solve with the
   /// kinematic targets at t. Newton's on_iteration/should_stop come from `newton` (else the setup's).
+  /// With contact terms, the step from time() to t is first checked: each term's sweep (a moving collider
+  /// from its pose at time() to its pose at t) and the scripted pins' jump to their targets at t (the
+  /// terms' max_step, colliders at their pose at t) against the current state. A step not clear is cut
+  /// (time and, for backward Euler, dt) to the fraction found clear, checked again, solved, and the rest
+  /// of the step done likewise from there (report.splits counts the cuts); a part below a millionth of the
+  /// step fails with one line (a script driving the surface into a collider).
   StepReport step(double t, const NewtonOptions* newton = nullptr);
   /// `substeps` solves at t_start + k·h, k = 1 … substeps (h = the setup's dt for backward Euler); stops at
   /// the first that fails. An interrupted frame returns to the state it started from.
@@ -130,6 +139,12 @@ class Simulation {
   [[nodiscard]] double rest_volume() const { return rest_volume_; }
 
  private:
+  /// One solve to time t over a time step h (backward Euler; ignored quasi-statically).
+  StepReport solve(double t, double h, const NewtonOptions* newton);
+  /// The smallest fraction of the step from `from` to `to` (over h, backward Euler) that the moving terms'
+  /// sweeps (against the pins' jump and the inertial prediction) and the other terms' bounds on the pins'
+  /// jump keep clear.
+  double clearance(double from, double to, double h);
   SimulationSetup setup_;
   ElasticTerm elastic_;
   DofMap dofs_;

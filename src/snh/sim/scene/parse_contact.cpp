@@ -1,8 +1,9 @@
+#include "snh/io/surface_read.hpp"
 #include "snh/sim/scene/sections.hpp"
 
 namespace snh::scene {
 
-ContactSpec parse_contact(Keys& top, Integrator integrator) {
+ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesystem::path& source, double end_time) {
   ContactSpec s;
   if (const json* c = top.get("contact")) {
     Keys k(*c, "contact", top.file());
@@ -29,20 +30,81 @@ ContactSpec parse_contact(Keys& top, Integrator integrator) {
   if (const json* list = top.get("colliders")) {
     if (!list->is_array()) top.fail("expected an array of colliders, got " + list->dump(), "colliders");
     for (std::size_t i = 0; i < list->size(); ++i) {
-      Keys k((*list)[i], fmt::format("colliders[{}]", i), top.file());
-      if (!k.has("type")) k.fail("required: the collider's type (plane)", "type");
-      (void)k.choice("type", "plane", {"plane"});
-      PlaneColliderSpec plane;
-      const auto point = k.vec3("point"), normal = k.vec3("normal");
-      if (!point) k.fail("required: a point of the plane, 3 numbers", "point");
-      if (!normal) k.fail("required: the plane's normal (the side kept free), 3 numbers", "normal");
-      if (!(normal->norm() > 0.0)) k.fail("must not be zero", "normal");
-      plane.point = *point;
-      plane.normal = normal->normalized();
+      const std::string path = fmt::format("colliders[{}]", i);
+      Keys k((*list)[i], path, top.file());
+      if (!k.has("type")) k.fail("required: the collider's type (plane, sphere, capsule, box or mesh)", "type");
+      const std::string type = k.choice("type", "plane", {"plane", "sphere", "capsule", "box", "mesh"});
+      ColliderSpec c;
+      c.index = static_cast<int>(i);
+      if (const json* motions = k.get("motion")) {
+        if (!motions->is_array()) k.fail("expected an array of motions", "motion");
+        for (std::size_t m = 0; m < motions->size(); ++m) {
+          const std::string at = fmt::format("{}.motion[{}]", path, m);
+          c.motions.push_back(parse_motion((*motions)[m], at, top.file(), end_time));
+          // A shape stays a shape under rotations, translations and uniform scales only.
+          if (const auto* scale = std::get_if<Scale>(&c.motions.back()); scale && type != "mesh" &&
+              !(scale->factors[0] == scale->factors[1] && scale->factors[1] == scale->factors[2]))
+            Keys((*motions)[m], at, top.file()).fail("a " + type + " collider scales only with three equal factors (a mesh collider takes any)", "factors");
+        }
+      }
+      const auto required = [&](const char* key, const char* what) {
+        const auto v = k.vec3(key);
+        if (!v) k.fail(std::string("required: ") + what + ", 3 numbers", key);
+        return *v;
+      };
+      if (type == "plane") {
+        c.type = ColliderSpec::Type::plane;
+        c.a = required("point", "a point of the plane");
+        c.b = required("normal", "the plane's normal (the side kept free)");
+        if (!(c.b.norm() > 0.0)) k.fail("must not be zero", "normal");
+        c.b.normalize();
+      } else if (type == "sphere") {
+        c.type = ColliderSpec::Type::sphere;
+        c.a = required("center", "the sphere's centre");
+        if (!k.has("radius")) k.fail("required: the sphere's radius (> 0)", "radius");
+        c.radius = k.positive("radius", 0.0);
+      } else if (type == "capsule") {
+        c.type = ColliderSpec::Type::capsule;
+        c.a = required("a", "one end of the capsule's segment");
+        c.b = required("b", "the other end of the capsule's segment");
+        if (!k.has("radius")) k.fail("required: the capsule's radius (> 0)", "radius");
+        c.radius = k.positive("radius", 0.0);
+      } else if (type == "box") {
+        c.type = ColliderSpec::Type::box;
+        c.a = required("center", "the box's centre");
+        const Eigen::Vector3d size = required("size", "the box's edge lengths along x, y and z");
+        if (!(size.array() > 0.0).all()) k.fail(fmt::format("expected 3 edge lengths > 0, got [{:g}, {:g}, {:g}]", size[0], size[1], size[2]), "size");
+        c.b = 0.5 * size;
+      } else {
+        c.type = ColliderSpec::Type::mesh;
+        const json* file = k.get("file");
+        if (!file) k.fail("required: the collider's surface file (.obj, .off, .ply or .stl)", "file");
+        if (!file->is_string() || file->get<std::string>().empty()) k.fail("expected a file name, got " + file->dump(), "file");
+        const std::filesystem::path f = file->get<std::string>();
+        c.file = f.is_absolute() ? f : source.parent_path() / f;
+        if (!is_surface_file(c.file)) k.fail("expected a .obj, .off, .ply or .stl file, got " + file->dump(), "file");
+        SurfaceMesh surface;
+        try {
+          surface = read_surface(c.file);
+        } catch (const std::exception& e) {
+          k.fail(e.what(), "file");
+        }
+        if (surface.triangles.cols() == 0) k.fail(fmt::format("{} has no triangles", c.file.string()), "file");
+        if (!(surface.vertices.array().abs() <= max_magnitude).all())
+          k.fail(fmt::format("{} has a coordinate beyond the {:g} a scene allows", c.file.string(), max_magnitude), "file");
+        for (Eigen::Index t = 0; t < surface.triangles.cols(); ++t) {
+          const auto& T = surface.triangles.col(t);
+          if (T[0] == T[1] || T[1] == T[2] || T[2] == T[0])
+            k.fail(fmt::format("{}: triangle {} repeats a vertex", c.file.string(), t), "file");
+        }
+        c.vertices = std::move(surface.vertices);
+        c.triangles = std::move(surface.triangles);
+      }
       k.finish();
-      s.planes.push_back(plane);
+      if (c.type == ColliderSpec::Type::plane && c.motions.empty()) s.planes.push_back({c.a, c.b, c.index});
+      else s.colliders.push_back(std::move(c));
     }
-    if (!s.enabled && !s.planes.empty())
+    if (!s.enabled && !list->empty())
       top.fail("colliders need a \"contact\" section (its dhat and stiffness)", "colliders");
   }
   return s;

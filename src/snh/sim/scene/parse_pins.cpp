@@ -14,6 +14,8 @@ void read_timing(Keys& k, double end_time, M& m) {
   if (!(m.end > m.start)) k.fail(fmt::format("end ({:g}) must be later than start ({:g})", m.end, m.start));
 }
 
+}  // namespace
+
 Motion parse_motion(const json& j, const std::string& path, const std::string& file, double end_time) {
   Keys k(j, path, file);
   const std::string type = k.choice("type", "", {"translate", "rotate", "scale"});
@@ -47,8 +49,6 @@ Motion parse_motion(const json& j, const std::string& path, const std::string& f
   k.finish();
   return motion;
 }
-
-}  // namespace
 
 Selection parse_selection(Keys& k) {
   Selection s;

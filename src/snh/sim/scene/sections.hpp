@@ -24,12 +24,15 @@ namespace snh::scene {
 [[nodiscard]] Selection parse_selection(Keys& k);
 /// "pins" (motions default to ending at end_time).
 [[nodiscard]] std::vector<PinSpec> parse_pins(Keys& top, double end_time);
+/// One motion object of a "motion" array (pins, colliders) at `path` (its end defaults to end_time).
+[[nodiscard]] Motion parse_motion(const json& j, const std::string& path, const std::string& file, double end_time);
 /// "initial".
 [[nodiscard]] std::vector<InitialOp> parse_initial(Keys& top);
 /// "solver".
 [[nodiscard]] SolverSpec parse_solver(Keys& top);
-/// "contact" and "colliders" ("auto" stiffness only with backward Euler).
-[[nodiscard]] ContactSpec parse_contact(Keys& top, Integrator integrator);
+/// "contact" and "colliders" ("auto" stiffness only with backward Euler; mesh files relative to the scene
+/// file's directory, read here; motions default to ending at end_time).
+[[nodiscard]] ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesystem::path& source, double end_time);
 /// "output" (the directory defaults to output/<file stem>).
 [[nodiscard]] OutputSpec parse_output(Keys& top, const std::filesystem::path& source);
 

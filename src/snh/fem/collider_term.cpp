@@ -1,0 +1,355 @@
+#include "snh/fem/collider_term.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "snh/contact/barrier.hpp"
+#include "snh/contact/broad_phase.hpp"
+#include "snh/contact/ccd.hpp"
+#include "snh/contact/edge_edge_distance.hpp"
+#include "snh/contact/edge_edge_mollifier.hpp"
+#include "snh/contact/pair_barrier.hpp"
+#include "snh/contact/point_triangle_distance.hpp"
+
+namespace snh {
+namespace {
+
+constexpr double inf = std::numeric_limits<double>::infinity();
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+void require_positive(const char* what, double value) {
+  if (!(value > 0.0) || !std::isfinite(value))
+    throw std::invalid_argument(fmt::format("collider: {} must be finite and > 0, got {:g}", what, value));
+}
+
+}  // namespace
+
+ShapeDistance shape_distance(const ColliderShape& shape, const Vec3& q, bool hessian) {
+  ShapeDistance out;
+  if (shape.kind == ColliderShape::Kind::plane) {  // signed distance, linear
+    out.distance = shape.b.dot(q - shape.a);
+    out.normal = shape.b;
+    return out;
+  }
+  // The closest point c of the core and the projector P = I − J on the directions c does not follow.
+  Vec3 c = shape.a;
+  Mat3 P = Mat3::Identity();
+  if (shape.kind == ColliderShape::Kind::capsule) {
+    const Vec3 axis = shape.b - shape.a;
+    const double length2 = axis.squaredNorm();
+    const double tau = length2 > 0.0 ? (q - shape.a).dot(axis) / length2 : 0.0;
+    if (tau > 0.0 && tau < 1.0) {
+      c = shape.a + tau * axis;
+      P -= axis * axis.transpose() / length2;
+    } else {
+      c = tau <= 0.0 ? shape.a : shape.b;
+    }
+  } else if (shape.kind == ColliderShape::Kind::box) {
+    const Vec3 lo = shape.a - shape.b, hi = shape.a + shape.b;
+    for (int i = 0; i < 3; ++i) {
+      c[i] = std::clamp(q[i], lo[i], hi[i]);
+      if (c[i] == q[i]) P(i, i) = 0.0;  // inside the slab: c follows q along this axis
+    }
+  }
+  const Vec3 u = q - c;
+  const double r = u.norm();
+  if (!(r > 0.0)) {  // on the core (inside the shape), or not finite
+    out.distance = std::isnan(r) ? nan : -shape.radius;
+    return out;
+  }
+  out.normal = u / r;
+  out.distance = r - shape.radius;
+  if (hessian) out.hessian = (P - out.normal * out.normal.transpose()) / r;
+  return out;
+}
+
+double shape_step(const ColliderShape& shape, const Vec3& q, const Vec3& dq, double keep) {
+  const double d0 = shape_distance(shape, q).distance;
+  if (!(d0 > 0.0)) return 0.0;
+  const double floor = keep * d0;
+  double tau = 0.0;
+  for (int it = 0; it < 200; ++it) {
+    const ShapeDistance sd = shape_distance(shape, q + tau * dq);
+    const double slope = sd.normal.dot(dq);
+    if (!(slope < 0.0)) return 1.0;  // not approaching: d is convex along the line, it only grows from here
+    // The tangent's root of d = floor: at or before the true one (convexity).
+    const double next = tau + (sd.distance - floor) / -slope;
+    if (!(next < 1.0)) return 1.0;
+    // Rounding may put d at the tangent's root a hair below floor: accept half of it, never less.
+    if (!(shape_distance(shape, q + next * dq).distance > 0.5 * floor) || next - tau <= 1e-12) return tau;
+    tau = next;
+  }
+  return tau;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+
+ShapeColliderTerm::ShapeColliderTerm(std::vector<int> vertices, ColliderShape shape, ColliderPose pose, double dhat,
+                                     double stiffness)
+    : vertices_(std::move(vertices)), shape_(std::move(shape)), pose_(std::move(pose)), dhat_(dhat), kappa_(stiffness) {
+  require_positive("dhat", dhat_);
+  require_positive("stiffness", kappa_);
+  if (!shape_.a.allFinite() || !shape_.b.allFinite() || !std::isfinite(shape_.radius))
+    throw std::invalid_argument("collider: the shape's numbers are not all finite");
+  using K = ColliderShape::Kind;
+  if (shape_.kind == K::plane) {
+    if (!(shape_.b.norm() > 0.0)) throw std::invalid_argument("collider: the plane's normal must be non-zero");
+    shape_.b.normalize();
+    shape_.radius = 0.0;
+  }
+  if ((shape_.kind == K::sphere || shape_.kind == K::capsule) && !(shape_.radius > 0.0))
+    throw std::invalid_argument(fmt::format("collider: the radius must be > 0, got {:g}", shape_.radius));
+  if (shape_.kind == K::box) {
+    if (!(shape_.b.minCoeff() > 0.0)) throw std::invalid_argument("collider: the box's half extents must be > 0");
+    shape_.radius = 0.0;
+  }
+  for (const int v : vertices_)
+    if (v < 0) throw std::invalid_argument(fmt::format("collider: vertex id {} is negative", v));
+  frame_ = frame_at(0.0);
+}
+
+ShapeColliderTerm::Frame ShapeColliderTerm::frame_at(double t) const {
+  Frame f;
+  if (!pose_) return f;
+  const Eigen::Affine3d A = pose_(t);
+  const Mat3 L = A.linear();
+  f.scale = L.col(0).norm();
+  if (!(f.scale > 0.0) || !std::isfinite(f.scale) || !A.translation().allFinite() ||
+      !((L.transpose() * L - f.scale * f.scale * Mat3::Identity()).norm() <= 1e-9 * f.scale * f.scale) || !(L.determinant() > 0.0))
+    throw std::invalid_argument(
+        fmt::format("collider: its pose at t = {:g} is not a rotation, translation and uniform scale", t));
+  f.rotation = L / f.scale;
+  f.translation = A.translation();
+  return f;
+}
+
+void ShapeColliderTerm::at_time(double t) { frame_ = frame_at(t); }
+
+double ShapeColliderTerm::distance(const Eigen::VectorXd& x, int v) const {
+  if (3 * static_cast<Eigen::Index>(v) + 3 > x.size())
+    throw std::logic_error(fmt::format("collider: vertex {} is beyond the {} DOFs given", v, x.size()));
+  return frame_.scale * shape_distance(shape_, frame_.to_base(x.segment<3>(3 * v))).distance;
+}
+
+double ShapeColliderTerm::min_distance(const Eigen::VectorXd& x) const {
+  double d = inf;
+  for (const int v : vertices_) d = std::min(d, distance(x, v));
+  return d;
+}
+
+double ShapeColliderTerm::energy(const Eigen::VectorXd& x) const { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
+
+double ShapeColliderTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
+                                   PsdProjection projection) const {
+  const double s_hat = dhat_ * dhat_;
+  const Mat3& R = frame_.rotation;
+  double e = 0.0;
+  for (const int v : vertices_) {
+    if (3 * static_cast<Eigen::Index>(v) + 3 > x.size())
+      throw std::logic_error(fmt::format("collider: vertex {} is beyond the {} DOFs given", v, x.size()));
+    const ShapeDistance sd = shape_distance(shape_, frame_.to_base(x.segment<3>(3 * v)), hessian != nullptr);
+    const double d = frame_.scale * sd.distance;
+    if (std::isnan(d)) return nan;
+    if (d <= 0.0) return inf;
+    const double s = d * d;
+    if (!(s < s_hat)) continue;
+    const double b1 = contact::barrier_first_derivative(s, s_hat);
+    const Vec3 n = R * sd.normal;  // ∇d in world space
+    e += kappa_ * contact::barrier(s, s_hat);
+    if (gradient) gradient->segment<3>(3 * v) += (kappa_ * b1 * 2.0 * d) * n;
+    if (hessian) {
+      const double c = kappa_ * (4.0 * s * contact::barrier_second_derivative(s, s_hat) + 2.0 * b1);
+      if (projection != PsdProjection::none) {  // the exact projection (header)
+        hessian->add_block(v, v, std::max(c, 0.0) * n * n.transpose());
+      } else {
+        // ∇²d in world space: R (∇²d in the base frame) Rᵀ / scale.
+        const Mat3 Hd = R * sd.hessian * R.transpose() / frame_.scale;
+        hessian->add_block(v, v, c * n * n.transpose() + (kappa_ * 2.0 * d * b1) * Hd);
+      }
+    }
+  }
+  return e;
+}
+
+double ShapeColliderTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  if (!x.allFinite() || !dx.allFinite()) return 1.0;  // the line search rejects what follows
+  double t = 1.0;
+  for (const int v : vertices_) {
+    const Vec3 q = frame_.to_base(x.segment<3>(3 * v));
+    const Vec3 dq = frame_.rotation.transpose() * dx.segment<3>(3 * v) / frame_.scale;
+    if (dq == Vec3::Zero()) continue;
+    t = std::min(t, shape_step(shape_, q, dq));
+  }
+  return t;
+}
+
+double ShapeColliderTerm::sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const {
+  if (!pose_) return 1.0;
+  const Frame f0 = frame_at(t0), f1 = frame_at(t1);
+  double t = 1.0;
+  for (const int v : vertices_) {
+    const Vec3 q0 = f0.to_base(x.segment<3>(3 * v)), q1 = f1.to_base(x.segment<3>(3 * v) + dx.segment<3>(3 * v));
+    t = std::min(t, shape_step(shape_, q0, q1 - q0));
+  }
+  return t;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+
+MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, Eigen::Matrix3Xd V,
+                                   const Eigen::Matrix3Xi& T, ColliderPose pose, double dhat, double stiffness)
+    : volume_vertices_(rest.cols()), base_(std::move(V)), collider_T_(T), pose_(std::move(pose)), dhat_(dhat), kappa_(stiffness) {
+  require_positive("dhat", dhat_);
+  require_positive("stiffness", kappa_);
+  if (!rest.allFinite() || !base_.allFinite()) throw std::invalid_argument("collider: positions are not all finite");
+  const auto check = [](const Eigen::Matrix3Xi& tris, Eigen::Index count, const char* what) {
+    for (Eigen::Index t = 0; t < tris.cols(); ++t) {
+      for (int k = 0; k < 3; ++k)
+        if (tris(k, t) < 0 || tris(k, t) >= count)
+          throw std::invalid_argument(fmt::format("collider: {} triangle {} has vertex id {} outside [0, {})", what, t, tris(k, t), count));
+      if (tris(0, t) == tris(1, t) || tris(1, t) == tris(2, t) || tris(2, t) == tris(0, t))
+        throw std::invalid_argument(fmt::format("collider: {} triangle {} repeats a vertex", what, t));
+    }
+  };
+  check(F, rest.cols(), "surface");
+  check(T, base_.cols(), "mesh");
+  std::vector<int> ids(F.data(), F.data() + F.size());
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  surface_vertices_ = std::move(ids);
+  const auto ns = static_cast<int>(surface_vertices_.size());
+  std::vector<int> local(static_cast<std::size_t>(rest.cols()), -1);
+  for (int i = 0; i < ns; ++i) local[static_cast<std::size_t>(surface_vertices_[static_cast<std::size_t>(i)])] = i;
+  triangles_simulated_ = static_cast<int>(F.cols());
+  F_.resize(3, F.cols() + T.cols());
+  F_.leftCols(F.cols()) = F.unaryExpr([&](int v) { return local[static_cast<std::size_t>(v)]; });
+  F_.rightCols(T.cols()) = T.array() + ns;
+  E_ = contact::surface_edges(F_);
+  rest_.resize(3, ns + base_.cols());
+  for (int i = 0; i < ns; ++i) rest_.col(i) = rest.col(surface_vertices_[static_cast<std::size_t>(i)]);
+  rest_.rightCols(base_.cols()) = base_;
+  placed_ = placed_at(0.0);
+}
+
+Eigen::Matrix3Xd MeshColliderTerm::placed_at(double t) const {
+  if (!pose_) return base_;
+  const Eigen::Affine3d A = pose_(t);
+  Eigen::Matrix3Xd P = (A.linear() * base_).colwise() + A.translation();
+  if (!P.allFinite()) throw std::invalid_argument(fmt::format("collider: the mesh's pose at t = {:g} is not finite", t));
+  return P;
+}
+
+void MeshColliderTerm::at_time(double t) { placed_ = placed_at(t); }
+
+Eigen::Matrix3Xd MeshColliderTerm::combined(const Eigen::VectorXd& x, const Eigen::Matrix3Xd& collider) const {
+  if (x.size() != 3 * volume_vertices_)
+    throw std::logic_error(fmt::format("collider: {} DOFs for {} vertices", x.size(), volume_vertices_));
+  const auto ns = static_cast<Eigen::Index>(surface_vertices_.size());
+  Eigen::Matrix3Xd V(3, ns + collider.cols());
+  for (Eigen::Index i = 0; i < ns; ++i) V.col(i) = x.segment<3>(3 * surface_vertices_[static_cast<std::size_t>(i)]);
+  V.rightCols(collider.cols()) = collider;
+  return V;
+}
+
+std::vector<MeshColliderTerm::Candidate> MeshColliderTerm::candidates(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1,
+                                                                      double dhat) const {
+  const auto ns = static_cast<int>(surface_vertices_.size());
+  const contact::Candidates c = contact::broad_phase(V0, V1, F_, E_, dhat);
+  std::vector<Candidate> out;
+  for (const auto& [v, t] : c.vertex_triangle)
+    if ((v < ns) != (t < triangles_simulated_)) out.push_back({false, {v, F_(0, t), F_(1, t), F_(2, t)}, 0.0});
+  for (const auto& [a, b] : c.edge_edge) {
+    if ((E_(0, a) < ns) == (E_(0, b) < ns)) continue;  // both edges of one body
+    const std::array<int, 4> id{E_(0, a), E_(1, a), E_(0, b), E_(1, b)};
+    out.push_back({true, id,
+                   contact::edge_edge_mollifier_threshold(rest_.col(id[0]), rest_.col(id[1]), rest_.col(id[2]), rest_.col(id[3]))});
+  }
+  return out;
+}
+
+double MeshColliderTerm::energy(const Eigen::VectorXd& x) const { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
+
+double MeshColliderTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
+                                  PsdProjection projection) const {
+  if (!x.allFinite()) return nan;
+  const Eigen::Matrix3Xd V = combined(x, placed_);
+  const auto ns = static_cast<int>(surface_vertices_.size());
+  const double s_hat = dhat_ * dhat_;
+  const bool project = projection != PsdProjection::none;
+  double e = 0.0;
+  for (const Candidate& c : candidates(V, V, dhat_)) {
+    const auto& id = c.local;
+    contact::Derivatives<12> d =
+        c.edge_edge ? contact::edge_edge_barrier(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3]), s_hat, c.mollifier_threshold, project)
+                    : contact::point_triangle_barrier(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3]), s_hat, project);
+    if (!std::isfinite(d.value)) return d.value;  // in contact (+∞) or undefined (NaN)
+    e += kappa_ * d.value;
+    // The simulated vertices' blocks only (the collider's vertices are not DOFs).
+    for (int i = 0; i < 4; ++i) {
+      if (id[i] >= ns) continue;
+      const int gi = surface_vertices_[static_cast<std::size_t>(id[i])];
+      if (gradient) gradient->segment<3>(3 * gi) += kappa_ * d.gradient.segment<3>(3 * i);
+      if (hessian)
+        for (int j = i; j < 4; ++j)
+          if (id[j] < ns)
+            hessian->add_block(gi, surface_vertices_[static_cast<std::size_t>(id[j])], kappa_ * d.hessian.block<3, 3>(3 * i, 3 * j));
+    }
+  }
+  return e;
+}
+
+void MeshColliderTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
+  out.arity = 2;
+  out.vertices.clear();
+  if (!x.allFinite()) return;
+  const Eigen::Matrix3Xd V = combined(x, placed_);
+  const auto ns = static_cast<int>(surface_vertices_.size());
+  for (const Candidate& c : candidates(V, V, dhat_))
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j)
+        if (c.local[i] < ns && c.local[j] < ns)
+          out.vertices.insert(out.vertices.end(), {surface_vertices_[static_cast<std::size_t>(c.local[i])],
+                                                   surface_vertices_[static_cast<std::size_t>(c.local[j])]});
+}
+
+double MeshColliderTerm::min_distance(const Eigen::VectorXd& x) const {
+  const Eigen::Matrix3Xd V = combined(x, placed_);
+  double s = dhat_ * dhat_;
+  for (const Candidate& c : candidates(V, V, dhat_)) {
+    const auto& id = c.local;
+    s = std::min(s, c.edge_edge ? contact::edge_edge_distance(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3]))
+                                : contact::point_triangle_distance(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3])));
+  }
+  return std::sqrt(std::max(s, 0.0));
+}
+
+double MeshColliderTerm::ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D) const {
+  double t = 1.0;
+  for (const Candidate& c : candidates(V0, V0 + D, 0.0)) {
+    const auto& i = c.local;
+    t = std::min(t, c.edge_edge ? contact::edge_edge_ccd(V0.col(i[0]), V0.col(i[1]), V0.col(i[2]), V0.col(i[3]), D.col(i[0]),
+                                                         D.col(i[1]), D.col(i[2]), D.col(i[3]))
+                                : contact::point_triangle_ccd(V0.col(i[0]), V0.col(i[1]), V0.col(i[2]), V0.col(i[3]), D.col(i[0]),
+                                                              D.col(i[1]), D.col(i[2]), D.col(i[3])));
+  }
+  return t;
+}
+
+double MeshColliderTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  if (!x.allFinite() || !dx.allFinite()) return 1.0;  // the line search rejects what follows
+  const Eigen::Matrix3Xd V0 = combined(x, placed_);
+  const Eigen::Matrix3Xd D = combined(dx, Eigen::Matrix3Xd::Zero(3, placed_.cols()));  // the collider holds still
+  return ccd(V0, D);
+}
+
+double MeshColliderTerm::sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const {
+  if (!pose_ || !x.allFinite() || !dx.allFinite()) return 1.0;
+  const Eigen::Matrix3Xd P0 = placed_at(t0), P1 = placed_at(t1);
+  return ccd(combined(x, P0), combined(dx, P1 - P0));
+}
+
+}  // namespace snh

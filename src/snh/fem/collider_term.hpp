@@ -1,0 +1,164 @@
+#pragma once
+// Kinematic colliders as energy terms (IPC, Li et al. 2020): obstacles whose place is a function of time
+// (a scene's "colliders" with their scripted "motion"), which the simulated surface stays clear of.
+//
+// ShapeColliderTerm: a convex shape, the points within a radius r of a core: a point (sphere), a segment
+// (capsule), an axis-aligned box (box, r = 0), or a half-space (plane). Each simulated surface vertex at
+// distance d outside the shape (d = |x − c(x)| − r, c the closest point of the core; for the plane the
+// signed distance) adds κ b(d², d̂²) (contact/barrier.hpp); d ≤ 0 (on or inside the shape) makes the energy
+// +∞. Derivatives, with n = (x − c)/|x − c| and J the Jacobian of the closest point c(x):
+//     ∇d = n,   ∇²d = (I − n nᵀ)(I − J)/|x − c|
+// (J = 0 at a point core, a segment's end or a box corner; a aᵀ, a the axis, inside a segment; the
+// projector on the box's unclamped axes); ∇²d is symmetric, PSD, and n is in its null space, so the
+// vertex's Hessian κ[(4d²b'' + 2b') n nᵀ + 2d b' ∇²d] has eigenvector n with κ(4d²b'' + 2b') and the rest
+// ≤ 0 (b' ≤ 0): its PSD projection is κ max(4d²b'' + 2b', 0) n nᵀ (exact, no eigen-solve).
+// max_step: d along a linear path x + τ dx is convex (the distance to a convex set is convex), so its
+// tangent at τ lies below it: stepping to the tangent's root of d(τ) = d(0)/10 never passes the true
+// root; repeated (Newton from the left on a convex function) it climbs to it. Each vertex keeps at least
+// a tenth of its distance; a vertex not approaching (d′ ≥ 0) does not limit the step.
+//
+// MeshColliderTerm: a triangle mesh against the simulated surface: simulated vertex – collider triangle,
+// collider vertex – simulated triangle and simulated edge – collider edge candidates (the broad phase over
+// both surfaces at once, pairs within one body left out), each adding κ B with B its pair barrier
+// (contact/pair_barrier.hpp: b of the classified point–triangle distance; m·b of the edge–edge distance,
+// mollified where the edges are nearly parallel). The energy is IPC's sum over candidates (no merging:
+// with the collider fixed the duplicates are few). Only the simulated vertices' blocks of each pair's
+// gradient and Hessian are scattered (the collider's vertices are not DOFs); with projection, the pair's
+// 12 by 12 Hessian is projected first, so its simulated blocks are PSD too. max_step: additive CCD
+// (contact/ccd.hpp) of the swept candidates, the collider fixed during the solve.
+//
+// Motion: each term holds a pose, a function of time mapping its base geometry (as given, at t = 0) to
+// world space; at_time(t) moves it there. sweep(x, dx, t0, t1) says which fraction of the joint motion —
+// the state from x to x + dx while the collider goes from its pose at t0 to its pose at t1 — keeps clear,
+// each distance keeping a tenth of itself: the simulation splits a step whose sweep is not clear
+// (simulation.cpp). The motion is taken as linear: for a mesh, every vertex of both bodies on the straight
+// line between its two places (CCD); for a shape, each simulated vertex on the straight line between its
+// two places in the shape's own frame (exact for a translation; for a rotation the chord of the arc).
+#include <array>
+#include <functional>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "snh/fem/term.hpp"
+#include "snh/math/types.hpp"
+
+namespace snh {
+
+/// Where a collider is at time t: the map of its base geometry to world space. Shapes need a similarity
+/// (rotation, translation, uniform scale); a mesh takes any affine map. Empty: fixed (the identity).
+using ColliderPose = std::function<Eigen::Affine3d(double t)>;
+
+/// A convex shape in its base frame: the points within `radius` of a core.
+struct ColliderShape {
+  enum class Kind { plane, sphere, capsule, box };
+  Kind kind = Kind::sphere;
+  /// plane: a point and the unit normal (the free side); sphere: the centre (a); capsule: the segment
+  /// a–b; box: the centre (a) and the half extents (b, each > 0)
+  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+  double radius = 0.0;  ///< sphere, capsule (> 0); 0 for plane and box
+};
+
+/// A point's distance from outside a shape (negative or 0 on or inside it) and its derivatives.
+struct ShapeDistance {
+  double distance = 0.0;
+  Vec3 normal = Vec3::Zero();   ///< ∇d
+  Mat3 hessian = Mat3::Zero();  ///< ∇²d (where asked)
+};
+/// In the shape's frame. Throws nothing; a point on a segment or a box core gives the normal 0.
+[[nodiscard]] ShapeDistance shape_distance(const ColliderShape& shape, const Vec3& q, bool hessian = false);
+
+/// The largest τ ∈ [0, 1] such that q + τ' dq stays at distance ≥ keep·d(q) from the shape for all τ' ≤ τ
+/// (d convex along the line); 0 when q is not outside.
+[[nodiscard]] double shape_step(const ColliderShape& shape, const Vec3& q, const Vec3& dq, double keep = 0.1);
+
+class ShapeColliderTerm final : public Term {
+ public:
+  /// vertices  the simulated vertices that collide (each once; e.g. the surface's)
+  /// Throws std::invalid_argument (one line) for a shape that is not valid (radius, half extents, normal,
+  /// non-finite numbers), d̂ or κ not finite and > 0, or a negative vertex id.
+  ShapeColliderTerm(std::vector<int> vertices, ColliderShape shape, ColliderPose pose, double dhat, double stiffness);
+
+  [[nodiscard]] std::string_view name() const override { return "collider"; }
+  [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
+                  PsdProjection projection) const override;
+  [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
+  void at_time(double t) override;
+  [[nodiscard]] bool moving() const override { return static_cast<bool>(pose_); }
+  [[nodiscard]] double sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const override;
+
+  /// The distance of vertex v from the shape at its current pose (negative inside).
+  [[nodiscard]] double distance(const Eigen::VectorXd& x, int v) const;
+  /// The smallest distance over the vertices at the current pose.
+  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const;
+
+ private:
+  struct Frame {  ///< world x = scale·R q + t
+    Mat3 rotation = Mat3::Identity();
+    Vec3 translation = Vec3::Zero();
+    double scale = 1.0;
+    [[nodiscard]] Vec3 to_base(const Vec3& x) const { return rotation.transpose() * (x - translation) / scale; }
+  };
+  [[nodiscard]] Frame frame_at(double t) const;
+  std::vector<int> vertices_;
+  ColliderShape shape_;
+  ColliderPose pose_;
+  Frame frame_;
+  double dhat_, kappa_;
+};
+
+class MeshColliderTerm final : public Term {
+ public:
+  /// F          3 by #F triangles of the simulated surface (vertex ids of the volume mesh)
+  /// rest       3 by #V rest positions of every simulated vertex (mollifier thresholds)
+  /// V, T       the collider's base vertices and triangles (T's ids into V)
+  /// Throws std::invalid_argument (one line) for ids out of range, a repeated vertex in a triangle,
+  /// non-finite positions, d̂ or κ not finite and > 0.
+  MeshColliderTerm(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T,
+                   ColliderPose pose, double dhat, double stiffness);
+
+  [[nodiscard]] std::string_view name() const override { return "mesh collider"; }
+  [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
+                  PsdProjection projection) const override;
+  void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
+  [[nodiscard]] bool stencil_varies() const override { return true; }
+  [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
+  void at_time(double t) override;
+  [[nodiscard]] bool moving() const override { return static_cast<bool>(pose_); }
+  [[nodiscard]] double sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const override;
+
+  /// The collider's vertices at the current pose (3 by #V of the collider).
+  [[nodiscard]] const Eigen::Matrix3Xd& collider_vertices() const { return placed_; }
+  [[nodiscard]] const Eigen::Matrix3Xi& collider_triangles() const { return collider_T_; }
+  /// The smallest distance between the two surfaces over candidates within d̂ at x; d̂ if there is none.
+  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const;
+
+ private:
+  struct Candidate {
+    bool edge_edge;
+    std::array<int, 4> local;  ///< combined ids (simulated surface vertices first, then the collider's)
+    double mollifier_threshold;
+  };
+  /// Both surfaces' vertices: the simulated ones at x, the collider's at `collider`.
+  [[nodiscard]] Eigen::Matrix3Xd combined(const Eigen::VectorXd& x, const Eigen::Matrix3Xd& collider) const;
+  /// The candidates between the two bodies over the step V0 → V1 within dhat.
+  [[nodiscard]] std::vector<Candidate> candidates(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, double dhat) const;
+  /// The smallest CCD fraction of the candidates for the step V0 → V0 + D.
+  [[nodiscard]] double ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D) const;
+  [[nodiscard]] Eigen::Matrix3Xd placed_at(double t) const;
+  std::vector<int> surface_vertices_;  ///< volume id of each simulated surface vertex (local id order)
+  Eigen::Index volume_vertices_ = 0;
+  int triangles_simulated_ = 0;        ///< triangles below this index are the simulated surface's
+  Eigen::Matrix3Xi F_;                 ///< combined triangles
+  Eigen::Matrix2Xi E_;                 ///< combined edges
+  Eigen::Matrix3Xd rest_;              ///< combined rest positions
+  Eigen::Matrix3Xd base_, placed_;     ///< collider vertices: base and at the current pose
+  Eigen::Matrix3Xi collider_T_;
+  ColliderPose pose_;
+  double dhat_, kappa_;
+};
+
+}  // namespace snh
