@@ -1,5 +1,5 @@
 // Flesh with contact on its render surface (the WebXR hand closing into a fist, scenes/hand_fist.json, the
-// fingers' closing only, to stay quick): with self-contact no two triangles
+// whole clip: the fingers close, then the wrist turns with the fist closed): with self-contact no two triangles
 // of the welded render surface intersect at any frame (the brute-force test of tests/contact/surface_checks.hpp
 // over the whole surface); without it they do. The contact statistics: pairs in range and a smallest
 // distance within (0, d̂) with contact, no contact fields without.
@@ -33,14 +33,11 @@ struct FistRun {
   int first_intersecting = -1;
 };
 
-/// The fist to t = 2 (fingers closed) at the scene's lattice resolution 24, 24 frames, with or without
-/// self-contact.
+/// The fist (36 frames to t = 3) at the scene's lattice resolution 24, with or without self-contact.
 FistRun run_fist(bool self_contact, const fs::path& out) {
   const fs::path file = fs::path(SNH_SOURCE_DIR) / "scenes" / "hand_fist.json";
   std::ifstream in(file);
   json j = json::parse(in);
-  j["end_time"] = 2.0;  // the fingers' closing (the scene's frame rate, 12 per second)
-  j["frames"] = 24;
   j["output"] = {{"dir", out.string()}};
   if (self_contact) j["contact"] = {{"self", true}};
   FistRun run;
@@ -53,7 +50,7 @@ FistRun run_fist(bool self_contact, const fs::path& out) {
   // Every frame's render surface (model order), welded, checked for intersecting triangles.
   const Flesh& flesh = *run.scene.loaded->flesh;
   const RiggedModel& m = flesh.model;
-  for (int f = 0; f <= 24; ++f) {
+  for (int f = 0; f <= j.at("frames").get<int>(); ++f) {
     const SurfaceMesh s = read_surface(out / "surface" / fmt::format("{:03d}.obj", f));
     Eigen::Matrix3Xd P(3, m.surface_vertices.cols());
     for (std::size_t v = 0; v < m.weld.size(); ++v) P.col(m.weld[v]) = s.vertices.col(static_cast<Eigen::Index>(v));
@@ -82,7 +79,7 @@ TEST_F(FleshContact, TheFistWithSelfContactNeverIntersectsItselfAndWithoutItDoes
   EXPECT_TRUE(with.result.all_converged) << with.log;
   EXPECT_GT(without.frames_intersecting, 0);  // the fingers pass into the palm and each other
   EXPECT_EQ(with.frames_intersecting, 0) << "first at frame " << with.first_intersecting;
-  std::cout << "fist: without contact " << without.frames_intersecting << " of 25 frames intersect (first "
+  std::cout << "fist: without contact " << without.frames_intersecting << " of 37 frames intersect (first "
             << without.first_intersecting << ")\n";
 
   // Statistics: with contact, pairs in range at some frames, their smallest distance within (0, d̂), CCD
