@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -16,6 +17,8 @@
 
 #include "contact/surface_checks.hpp"
 #include "snh/io/surface_read.hpp"
+#include "snh/fem/collider_term.hpp"
+#include "snh/sim/flesh.hpp"
 #include "snh/sim/scene.hpp"
 
 namespace snh {
@@ -104,6 +107,36 @@ TEST_F(FleshContact, TheFistWithSelfContactNeverIntersectsItselfAndWithoutItDoes
   for (const json& f : without.stats.at("frames")) EXPECT_FALSE(f.contains("contact_pairs"));
   EXPECT_FALSE(without.stats.contains("ccd_calls"));
   EXPECT_FALSE(without.stats.contains("contact"));
+}
+
+
+TEST(FleshBones, CapsuleCollidersHoldTheFreeBoundaryVerticesFarFromTheirBonesOnly) {
+  FleshSpec spec;
+  spec.model = fs::path(SNH_SOURCE_DIR) / "data" / "hand" / "left.glb";
+  spec.resolution = 16;
+  spec.keyframes = {{{"wrist"}, {0.0, 1.0}, {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()}}};
+  const auto flesh = std::make_shared<const Flesh>(build_flesh(spec, "test"));
+  const double dhat = 1e-4;
+  const std::vector<std::shared_ptr<Term>> terms = bone_collider_terms(flesh, dhat, 1.0);
+  ASSERT_FALSE(terms.empty());
+  EXPECT_LE(terms.size(), flesh->bones.size());
+  const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(flesh->volume.vertices.data(), flesh->volume.vertices.size());
+  for (const std::shared_ptr<Term>& t : terms) {
+    const auto* shape = dynamic_cast<const ShapeColliderTerm*>(t.get());
+    ASSERT_NE(shape, nullptr);
+    // At rest nothing is in range (the first layer around a capsule and the bound vertices are left out).
+    EXPECT_EQ(t->energy(x), 0.0);
+    EXPECT_GT(shape->min_distance(x), std::max(flesh->cell_size, 2 * dhat));
+  }
+  // A vertex moved into a bone's capsule makes the energy infinite for that bone's term.
+  const Bone& bone = *std::find_if(flesh->bones.begin(), flesh->bones.end(), [](const Bone& b) { return b.radius > 0.0; });
+  bool refused = false;
+  for (const std::shared_ptr<Term>& t : terms) {
+    Eigen::VectorXd y = x;
+    for (Eigen::Index v = 0; v < flesh->volume.vertex_count(); ++v) y.segment<3>(3 * v) = 0.5 * (bone.a + bone.b);
+    refused = refused || !std::isfinite(t->energy(y));
+  }
+  EXPECT_TRUE(refused);
 }
 
 }  // namespace

@@ -166,7 +166,9 @@ TEST(SceneFile, ContactKeysAreChecked) {
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "self": 1}})")),
             "s.json: contact.self: expected true or false, got 1");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction": 0.3}})")),
-            "s.json: contact.friction: unknown key (known here: dhat, self, stiffness)");
+            "s.json: contact.friction: unknown key (known here: bones, dhat, self, stiffness)");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "bones": true}})")),
+            "s.json: contact.bones: only a flesh scene has bones");
   const std::string contact = R"("contact": {"dhat": 0.1, "stiffness": 1}, )";
   EXPECT_EQ(error_of(json::parse("{" + contact + R"("colliders": {"type": "plane"}})")),
             "s.json: colliders: expected an array of colliders, got {\"type\":\"plane\"}");

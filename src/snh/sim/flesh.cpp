@@ -4,11 +4,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/SVD>
 #include <fmt/format.h>
 
 #include "snh/embed/lattice.hpp"
 #include "snh/embed/winding_number.hpp"
 #include "snh/fem/attachment_term.hpp"
+#include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/mesh/surface.hpp"
@@ -198,6 +200,43 @@ std::function<void(double, std::vector<Eigen::Matrix<double, 3, 4>>&)> flesh_car
       for (int k = 0; k < 4; ++k)
         if (const double w = (*weights)(k, v); w != 0.0) frames[static_cast<std::size_t>(v)] += w * motion[static_cast<std::size_t>((*joints)(k, v))];
   };
+}
+
+std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Flesh> flesh, double dhat, double stiffness) {
+  const Eigen::Matrix3Xd& X = flesh->volume.vertices;
+  std::vector<char> kinematic(static_cast<std::size_t>(X.cols()), 0);
+  for (const int v : flesh->binding.vertex) kinematic[static_cast<std::size_t>(v)] = 1;
+  const Eigen::Matrix3Xi F = boundary_triangles(flesh->volume);
+  std::vector<char> on_boundary(static_cast<std::size_t>(X.cols()), 0);
+  for (Eigen::Index i = 0; i < F.size(); ++i) on_boundary[static_cast<std::size_t>(F.data()[i])] = 1;
+  const double margin = std::max(flesh->cell_size, 2.0 * dhat);
+  std::vector<std::shared_ptr<Term>> terms;
+  for (const Bone& bone : flesh->bones) {
+    if (!(bone.radius > 0.0)) continue;
+    std::vector<int> vertices;
+    for (Eigen::Index v = 0; v < X.cols(); ++v)
+      if (on_boundary[static_cast<std::size_t>(v)] && !kinematic[static_cast<std::size_t>(v)] &&
+          segment_distance(bone.a, bone.b, X.col(v)) - bone.radius > margin)
+        vertices.push_back(static_cast<int>(v));
+    if (vertices.empty()) continue;
+    ColliderShape shape;
+    shape.kind = bone.a == bone.b ? ColliderShape::Kind::sphere : ColliderShape::Kind::capsule;
+    shape.a = bone.a;
+    shape.b = bone.b;
+    shape.radius = bone.radius;
+    const Eigen::Affine3d rest_inverse = flesh->rest_world[static_cast<std::size_t>(bone.joint)].inverse();
+    // The joint's motion from rest is rigid up to the rounding of the file's single-precision transforms:
+    // taken as the nearest rotation (polar decomposition) and the mean scale, as the shape needs.
+    ColliderPose pose = [flesh, joint = bone.joint, rest_inverse](double t) {
+      Eigen::Affine3d m = joint_world(*flesh, t)[static_cast<std::size_t>(joint)] * rest_inverse;
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.linear(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
+      m.linear() = svd.singularValues().mean() * r;
+      return m;
+    };
+    terms.push_back(std::make_shared<ShapeColliderTerm>(std::move(vertices), shape, std::move(pose), dhat, stiffness));
+  }
+  return terms;
 }
 
 std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t) {

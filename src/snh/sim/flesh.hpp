@@ -130,6 +130,15 @@ struct EmbeddedSurface {
 [[nodiscard]] double flesh_contact_dhat(const Flesh& flesh);
 [[nodiscard]] double flesh_contact_stiffness(const Flesh& flesh, double youngs, double dhat);
 
+/// The bones' capsules as moving colliders (one ShapeColliderTerm per bone: a capsule, or a sphere for a
+/// point bone, carried by its joint) against the flesh that is not bound to them: the volume's boundary
+/// vertices that are free (not hard-bound: soft or released ones count) and lie farther than a cell (and than 2 d̂) outside the capsule at
+/// rest: the first layer around a capsule hangs on its bound vertices and is left out, so that the rest
+/// state has nothing in range. A finger's flesh pressed onto another finger's (or the palm's) bone stops
+/// at its capsule. Bones whose capsule has no such vertex get no term.
+[[nodiscard]] std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Flesh> flesh, double dhat,
+                                                                     double stiffness);
+
 /// The joints' world transforms at time t of the clip.
 [[nodiscard]] std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t);
 /// The render surface (model order, 3 by #v) embedded in the volume at positions x (3 #V).

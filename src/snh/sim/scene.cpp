@@ -556,6 +556,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
       setup.terms.push_back(std::move(soft));
   double kappa = s.contact.stiffness;
   std::vector<std::shared_ptr<ContactTermBase>> contact;  // the contact terms, for the statistics
+  int bone_colliders = 0;                                  // a flesh's bones with a capsule collider
   if (s.contact.enabled) {
     if (kappa == 0.0) {  // "auto": IPC's choice on the mesh's size, its average vertex mass and the substep
       const Eigen::Matrix3Xd& X = mesh.vertices;
@@ -572,6 +573,11 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
       for (const PlaneColliderSpec& plane : s.contact.planes)
         setup.terms.push_back(
             std::make_shared<PlaneContactTerm>(surface.vertex, surface.weight, plane.point, plane.normal, s.contact.dhat, kappa));
+      if (s.contact.bones)
+        for (std::shared_ptr<Term>& t : bone_collider_terms(loaded->flesh, s.contact.dhat, kappa)) {
+          setup.terms.push_back(std::move(t));
+          ++bone_colliders;
+        }
     } else {
       if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa));
       const std::vector<int> surface = vertices_of(F);
@@ -627,6 +633,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     settings["contact"] = {{"self", s.contact.self}, {"dhat", s.contact.dhat}, {"stiffness", kappa},
                            {"stiffness_auto", s.contact.stiffness == 0.0}, {"planes", planes},
                            {"colliders", s.contact.planes.size() + s.contact.colliders.size()}};
+    if (loaded->flesh) settings["contact"]["bone_colliders"] = bone_colliders;
   }
 
   RunPlan plan;

@@ -154,6 +154,7 @@ struct ColliderSpec {
 struct ContactSpec {
   bool enabled = false;    ///< a "contact" section was given
   bool self = false;       ///< self-contact of the boundary surface
+  bool bones = false;      ///< a flesh scene: the bones' capsules keep the volume's free boundary vertices out
   double dhat = 0.0;       ///< the distance below which the barrier acts
   double stiffness = 0.0;  ///< κ; 0: "auto" (ipc_barrier_stiffness on the mesh, its mass and time step)
   std::vector<PlaneColliderSpec> planes;  ///< fixed planes

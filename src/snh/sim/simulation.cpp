@@ -130,6 +130,10 @@ double Simulation::clearance(double from, double to, double h) {
   return alpha;
 }
 
+/// A step split into more parts than this stops (a collider crawling along a surface in parts of ever smaller
+/// size would otherwise run for hours).
+constexpr int kMaxSplits = 200;
+
 StepReport Simulation::step(double t, const NewtonOptions* newton) {
   const double t0 = time_, h = setup_.dt;
   if (!(t > t0) || clearance(t0, t, h) >= 1.0) return solve(t, h, newton);
@@ -144,7 +148,7 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
     for (double alpha = clearance(from, to, part_of(to)); alpha < 1.0; alpha = clearance(from, to, part_of(to))) {
       to = from + alpha * (to - from);
       ++total.splits;
-      if (!(alpha > 0.0) || !((to - from) > 1e-6 * (t - t0))) {
+      if (!(alpha > 0.0) || !((to - from) > 1e-6 * (t - t0)) || total.splits > kMaxSplits) {
         restore(start);
         total.converged = false;
         total.substeps = 1;

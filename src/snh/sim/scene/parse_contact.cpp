@@ -12,6 +12,8 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
     // A flesh scene may leave dhat and stiffness to its defaults (flesh_contact_dhat and _stiffness, set
     // once the flesh is built): 0 here.
     const bool flesh = top.has("flesh");
+    if (k.has("bones") && !flesh) k.fail("only a flesh scene has bones", "bones");
+    s.bones = k.boolean("bones", s.bones);
     if (!k.has("dhat") && !flesh) k.fail("required: the distance below which surfaces repel (> 0)", "dhat");
     s.dhat = k.has("dhat") ? k.positive("dhat", 0.0) : 0.0;
     if (!k.has("stiffness") && !flesh) k.fail("required: the barrier's stiffness kappa (> 0, or \"auto\")", "stiffness");
