@@ -263,6 +263,16 @@ TEST(MeshColliderTerm, MaxStepAndSweepNeverCrossOnRandomSteps) {
 
 // ---- simulations
 
+/// The mesh's bottom layer (y = -1) as a kinematic set following these motions.
+KinematicSet bottom_pins(const VolumeMesh& m, std::vector<Motion> motions) {
+  KinematicSet bottom;
+  bottom.name = "bottom";
+  for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
+    if (m.vertices(1, v) == -1.0) bottom.vertices.push_back(static_cast<int>(v));
+  bottom.provider = std::make_shared<ScriptedMotion>(m.vertices(Eigen::all, bottom.vertices), std::move(motions));
+  return bottom;
+}
+
 SimulationSetup cube_setup(const VolumeMesh& m, Integrator integrator) {
   SimulationSetup setup;
   setup.mesh = m;
@@ -322,16 +332,7 @@ TEST(MeshColliderTerm, ASlabPressingACubeNeverPassesIntoIt) {
   const VolumeMesh m = box_tets(2);
   const Eigen::Matrix3Xi F = boundary_triangles(m);
   SimulationSetup setup = cube_setup(m, Integrator::quasi_static);
-  KinematicSet bottom;
-  bottom.name = "bottom";
-  Eigen::Matrix3Xd base(3, 0);
-  for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
-    if (m.vertices(1, v) == -1.0) {
-      bottom.vertices.push_back(static_cast<int>(v));
-      base.conservativeResize(3, base.cols() + 1);
-      base.col(base.cols() - 1) = m.vertices.col(v);
-    }
-  bottom.provider = std::make_shared<ScriptedMotion>(base, std::vector<Motion>{});
+  KinematicSet bottom = bottom_pins(m, {});
   setup.kinematic.push_back(bottom);
   const Slab slab(Vec3(-1.4, 1.03, -1.5), Vec3(1.6, 1.13, 1.5));
   const double speed = 0.5;  // per unit time; the run is t = 0.1 … 1
@@ -398,16 +399,7 @@ TEST(ShapeColliderTerm, PinsDrivingTheSurfaceIntoAColliderStopTheRunWithOneLine)
   // pinned vertices clear; the step fails with the reason, the state stays finite and separated.
   const VolumeMesh m = box_tets(2);
   SimulationSetup setup = cube_setup(m, Integrator::quasi_static);
-  KinematicSet bottom;
-  bottom.name = "bottom";
-  Eigen::Matrix3Xd base(3, 0);
-  for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
-    if (m.vertices(1, v) == -1.0) {
-      bottom.vertices.push_back(static_cast<int>(v));
-      base.conservativeResize(3, base.cols() + 1);
-      base.col(base.cols() - 1) = m.vertices.col(v);
-    }
-  bottom.provider = std::make_shared<ScriptedMotion>(base, std::vector<Motion>{Translate{Vec3(0, -0.5, 0), 0.0, 1.0}});
+  KinematicSet bottom = bottom_pins(m, {Translate{Vec3(0, -0.5, 0), 0.0, 1.0}});
   setup.kinematic.push_back(bottom);
   auto ground = std::make_shared<ShapeColliderTerm>(surface_of(m), ColliderShape{Kind::plane, Vec3(0, -1.1, 0), Vec3(0, 1, 0), 0.0},
                                                     ColliderPose{}, 0.02, 1e4);
