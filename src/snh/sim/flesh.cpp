@@ -252,24 +252,20 @@ EmbeddedSurface contact_surface(const Flesh& flesh) {
   EmbeddedSurface s;
   s.triangles = m.surface_triangles;
   const auto welded = static_cast<Eigen::Index>(m.surface_vertices.cols());
-  s.vertex.resize(flesh.embedding.vertex.rows(), welded);
-  s.weight.resize(flesh.embedding.weight.rows(), welded);
+  Embedding& p = s.points;
+  p.cell.resize(static_cast<std::size_t>(welded));
+  p.vertex.resize(flesh.embedding.vertex.rows(), welded);
+  p.weight.resize(flesh.embedding.weight.rows(), welded);
   std::vector<bool> seen(static_cast<std::size_t>(welded), false);
   for (std::size_t v = 0; v < m.weld.size(); ++v) {
     const int w = m.weld[v];
     if (seen[static_cast<std::size_t>(w)]) continue;
     seen[static_cast<std::size_t>(w)] = true;
-    s.vertex.col(w) = flesh.embedding.vertex.col(static_cast<Eigen::Index>(v));
-    s.weight.col(w) = flesh.embedding.weight.col(static_cast<Eigen::Index>(v));
+    p.cell[static_cast<std::size_t>(w)] = flesh.embedding.cell[v];
+    p.vertex.col(w) = flesh.embedding.vertex.col(static_cast<Eigen::Index>(v));
+    p.weight.col(w) = flesh.embedding.weight.col(static_cast<Eigen::Index>(v));
   }
   return s;
-}
-
-Eigen::Matrix3Xd EmbeddedSurface::positions(const Eigen::VectorXd& x) const {
-  Eigen::Matrix3Xd P = Eigen::Matrix3Xd::Zero(3, vertex.cols());
-  for (Eigen::Index i = 0; i < vertex.cols(); ++i)
-    for (Eigen::Index k = 0; k < vertex.rows(); ++k) P.col(i) += weight(k, i) * x.segment<3>(3 * vertex(k, i));
-  return P;
 }
 
 double flesh_contact_dhat(const Flesh& flesh) {
@@ -283,7 +279,7 @@ double flesh_contact_dhat(const Flesh& flesh) {
   // contact at the start: fingers lying close together at rest are not pushed apart by the barrier.
   const EmbeddedSurface surface = contact_surface(flesh);
   const VolumeMesh& volume = flesh.volume;
-  const ContactTerm probe(surface.triangles, surface.vertex, surface.weight, volume.vertices, quarter, 1.0);
+  const ContactTerm probe(surface.triangles, surface.points.vertex, surface.points.weight, volume.vertices, quarter, 1.0);
   const double closest = probe.min_distance(Eigen::Map<const Eigen::VectorXd>(volume.vertices.data(), volume.vertices.size()));
   return closest > 0.0 ? std::min(quarter, 0.5 * closest) : quarter;
 }

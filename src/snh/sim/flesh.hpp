@@ -108,14 +108,11 @@ struct Flesh {
     std::shared_ptr<const Flesh> flesh);
 
 /// The render surface as contact sees it: the model's welded, closed surface (surface_triangles over its
-/// welded vertices), each welded vertex embedded in the volume as its first model vertex is (vertex and
-/// weight: k by #welded, k = 8 in a lattice, 4 in tets).
+/// welded vertices), each welded vertex embedded in the volume as its first model vertex is (points: k by
+/// #welded cells' vertices and weights, k = 8 in a lattice, 4 in tets; points.apply(x) places them).
 struct EmbeddedSurface {
   Eigen::Matrix3Xi triangles;
-  Eigen::MatrixXi vertex;
-  Eigen::MatrixXd weight;
-  /// The welded vertices at volume positions x (3 by #welded).
-  [[nodiscard]] Eigen::Matrix3Xd positions(const Eigen::VectorXd& x) const;
+  Embedding points;
 };
 [[nodiscard]] EmbeddedSurface contact_surface(const Flesh& flesh);
 

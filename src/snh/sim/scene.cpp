@@ -110,7 +110,7 @@ void check_contact_start(const Scene& s, const VolumeMesh& mesh, const Eigen::Ve
   if (!s.contact.enabled) return;
   if (s.loaded && s.loaded->flesh) {  // the render surface, embedded in the volume
     const EmbeddedSurface surface = contact_surface(*s.loaded->flesh);
-    const Eigen::Matrix3Xd P = surface.positions(x0);
+    const Eigen::Matrix3Xd P = surface.points.apply(x0);
     for (std::size_t i = 0; i < s.contact.planes.size(); ++i) {
       const PlaneColliderSpec& plane = s.contact.planes[i];
       for (Eigen::Index v = 0; v < P.cols(); ++v)
@@ -120,7 +120,7 @@ void check_contact_start(const Scene& s, const VolumeMesh& mesh, const Eigen::Ve
                                        file, i, v, d));
     }
     if (s.contact.self) {
-      const ContactTerm self(surface.triangles, surface.vertex, surface.weight, mesh.vertices, s.contact.dhat, 1.0);
+      const ContactTerm self(surface.triangles, surface.points.vertex, surface.points.weight, mesh.vertices, s.contact.dhat, 1.0);
       if (!std::isfinite(self.energy(x0)))
         throw SceneError(fmt::format("{}: contact.self: the render surface touches itself at the start (two of its triangles at "
                                      "distance 0): contact needs a separated start",
@@ -568,11 +568,11 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     if (loaded->flesh) {  // on the render surface, embedded in the volume
       const EmbeddedSurface surface = contact_surface(*loaded->flesh);
       if (s.contact.self)
-        setup.terms.push_back(std::make_shared<ContactTerm>(surface.triangles, surface.vertex, surface.weight, mesh.vertices,
+        setup.terms.push_back(std::make_shared<ContactTerm>(surface.triangles, surface.points.vertex, surface.points.weight, mesh.vertices,
                                                             s.contact.dhat, kappa));
       for (const PlaneColliderSpec& plane : s.contact.planes)
         setup.terms.push_back(
-            std::make_shared<PlaneContactTerm>(surface.vertex, surface.weight, plane.point, plane.normal, s.contact.dhat, kappa));
+            std::make_shared<PlaneContactTerm>(surface.points.vertex, surface.points.weight, plane.point, plane.normal, s.contact.dhat, kappa));
       if (s.contact.bones)
         for (std::shared_ptr<Term>& t : bone_collider_terms(loaded->flesh, s.contact.dhat, kappa)) {
           setup.terms.push_back(std::move(t));

@@ -54,6 +54,10 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
         if (!v) k.fail(std::string("required: ") + what + ", 3 numbers", key);
         return *v;
       };
+      const auto radius = [&](const std::string& shape) {
+        if (!k.has("radius")) k.fail("required: the " + shape + "'s radius (> 0)", "radius");
+        return k.positive("radius", 0.0);
+      };
       if (type == "plane") {
         c.type = ColliderSpec::Type::plane;
         c.a = required("point", "a point of the plane");
@@ -63,14 +67,12 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
       } else if (type == "sphere") {
         c.type = ColliderSpec::Type::sphere;
         c.a = required("center", "the sphere's centre");
-        if (!k.has("radius")) k.fail("required: the sphere's radius (> 0)", "radius");
-        c.radius = k.positive("radius", 0.0);
+        c.radius = radius("sphere");
       } else if (type == "capsule") {
         c.type = ColliderSpec::Type::capsule;
         c.a = required("a", "one end of the capsule's segment");
         c.b = required("b", "the other end of the capsule's segment");
-        if (!k.has("radius")) k.fail("required: the capsule's radius (> 0)", "radius");
-        c.radius = k.positive("radius", 0.0);
+        c.radius = radius("capsule");
       } else if (type == "box") {
         c.type = ColliderSpec::Type::box;
         c.a = required("center", "the box's centre");
