@@ -1,7 +1,8 @@
 #pragma once
 // Checks of a whole triangle surface for the contact tests (tests only): whether two of its triangles
 // intersect, and its smallest vertex–triangle or edge–edge distance, each over every pair of triangles that
-// share no vertex (brute force, written here independently of the contact code it checks).
+// share no vertex (brute force, written here independently of the contact code it checks); and a closed box
+// surface for colliders.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -24,10 +25,43 @@ inline int orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   return det > bound ? 1 : det < -bound ? -1 : 0;
 }
 
+// In the plane of a triangle (coordinates `u`, `v` of the two axes its normal is smallest along): the same
+// filtered orientation in 2D, a point in (or on) a triangle, two segments touching.
+inline int orient2(const Vec3& a, const Vec3& b, const Vec3& c, int u, int v) {
+  const double det = (b[u] - a[u]) * (c[v] - a[v]) - (b[v] - a[v]) * (c[u] - a[u]);
+  const double bound = 1e-12 * std::hypot(b[u] - a[u], b[v] - a[v]) * std::hypot(c[u] - a[u], c[v] - a[v]);
+  return det > bound ? 1 : det < -bound ? -1 : 0;
+}
+
+inline bool segments2_touch(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, int u, int v) {
+  const int o1 = orient2(p, q, a, u, v), o2 = orient2(p, q, b, u, v), o3 = orient2(a, b, p, u, v), o4 = orient2(a, b, q, u, v);
+  if (o1 == 0 && o2 == 0 && o3 == 0 && o4 == 0) {  // on one line: do their extents overlap?
+    for (const int k : {u, v})
+      if (std::max(p[k], q[k]) < std::min(a[k], b[k]) || std::max(a[k], b[k]) < std::min(p[k], q[k])) return false;
+    return true;
+  }
+  return o1 * o2 <= 0 && o3 * o4 <= 0;
+}
+
+/// A segment lying in the plane of triangle abc (both ends' orientations zero): does it touch the
+/// triangle? (An end inside, or a crossing with an edge; touching counts, as above.)
+inline bool coplanar_segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 n = (b - a).cross(c - a).cwiseAbs();
+  const int drop = n[0] >= n[1] && n[0] >= n[2] ? 0 : n[1] >= n[2] ? 1 : 2;
+  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  for (const Vec3* e : {&p, &q}) {
+    const int s0 = orient2(a, b, *e, u, v), s1 = orient2(b, c, *e, u, v), s2 = orient2(c, a, *e, u, v);
+    if (!((s0 > 0 || s1 > 0 || s2 > 0) && (s0 < 0 || s1 < 0 || s2 < 0))) return true;
+  }
+  return segments2_touch(p, q, a, b, u, v) || segments2_touch(p, q, b, c, u, v) || segments2_touch(p, q, c, a, u, v);
+}
+
 /// Does segment pq touch triangle abc (up to the filter above)?
 inline bool segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
   const int sp = orient(a, b, c, p), sq = orient(a, b, c, q);
   if (sp != 0 && sp == sq) return false;  // both strictly on one side
+  // In the triangle's plane (a flat face's triangles side by side): only an overlap within the plane counts.
+  if (sp == 0 && sq == 0) return coplanar_segment_hits_triangle(p, q, a, b, c);
   const int s0 = orient(p, q, a, b), s1 = orient(p, q, b, c), s2 = orient(p, q, c, a);
   const bool has_pos = s0 > 0 || s1 > 0 || s2 > 0, has_neg = s0 < 0 || s1 < 0 || s2 < 0;
   return !(has_pos && has_neg);  // the line through pq passes inside (or on the rim of) abc
@@ -82,5 +116,22 @@ inline double surface_min_distance(const Eigen::Matrix3Xi& F, const Eigen::Matri
     }
   return std::sqrt(s);
 }
+
+/// A closed slab [lo, hi] as 12 triangles (outward normals).
+struct Slab {
+  Eigen::Matrix3Xd V{3, 8};
+  Eigen::Matrix3Xi T{3, 12};
+  Vec3 lo, hi;
+  Slab(const Vec3& lo_, const Vec3& hi_) : lo(lo_), hi(hi_) {
+    for (int i = 0; i < 8; ++i) V.col(i) = Vec3(i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2]);
+    int t = 0;
+    for (int axis = 0; axis < 3; ++axis)  // the two faces across each axis, two triangles each
+      for (int side = 0; side < 2; ++side) {
+        const int b = 1 << ((axis + 1) % 3), c = 1 << ((axis + 2) % 3), s = side << axis;
+        T.col(t++) << s, s + b, s + b + c;
+        T.col(t++) << s, s + b + c, s + c;
+      }
+  }
+};
 
 }  // namespace snh

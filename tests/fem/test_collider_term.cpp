@@ -19,6 +19,7 @@
 #include "snh/mesh/surface.hpp"
 #include "snh/sim/kinematics.hpp"
 #include "snh/sim/simulation.hpp"
+#include "contact/surface_checks.hpp"
 #include "fem/problem_fd.hpp"
 
 namespace snh {
@@ -164,23 +165,6 @@ bool surfaces_cross(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& V, const 
   };
   return edges_through(F, V, T, W) || edges_through(T, W, F, V);
 }
-
-/// A closed slab [lo, hi] as 12 triangles (outward normals).
-struct Slab {
-  Eigen::Matrix3Xd V{3, 8};
-  Eigen::Matrix3Xi T{3, 12};
-  Vec3 lo, hi;
-  Slab(const Vec3& lo_, const Vec3& hi_) : lo(lo_), hi(hi_) {
-    for (int i = 0; i < 8; ++i) V.col(i) = Vec3(i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2]);
-    int t = 0;
-    for (int axis = 0; axis < 3; ++axis)  // the two faces across each axis, two triangles each
-      for (int side = 0; side < 2; ++side) {
-        const int b = 1 << ((axis + 1) % 3), c = 1 << ((axis + 2) % 3), s = side << axis;
-        T.col(t++) << s, s + b, s + b + c;
-        T.col(t++) << s, s + b + c, s + c;
-      }
-  }
-};
 
 TEST(MeshColliderTerm, MatchesFiniteDifferencesWithEachPairKind) {
   // One tet (simulated) under a small tilted triangle pair (the collider): a tet vertex under a collider

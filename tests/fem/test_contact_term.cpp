@@ -246,6 +246,29 @@ TEST(ContactTerm, MaxStepKeepsEveryPairApartOnRandomSteps) {
   EXPECT_GT(unsafe_full_steps, 10);  // the full steps mostly do pass through: the bound has work to do
 }
 
+TEST(ContactTerm, MaxStepDoesNotLoseAPairEndingInTouchingToTheRoundingOfItsBoxes) {
+  // A triangle 0.05 above the top vertex of another comes down to touching it, up to one rounding: at the end
+  // its lowest y is the double just above 1, the vertex's is 1. The swept boxes, not grown, do not overlap
+  // (the step went all the way, ending 2e-16 apart: seen with the broad phase's d̂ set to 0); grown by d̂
+  // they do, and CCD keeps a tenth of the distance.
+  Eigen::Matrix3Xd X(3, 6);
+  X << 0, -0.5, 0.5, -1, 1, 0,  //
+      1, 0.5, 0.5, 1.05, 1.05, 1.05,  //
+      0, 0.3, -0.3, -1, -1, 1;
+  Eigen::Matrix3Xi F(3, 2);
+  F << 0, 3, 1, 5, 2, 4;
+  const double drop = 1.05 - std::nextafter(1.0, 2.0);
+  ASSERT_GT(1.05 - drop, 1.0);  // the triangle ends above the vertex's y by rounding only
+  const ContactTerm term(F, X, 0.01, 1.0);
+  const Eigen::VectorXd x = flatten(X);
+  Eigen::Matrix3Xd D = Eigen::Matrix3Xd::Zero(3, 6);
+  D.row(1).tail(3).setConstant(-drop);
+  const Eigen::VectorXd dx = flatten(D);
+  const double alpha = term.max_step(x, dx);
+  EXPECT_LE(alpha, 0.9 + 1e-9);
+  EXPECT_GE(surface_min_distance(F, unflatten(x + alpha * dx)), 0.1 * 0.05 * (1.0 - 1e-9));
+}
+
 TEST(PlaneContactTerm, MatchesFiniteDifferencesAndMaxStepKeepsVerticesAbove) {
   // Four vertices 0.01 to 0.04 above a tilted plane (d̂ = 0.05), one far above it.
   const Vec3 n = Vec3(0.2, 1.0, -0.3).normalized(), p(0.1, -0.2, 0.3);

@@ -329,7 +329,8 @@ double MeshColliderTerm::min_distance(const Eigen::VectorXd& x) const {
 
 double MeshColliderTerm::ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D) const {
   double t = 1.0;
-  for (const Candidate& c : candidates(V0, V0 + D, 0.0)) {
+  // Boxes grown by d̂, as ContactTerm::max_step: a pair ending in touching is not lost to the boxes' rounding.
+  for (const Candidate& c : candidates(V0, V0 + D, dhat_)) {
     const auto& i = c.local;
     t = std::min(t, c.edge_edge ? contact::edge_edge_ccd(V0.col(i[0]), V0.col(i[1]), V0.col(i[2]), V0.col(i[3]), D.col(i[0]),
                                                          D.col(i[1]), D.col(i[2]), D.col(i[3]))

@@ -25,7 +25,8 @@
 // with the collider fixed the duplicates are few). Only the simulated vertices' blocks of each pair's
 // gradient and Hessian are scattered (the collider's vertices are not DOFs); with projection, the pair's
 // 12 by 12 Hessian is projected first, so its simulated blocks are PSD too. max_step: additive CCD
-// (contact/ccd.hpp) of the swept candidates, the collider fixed during the solve.
+// (contact/ccd.hpp) of the swept candidates (boxes grown by d̂, as ContactTerm's), the collider fixed during
+// the solve.
 //
 // Motion: each term holds a pose, a function of time mapping its base geometry (as given, at t = 0) to
 // world space; at_time(t) moves it there. sweep(x, dx, t0, t1) says which fraction of the joint motion —
