@@ -44,4 +44,14 @@ inline FdErrors problem_fd_errors(Problem& p, const Eigen::VectorXd& x) {
   return best;
 }
 
+/// The smallest eigenvalue of the assembled Hessian at x (with `projection`) over the Hessian's norm: ≥ −1e-9
+/// or so for a PSD one (dense: small problems only).
+inline double hessian_min_eigenvalue_ratio(Problem& p, const Eigen::VectorXd& x, PsdProjection projection) {
+  Eigen::VectorXd g;
+  HessianMatrix H;
+  p.evaluate(x, g, &H, projection);
+  const Eigen::MatrixXd Hd = Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>();
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Hd).eigenvalues().minCoeff() / Hd.norm();
+}
+
 }  // namespace snh

@@ -165,8 +165,25 @@ TEST(SceneFile, ContactKeysAreChecked) {
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 0}})")), "s.json: contact.stiffness: must be > 0, got 0");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "self": 1}})")),
             "s.json: contact.self: expected true or false, got 1");
-  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction": 0.3}})")),
-            "s.json: contact.friction: unknown key (known here: bones, dhat, self, stiffness)");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "speed": 0.3}})")),
+            "s.json: contact.speed: unknown key (known here: bones, dhat, friction, friction_velocity, self, stiffness)");
+  // Friction: μ ≥ 0, its sticking velocity > 0 and only with μ > 0, and a plane or shape to act against.
+  const std::string ground = R"(, "colliders": [{"type": "plane", "point": [0, -2, 0], "normal": [0, 1, 0]}]})";
+  const Scene f = parse_scene(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction": 0.3, "friction_velocity": 0.01})" + ground),
+                              "s.json");
+  EXPECT_EQ(f.contact.friction, 0.3);
+  EXPECT_EQ(f.contact.friction_velocity, 0.01);
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction": -0.3})" + ground)),
+            "s.json: contact.friction: must be >= 0, got -0.3");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction": "high"})" + ground)),
+            "s.json: contact.friction: expected a finite number, got \"high\"");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction": 0.3, "friction_velocity": 0})" + ground)),
+            "s.json: contact.friction_velocity: must be > 0, got 0");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction_velocity": 0.1})" + ground)),
+            "s.json: contact.friction_velocity: has no effect without friction > 0");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"self": true, "dhat": 0.1, "stiffness": 1, "friction": 0.3}})")),
+            "s.json: contact.friction: acts against plane, sphere, capsule and box colliders, and this scene has none (self-contact "
+            "and mesh colliders are frictionless)");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "bones": true}})")),
             "s.json: contact.bones: only a flesh scene has bones");
   const std::string contact = R"("contact": {"dhat": 0.1, "stiffness": 1}, )";
@@ -379,6 +396,30 @@ TEST(SceneRun, ACubeFallsOntoAPlaneColliderAndStaysAboveIt) {
   for (const FrameStats& f : r.frames) ccd += f.ccd_calls;
   EXPECT_GT(ccd, 0);
   }
+}
+
+TEST(SceneRun, ACubeOnATiltedGroundSlidesOrSticksByItsFriction) {
+  // A cube of tets resting just above the ground under gravity tilted by θ (tan θ = 1/2) along x (a slope),
+  // for 1 s: without friction it slides g sin θ t²/2 = 2.19; with μ = 0.2 the Coulomb law's
+  // g (sin θ − μ cos θ) t²/2 = 1.31; with μ = 0.8 > tan θ it stays, but for its shear under the load.
+  const double theta = std::atan(0.5);
+  const auto slid = [&](const std::string& friction) {
+    const SceneResult r = run_json(fmt::format(R"({{
+      "mesh": {{"box": {{"element": "tet", "res": 2}}}}, "material": {{"youngs": 5e5, "poisson": 0.3}}, "density": 100,
+      "gravity": [{}, {}, 0], "dt": 0.01, "end_time": 1, "frames": 4,
+      "contact": {{"dhat": 0.02, "stiffness": 1e8{}}},
+      "colliders": [{{"type": "plane", "point": [0, -1.01, 0], "normal": [0, 1, 0]}}]}})",
+                                               9.8 * std::sin(theta), -9.8 * std::cos(theta), friction),
+                                   "slide");
+    EXPECT_TRUE(r.all_converged) << friction << ": " << r.failure;
+    const Eigen::Index n = r.final_positions.size() / 3;
+    return r.final_positions(Eigen::seqN(0, n, 3)).mean();  // the centroid's x (0 at the start)
+  };
+  const double none = slid(""), some = slid(R"(, "friction": 0.2)"), much = slid(R"(, "friction": 0.8)");
+  std::cout << "slid " << none << " (frictionless), " << some << " (μ 0.2), " << much << " (μ 0.8)\n";
+  EXPECT_NEAR(none, 9.8 * std::sin(theta) / 2.0, 0.1);
+  EXPECT_NEAR(some, 9.8 * (std::sin(theta) - 0.2 * std::cos(theta)) / 2.0, 0.1);
+  EXPECT_LT(std::abs(much), 0.02);
 }
 
 TEST(SceneRun, AStopKeepsTheCompletedFrames) {

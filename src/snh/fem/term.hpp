@@ -45,6 +45,10 @@ class Term {
   /// Called before each solve with the time it solves for: a term whose data follow a script (a soft
   /// binding's targets carried by bones, a moving collider) updates them here.
   virtual void at_time(double /*t*/) {}
+  /// Called before each solve, after at_time(t1), with the state the solve starts from (the last solution,
+  /// at time t0; kinematic DOFs where they were then) and the time it solves for: a term with lagged data
+  /// (friction: the normal forces and tangents of the step's start) takes them here.
+  virtual void begin_step(const Eigen::VectorXd& /*x*/, double /*t0*/, double /*t1*/) {}
   /// True for a term whose data move with time (a moving collider).
   [[nodiscard]] virtual bool moving() const { return false; }
   /// A moving term: the largest fraction α ∈ [0, 1] of the joint motion — the state from x to x + dx (every

@@ -19,6 +19,7 @@
 #include "snh/io/surface_read.hpp"
 #include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
+#include "snh/fem/friction_term.hpp"
 #include "snh/io/usda.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/surface.hpp"
@@ -74,19 +75,19 @@ std::vector<int> vertices_of(const Eigen::Matrix3Xi& F) {
   return out;
 }
 
-/// The term of a sphere, capsule, box, mesh or moving plane collider over the surface F of the mesh (rest
-/// positions `rest`), its pose following its motions.
-std::shared_ptr<Term> collider_term(const ColliderSpec& c, const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, double dhat,
-                                    double kappa) {
+/// A collider's pose in time: its motions, turning and scaling about its centroid (empty: fixed).
+ColliderPose collider_pose(const ColliderSpec& c) {
   using T = ColliderSpec::Type;
-  ColliderPose pose;
-  if (!c.motions.empty()) {
-    const Eigen::Vector3d centroid = c.type == T::mesh      ? Eigen::Vector3d(c.vertices.rowwise().mean())
-                                     : c.type == T::capsule ? Eigen::Vector3d(0.5 * (c.a + c.b))
-                                                            : c.a;
-    pose = [motions = c.motions, centroid](double t) { return motion_transform(motions, centroid, t); };
-  }
-  if (c.type == T::mesh) return std::make_shared<MeshColliderTerm>(F, rest, c.vertices, c.triangles, pose, dhat, kappa);
+  if (c.motions.empty()) return {};
+  const Eigen::Vector3d centroid = c.type == T::mesh      ? Eigen::Vector3d(c.vertices.rowwise().mean())
+                                   : c.type == T::capsule ? Eigen::Vector3d(0.5 * (c.a + c.b))
+                                                          : c.a;
+  return [motions = c.motions, centroid](double t) { return motion_transform(motions, centroid, t); };
+}
+
+/// A plane, sphere, capsule or box collider's shape.
+ColliderShape collider_shape(const ColliderSpec& c) {
+  using T = ColliderSpec::Type;
   ColliderShape shape;
   shape.kind = c.type == T::plane    ? ColliderShape::Kind::plane
                : c.type == T::sphere ? ColliderShape::Kind::sphere
@@ -95,8 +96,20 @@ std::shared_ptr<Term> collider_term(const ColliderSpec& c, const Eigen::Matrix3X
   shape.a = c.a;
   shape.b = c.b;
   shape.radius = c.radius;
-  return std::make_shared<ShapeColliderTerm>(vertices_of(F), shape, pose, dhat, kappa);
+  return shape;
 }
+
+/// The term of a sphere, capsule, box, mesh or moving plane collider over the surface F of the mesh (rest
+/// positions `rest`), its pose following its motions.
+std::shared_ptr<Term> collider_term(const ColliderSpec& c, const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, double dhat,
+                                    double kappa) {
+  if (c.type == ColliderSpec::Type::mesh)
+    return std::make_shared<MeshColliderTerm>(F, rest, c.vertices, c.triangles, collider_pose(c), dhat, kappa);
+  return std::make_shared<ShapeColliderTerm>(vertices_of(F), collider_shape(c), collider_pose(c), dhat, kappa);
+}
+
+/// A fixed plane as a shape (for friction).
+ColliderShape plane_shape(const PlaneColliderSpec& p) { return {ColliderShape::Kind::plane, p.point, p.normal, 0.0}; }
 
 std::string_view type_name(ColliderSpec::Type t) {
   constexpr std::string_view names[] = {"plane", "sphere", "capsule", "box", "mesh"};
@@ -557,6 +570,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   double kappa = s.contact.stiffness;
   std::vector<std::shared_ptr<ContactTermBase>> contact;  // the contact terms, for the statistics
   int bone_colliders = 0;                                  // a flesh's bones with a capsule collider
+  double slip_velocity = 0.0;                              // friction's ε_v
   if (s.contact.enabled) {
     if (kappa == 0.0) {  // "auto": IPC's choice on the mesh's size, its average vertex mass and the substep
       const Eigen::Matrix3Xd& X = mesh.vertices;
@@ -565,14 +579,22 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
       kappa = as_scene_error([&] { return ipc_barrier_stiffness(diagonal, s.contact.dhat, mass, h); });
     }
     const Eigen::Matrix3Xi F = boundary_triangles(mesh);
+    // Lagged Coulomb friction (μ > 0) against the planes and shapes, on the points they keep out.
+    const double mu = s.contact.friction;
+    slip_velocity = s.contact.friction_velocity > 0.0 ? s.contact.friction_velocity
+                                                      : 1e-3 * (mesh.vertices.rowwise().maxCoeff() - mesh.vertices.rowwise().minCoeff()).norm();
     if (loaded->flesh) {  // on the render surface, embedded in the volume
       const EmbeddedSurface surface = contact_surface(*loaded->flesh);
       if (s.contact.self)
         setup.terms.push_back(std::make_shared<ContactTerm>(surface.triangles, surface.points.vertex, surface.points.weight, mesh.vertices,
                                                             s.contact.dhat, kappa));
-      for (const PlaneColliderSpec& plane : s.contact.planes)
+      for (const PlaneColliderSpec& plane : s.contact.planes) {
         setup.terms.push_back(
             std::make_shared<PlaneContactTerm>(surface.points.vertex, surface.points.weight, plane.point, plane.normal, s.contact.dhat, kappa));
+        if (mu > 0.0)
+          setup.terms.push_back(std::make_shared<FrictionTerm>(surface.points.vertex, surface.points.weight, plane_shape(plane),
+                                                               ColliderPose{}, s.contact.dhat, kappa, mu, slip_velocity));
+      }
       if (s.contact.bones)
         for (std::shared_ptr<Term>& t : bone_collider_terms(loaded->flesh, s.contact.dhat, kappa)) {
           setup.terms.push_back(std::move(t));
@@ -581,12 +603,21 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     } else {
       if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa));
       const std::vector<int> surface = vertices_of(F);
-      for (const PlaneColliderSpec& plane : s.contact.planes)
+      for (const PlaneColliderSpec& plane : s.contact.planes) {
         setup.terms.push_back(
             std::make_shared<PlaneContactTerm>(surface, plane.point, plane.normal, s.contact.dhat, kappa));
+        if (mu > 0.0)
+          setup.terms.push_back(
+              std::make_shared<FrictionTerm>(surface, plane_shape(plane), ColliderPose{}, s.contact.dhat, kappa, mu, slip_velocity));
+      }
     }
     // Shapes and meshes act on the volume's boundary (a flesh's lattice encloses its skin: the skin stays out too).
-    for (const ColliderSpec& c : s.contact.colliders) setup.terms.push_back(collider_term(c, F, mesh.vertices, s.contact.dhat, kappa));
+    for (const ColliderSpec& c : s.contact.colliders) {
+      setup.terms.push_back(collider_term(c, F, mesh.vertices, s.contact.dhat, kappa));
+      if (mu > 0.0 && c.type != ColliderSpec::Type::mesh)
+        setup.terms.push_back(std::make_shared<FrictionTerm>(vertices_of(F), collider_shape(c), collider_pose(c), s.contact.dhat, kappa,
+                                                             mu, slip_velocity));
+    }
   }
   for (const std::shared_ptr<Term>& t : setup.terms)
     if (auto c = std::dynamic_pointer_cast<ContactTermBase>(t)) contact.push_back(std::move(c));
@@ -632,7 +663,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
       planes.push_back({{"point", {p.point[0], p.point[1], p.point[2]}}, {"normal", {p.normal[0], p.normal[1], p.normal[2]}}});
     settings["contact"] = {{"self", s.contact.self}, {"dhat", s.contact.dhat}, {"stiffness", kappa},
                            {"stiffness_auto", s.contact.stiffness == 0.0}, {"planes", planes},
-                           {"colliders", s.contact.planes.size() + s.contact.colliders.size()}};
+                           {"colliders", s.contact.planes.size() + s.contact.colliders.size()}, {"friction", s.contact.friction}};
+    if (s.contact.friction > 0.0) settings["contact"]["friction_velocity"] = slip_velocity;
     if (loaded->flesh) settings["contact"]["bone_colliders"] = bone_colliders;
   }
 

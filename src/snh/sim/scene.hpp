@@ -157,6 +157,8 @@ struct ContactSpec {
   bool bones = false;      ///< a flesh scene: the bones' capsules keep the volume's free boundary vertices out
   double dhat = 0.0;       ///< the distance below which the barrier acts
   double stiffness = 0.0;  ///< κ; 0: "auto" (ipc_barrier_stiffness on the mesh, its mass and time step)
+  double friction = 0.0;   ///< μ of lagged Coulomb friction against planes and shapes (fem/friction_term.hpp); 0: none
+  double friction_velocity = 0.0;  ///< ε_v: slower slip counts as sticking; 0: 1e-3 of the mesh's diagonal per second
   std::vector<PlaneColliderSpec> planes;  ///< fixed planes
   std::vector<ColliderSpec> colliders;     ///< every other collider (a moving plane too)
 };

@@ -194,6 +194,7 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
   else guess = setup_.first_guess ? setup_.first_guess(x_, t) : x_;
   place_kinematic(guess, t);
   problem_.at_time(t);
+  for (const std::shared_ptr<Term>& term : setup_.terms) term->begin_step(x_n, time_, t);  // lagged data (friction)
   inertia_.begin_step(x_n, v_);
   double E = problem_.energy(guess);
   if (!dynamic() && setup_.extrapolation >= 2 && steps_ >= 2 && previous2_.size() == x_.size()) {

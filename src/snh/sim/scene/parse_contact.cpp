@@ -27,6 +27,9 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
     } else {
       s.stiffness = k.positive("stiffness", 0.0);
     }
+    s.friction = k.non_negative("friction", 0.0);
+    if (k.get("friction_velocity") && !(s.friction > 0.0)) k.fail("has no effect without friction > 0", "friction_velocity");
+    s.friction_velocity = k.has("friction_velocity") ? k.positive("friction_velocity", 0.0) : 0.0;
     k.finish();
   }
   if (const json* list = top.get("colliders")) {
@@ -111,6 +114,12 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
     if (!s.enabled && !list->empty())
       top.fail("colliders need a \"contact\" section (its dhat and stiffness)", "colliders");
   }
+  if (s.friction > 0.0 && s.planes.empty() &&
+      std::none_of(s.colliders.begin(), s.colliders.end(), [](const ColliderSpec& c) { return c.type != ColliderSpec::Type::mesh; }))
+    Keys(*top.get("contact"), "contact", top.file())
+        .fail("acts against plane, sphere, capsule and box colliders, and this scene has none (self-contact and mesh colliders "
+              "are frictionless)",
+              "friction");
   return s;
 }
 
