@@ -26,7 +26,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     std::string joint_cells = to_string(FleshSpec{}.joint_cells);
     int threads = 0;
     bool self_contact = false;
-    double ground = 0.0, dhat = 0.0, contact_stiffness = 0.0;
+    double ground = 0.0, dhat = 0.0, contact_stiffness = 0.0, friction = 0.0;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -67,6 +67,9 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--contact-stiffness", o->contact_stiffness,
                   "Barrier stiffness kappa (default: Young's modulus x cell size / dhat^2, about one cell's stiffness)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--friction", o->friction,
+                  "Coulomb friction coefficient mu against the --ground (default 0: frictionless; self-contact stays frictionless)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params);
   auto* qs = cmd->add_flag("--quasi-static", o->quasi_static, "Quasi-static frames (the default, as the paper)");
@@ -116,6 +119,12 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
       if (cmd->count("--dhat")) j["contact"]["dhat"] = o->dhat;
       if (cmd->count("--contact-stiffness")) j["contact"]["stiffness"] = o->contact_stiffness;
       if (ground) j["colliders"] = {{{"type", "plane"}, {"point", {0.0, o->ground, 0.0}}, {"normal", {0.0, 1.0, 0.0}}}};
+      if (cmd->count("--friction")) {
+        if (!ground) throw SceneError("snh flesh: --friction acts against the --ground: give one");
+        j["contact"]["friction"] = o->friction;
+      }
+    } else if (cmd->count("--friction")) {
+      throw SceneError("snh flesh: --friction acts against the --ground: give one");
     } else if (cmd->count("--dhat") || cmd->count("--contact-stiffness")) {
       throw SceneError("snh flesh: --dhat and --contact-stiffness need --self-contact or --ground");
     }

@@ -54,9 +54,25 @@ print(f"limb: lowest skin without ground {free:.4f}, with ground at -0.33 {min(g
 sys.exit(0 if free < -0.33 and min(ground) > -0.33 and s["all_converged"] and max(pairs) > 0 and s["contact"]["self"] else 1)
 PY
 grep -q ', [1-9][0-9]* contact pairs, min distance ' "$work/ground.log" && ok || bad "limb on the ground: progress line"
+# With --friction 1 the skin pressed onto the ground holds on: still above it, the run converged, its settings
+# naming the friction, and the last frame's skin where it touches elsewhere than frictionless (0.023 apart).
+"$SNH" flesh "$limb" --resolution 10 --ground -0.33 --self-contact --friction 1 --out "$work/friction" --no-report > "$work/friction.log" 2>&1 \
+  || bad "limb on the ground with friction: $(tail -2 "$work/friction.log")"
+python3 - "$work/ground" "$work/friction" <<'PY' && ok || bad "limb on the ground with friction"
+import json, math, sys
+def verts(run, f):
+    return [[float(x) for x in l.split()[1:4]] for l in open(f"{run}/surface/{f:03d}.obj") if l.startswith("v ")]
+s = json.load(open(sys.argv[2] + "/stats.json"))
+lowest = min(min(v[1] for v in verts(sys.argv[2], f)) for f in range(25))
+moved = max(math.dist(p, q) for p, q in zip(verts(sys.argv[1], 24), verts(sys.argv[2], 24)))
+print(f"limb with friction 1: lowest skin {lowest:.4f}, last frame {moved:.4f} from the frictionless one")
+sys.exit(0 if s["all_converged"] and s["contact"]["friction"] == 1.0 and lowest > -0.33 and moved > 1e-3 else 1)
+PY
 expect_error ground_above 'colliders\[0\]: vertex [0-9]* of the render surface \(welded\) is .* on or behind it at the start' -- \
   "$SNH" flesh "$limb" --resolution 10 --ground 0 --out "$work/bad_ground"
 expect_error dhat_alone 'dhat and --contact-stiffness need --self-contact or --ground' -- "$SNH" flesh "$limb" --dhat 0.1 --out "$work/bad_dhat"
+expect_error friction_alone 'friction acts against the --ground: give one' -- "$SNH" flesh "$limb" --friction 0.5 --out "$work/bad_friction"
+expect_error friction_no_ground 'friction acts against the --ground: give one' -- "$SNH" flesh "$limb" --self-contact --friction 0.5 --out "$work/bad_friction2"
 expect_error dhat_negative 'dhat' -- "$SNH" flesh "$limb" --self-contact --dhat -1 --out "$work/bad_dhat2"
 
 # The hand closing into a fist (scenes/hand_fist.json): every frame converges and the flesh keeps the volume
