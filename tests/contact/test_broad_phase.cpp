@@ -2,6 +2,7 @@
 // same pairs exactly, in sorted order), its conservativeness against exact distances, and its bad input.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "snh/contact/broad_phase.hpp"
@@ -98,6 +99,40 @@ TEST(BroadPhase, SameAsBruteForceOnRandomMeshes) {
   }
   EXPECT_GT(total_vt, 1000u);
   EXPECT_GT(total_ee, 1000u);
+}
+
+/// A crumpled sheet of n × n vertices (small triangles, two per square, folded over itself so that distant
+/// parts lie close), a few of its vertices swept far (boxes over many of the grid's cells, tested against
+/// all) and the rest by a little: the grid search finds the brute force's pairs exactly.
+TEST(BroadPhase, SameAsBruteForceOnAFineFoldedSheetWithAFewLongSweeps) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.002, 0.002);
+  const int n = 24;
+  Mesh mesh{Eigen::Matrix3Xd(3, n * n), Eigen::Matrix3Xd(3, n * n), Eigen::Matrix3Xi(3, 2 * (n - 1) * (n - 1))};
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double u = static_cast<double>(i) / (n - 1), v = static_cast<double>(j) / (n - 1);
+      // folded along u = 1/2 (the second half laid back over the first, 0.03 above it) and waved
+      const double x = u < 0.5 ? u : 1.0 - u, y = (u < 0.5 ? 0.0 : 0.03) + 0.01 * std::sin(9.0 * v);
+      mesh.V0.col(i + n * j) << x + jitter(rng), y + jitter(rng), v + jitter(rng);
+      mesh.V1.col(i + n * j) = mesh.V0.col(i + n * j) + Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
+    }
+  for (const int far : {5, 100, 333, 470}) mesh.V1.col(far) += Eigen::Vector3d(0.3, -0.4, 0.5);  // long sweeps
+  int f = 0;
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = i + n * j;
+      mesh.F.col(f++) << a, a + 1, a + n + 1;
+      mesh.F.col(f++) << a, a + n + 1, a + n;
+    }
+  const Eigen::Matrix2Xi E = surface_edges(mesh.F);
+  for (double dhat : {0.0, 0.01, 0.05}) {
+    const Candidates got = broad_phase(mesh.V0, mesh.V1, mesh.F, E, dhat);
+    const Candidates want = brute_force(mesh, E, dhat);
+    EXPECT_EQ(got.vertex_triangle, want.vertex_triangle) << "dhat " << dhat;
+    EXPECT_EQ(got.edge_edge, want.edge_edge) << "dhat " << dhat;
+    EXPECT_GT(want.vertex_triangle.size(), 1000u);  // the folded halves do meet in boxes
+  }
 }
 
 /// Every pair within d̂ (static positions) is a candidate.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -13,6 +14,7 @@ struct Box {
   Eigen::Vector3d lo, hi;
   int kind = 0;  ///< 0 vertex, 1 edge, 2 triangle
   int id = 0;
+  int index = 0;  ///< in the list of all boxes
 };
 
 bool overlap(const Box& a, const Box& b) {
@@ -22,7 +24,7 @@ bool overlap(const Box& a, const Box& b) {
 template <int K>
 Box box_of(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, const Eigen::Matrix<int, K, 1>& ids, double grow,
            int kind, int id) {
-  Box b{V0.col(ids[0]), V0.col(ids[0]), kind, id};
+  Box b{V0.col(ids[0]), V0.col(ids[0]), kind, id, 0};
   for (int k = 0; k < K; ++k) {
     b.lo = b.lo.cwiseMin(V0.col(ids[k])).cwiseMin(V1.col(ids[k]));
     b.hi = b.hi.cwiseMax(V0.col(ids[k])).cwiseMax(V1.col(ids[k]));
@@ -80,41 +82,96 @@ Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, c
   for (Eigen::Index f = 0; f < F.cols(); ++f)
     boxes.push_back(box_of<3>(V0, V1, F.col(f), grow, 2, static_cast<int>(f)));
 
-  // The sweep axis: the one along which the box centres spread most.
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (const Box& b : boxes) {
-    lo = lo.cwiseMin(b.lo + b.hi);
-    hi = hi.cwiseMax(b.lo + b.hi);
-  }
-  int axis = 0;
-  if (!boxes.empty()) (hi - lo).maxCoeff(&axis);
-  std::sort(boxes.begin(), boxes.end(), [axis](const Box& a, const Box& b) {
-    if (a.lo[axis] != b.lo[axis]) return a.lo[axis] < b.lo[axis];
-    return a.kind != b.kind ? a.kind < b.kind : a.id < b.id;
-  });
-
-  // Open boxes per kind: those whose upper bound on the axis is not yet passed.
-  std::array<std::vector<const Box*>, 3> open;
+  // A uniform grid of cells about the size of the boxes: each box is listed in the cells it covers, and
+  // only boxes sharing a cell are tested. A pair is reported from one cell only, the one holding the low
+  // corner of the two boxes' overlap, so it is met once. Boxes covering more than kMaxCells cells (a long
+  // swept step) are tested against every box instead.
   Candidates out;
+  if (boxes.empty()) return out;
+  Eigen::Vector3d lo = boxes.front().lo, hi = boxes.front().hi;
+  double extent = 0.0;
   for (const Box& b : boxes) {
-    for (auto& list : open)
-      list.erase(std::remove_if(list.begin(), list.end(), [&](const Box* o) { return o->hi[axis] < b.lo[axis]; }),
-                 list.end());
-    if (b.kind == 0) {
-      for (const Box* t : open[2])
-        if (overlap(b, *t) && !(F.col(t->id).array() == b.id).any()) out.vertex_triangle.push_back({b.id, t->id});
-    } else if (b.kind == 2) {
-      for (const Box* v : open[0])
-        if (overlap(b, *v) && !(F.col(b.id).array() == v->id).any()) out.vertex_triangle.push_back({v->id, b.id});
-    } else {
-      const Eigen::Vector2i eb = E.col(b.id);
-      for (const Box* o : open[1]) {
-        const Eigen::Vector2i eo = E.col(o->id);
-        if (overlap(b, *o) && eb[0] != eo[0] && eb[0] != eo[1] && eb[1] != eo[0] && eb[1] != eo[1])
-          out.edge_edge.push_back({std::min(b.id, o->id), std::max(b.id, o->id)});
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+    extent += (b.hi - b.lo).maxCoeff();
+  }
+  // Each entry packs a cell's key (13 bits per axis) and a box's index (25 bits) into one integer to sort.
+  constexpr int kBits = 13, kIndexBits = 25;
+  constexpr long long kMaxCells = 64;
+  double h = 2.0 * extent / static_cast<double>(boxes.size());  // twice the mean: fewer cells to sort (fastest on the fist)
+  h = std::max({h, (hi - lo).maxCoeff() / static_cast<double>(1 << kBits), std::numeric_limits<double>::min()});
+  const auto cell = [&](const Eigen::Vector3d& p) {
+    return ((p - lo) / h).array().floor().cast<long long>().min((1LL << kBits) - 1).max(0LL).matrix().eval();
+  };
+  const auto key = [](const Eigen::Matrix<long long, 3, 1>& c) {
+    return static_cast<std::uint64_t>(c[0] | (c[1] << kBits) | (c[2] << (2 * kBits)));
+  };
+  constexpr std::uint64_t mask = (std::uint64_t{1} << kIndexBits) - 1;
+  // The candidates: a vertex and a triangle not its own, two edges sharing no vertex, boxes overlapping.
+  const auto vertex_triangle = [&](const Box& v, const Box& t) {
+    if (overlap(v, t) && !(F.col(t.id).array() == v.id).any()) out.vertex_triangle.push_back({v.id, t.id});
+  };
+  const auto edge_edge = [&](const Box& a, const Box& b) {
+    const Eigen::Vector2i ea = E.col(a.id), eb = E.col(b.id);
+    if (overlap(a, b) && ea[0] != eb[0] && ea[0] != eb[1] && ea[1] != eb[0] && ea[1] != eb[1])
+      out.edge_edge.push_back({std::min(a.id, b.id), std::max(a.id, b.id)});
+  };
+  if (boxes.size() >= (std::size_t{1} << kIndexBits))
+    throw std::invalid_argument("broad_phase: " + std::to_string(boxes.size()) + " primitives, more than the 2^25 it can index");
+  std::vector<std::uint64_t> entries;  // key << kIndexBits | box, sorted: boxes of a cell together, by kind
+  std::vector<int> oversize;
+  std::vector<Eigen::Matrix<long long, 3, 1>> low_cell(boxes.size());
+  entries.reserve(8 * boxes.size());
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    boxes[i].index = static_cast<int>(i);
+    const Eigen::Matrix<long long, 3, 1> a = cell(boxes[i].lo), b = cell(boxes[i].hi);
+    low_cell[i] = a;
+    if ((b - a + Eigen::Matrix<long long, 3, 1>::Ones()).prod() > kMaxCells) {
+      oversize.push_back(static_cast<int>(i));
+      continue;
+    }
+    for (long long z = a[2]; z <= b[2]; ++z)
+      for (long long y = a[1]; y <= b[1]; ++y)
+        for (long long x = a[0]; x <= b[0]; ++x)
+          entries.push_back(static_cast<std::uint64_t>(key({x, y, z})) << kIndexBits | static_cast<std::uint64_t>(i));
+  }
+  std::sort(entries.begin(), entries.end());
+  // Within a cell its boxes come in box order: vertices, edges, triangles (as `boxes` holds them). A pair is
+  // reported where the cell is the componentwise largest of the two boxes' lowest cells (floor is monotone,
+  // so that is the cell of the low corner of their overlap).
+  const auto begin_of = [&](int kind, std::size_t from, std::size_t to) {
+    while (from < to && boxes[entries[from] & mask].kind < kind) ++from;
+    return from;
+  };
+  for (std::size_t g = 0; g < entries.size();) {
+    std::size_t end = g;
+    const std::uint64_t here = entries[g] >> kIndexBits;
+    while (end < entries.size() && entries[end] >> kIndexBits == here) ++end;
+    const std::size_t edges = begin_of(1, g, end), triangles = begin_of(2, edges, end);
+    const auto reported_here = [&](const Box& a, const Box& b) { return key(low_cell[a.index].cwiseMax(low_cell[b.index])) == here; };
+    for (std::size_t i = g; i < edges; ++i) {
+      const Box& v = boxes[entries[i] & mask];
+      for (std::size_t j = triangles; j < end; ++j) {
+        const Box& t = boxes[entries[j] & mask];
+        if (overlap(v, t) && reported_here(v, t)) vertex_triangle(v, t);
       }
     }
-    open[b.kind].push_back(&b);
+    for (std::size_t i = edges; i < triangles; ++i) {
+      const Box& a = boxes[entries[i] & mask];
+      for (std::size_t j = i + 1; j < triangles; ++j) {
+        const Box& b = boxes[entries[j] & mask];
+        if (overlap(a, b) && reported_here(a, b)) edge_edge(a, b);
+      }
+    }
+    g = end;
+  }
+  for (const int i : oversize) {
+    const Box& a = boxes[static_cast<std::size_t>(i)];
+    for (const Box& b : boxes) {
+      if (a.kind == 1 && b.kind == 1 && a.id != b.id) edge_edge(a, b);
+      else if (a.kind == 0 && b.kind == 2) vertex_triangle(a, b);
+      else if (a.kind == 2 && b.kind == 0) vertex_triangle(b, a);
+    }
   }
   std::sort(out.vertex_triangle.begin(), out.vertex_triangle.end());
   std::sort(out.edge_edge.begin(), out.edge_edge.end());

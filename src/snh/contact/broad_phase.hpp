@@ -5,9 +5,12 @@
 // swept primitive: every point of x + t·dx, t ∈ [0, 1], lies in it), grown by d̂/2 on every side, so two
 // primitives that come within d̂ at any time of the step have overlapping boxes. Pairs that share a vertex
 // are never candidates (their distance is 0 by construction; IPC leaves them to the elasticity).
-// The method is sort and sweep: boxes sorted by their lower bound on the axis along which the box centres
-// spread most, each box tested only against the boxes still open on that axis; the result is sorted, so it
-// does not depend on the sweep's order (deterministic).
+// The method is a uniform grid: cells as large as the boxes' mean largest extent, each box listed in the
+// cells it covers (a box over more than 64 cells is tested against every box instead), boxes sharing a cell
+// tested, each pair reported from the one cell holding the low corner of the two boxes' overlap; the result
+// is sorted, so it does not depend on the order of the search (deterministic). (It replaced a sort and
+// sweep along one axis, which tested each box against every box open across the surface's cross-section:
+// on the hand's fist with self-contact that took 39 % of the whole run.)
 #include <array>
 #include <vector>
 
