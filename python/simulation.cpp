@@ -336,12 +336,13 @@ void add_simulation(pyb::module_& m) {
                      double, double, int, const std::string&, const pyb::object&>(),
            "vertices"_a, "cells"_a, "material"_a, "pinned"_a = pyb::none(), pyb::kw_only(), "integrator"_a = "quasi_static",
            "dt"_a = 0.01, "density"_a = 1.0, "gravity"_a = std::vector<double>{0.0, 0.0, 0.0}, "mass_damping"_a = 0.0,
-           "stiffness_damping"_a = 0.0, "initial"_a = pyb::none(), "solver"_a = "cholmod", "reuse_factor"_a = true,
+           "stiffness_damping"_a = 0.0, "initial"_a = pyb::none(), "solver"_a = "auto", "reuse_factor"_a = true,
            "tolerance"_a = 1e-3, "step_tolerance"_a = 0.0, "relative_step_tolerance"_a = 0.0, "max_iterations"_a = 50,
            "projection"_a = "clamp", "first_guess"_a = pyb::none(),
            "vertices (n, 3), cells (m, 4) tets or (m, 8) hexes (checked as a mesh file is), an snh.Material, pinned "
            "vertex indices (k,). integrator quasi_static or backward_euler (time step dt); density, gravity (3,), "
-           "Rayleigh mass/stiffness damping; initial positions (n, 3); the linear solver (cholmod, ldlt, pcg, or mg for hex lattices); Newton's "
+           "Rayleigh mass/stiffness damping; initial positions (n, 3); the linear solver (auto: by size, as scenes; cholmod, "
+           "ldlt, pcg, mg for hex lattices, amg); Newton's "
            "stopping rule: ||g|| < tolerance (the paper programs' 1e-3), or the Newton step below step_tolerance (a "
            "length) or below relative_step_tolerance of the solve's own motion; first_guess(x, t) -> (n, 3): the first "
            "quasi-static step's starting positions (later ones extrapolate).")
