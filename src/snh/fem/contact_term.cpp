@@ -237,8 +237,16 @@ int ContactTerm::active_pairs(const Eigen::VectorXd& x) const {
   return static_cast<int>(pairs_at(x).size());
 }
 
+const contact::Candidates& ContactTerm::candidates_near(const Eigen::Matrix3Xd& V) const {
+  if (!(candidates_at_.cols() == V.cols() && (V - candidates_at_).cwiseAbs().maxCoeff() <= 0.5 * dhat_)) {
+    candidates_ = contact::broad_phase(V, V, local_F_, local_E_, 2.0 * dhat_);  // boxes grown by d̂
+    candidates_at_ = V;
+  }
+  return candidates_;
+}
+
 std::vector<ContactPair> ContactTerm::local_pairs(const Eigen::Matrix3Xd& V) const {
-  const contact::Candidates c = contact::broad_phase(V, V, local_F_, local_E_, dhat_);
+  const contact::Candidates& c = candidates_near(V);
   const double s_hat = dhat_ * dhat_;
   std::vector<ContactPair> raw;  // in local vertex ids (same order as the global ones)
   for (const auto& [v, t] : c.vertex_triangle) {

@@ -54,6 +54,7 @@
 
 #include <Eigen/Core>
 
+#include "snh/contact/broad_phase.hpp"
 #include "snh/contact/distance_core.hpp"
 #include "snh/fem/term.hpp"
 
@@ -163,6 +164,13 @@ class ContactTerm final : public ContactTermBase {
   mutable Eigen::VectorXd cache_x_;     ///< pairs_at's last x (empty: none)
   mutable Eigen::Matrix3Xd cache_positions_;
   mutable std::vector<ContactPair> cache_pairs_;
+  /// The broad phase's candidates at the surface positions `candidates_at_`, their boxes grown by d̂ (not
+  /// d̂/2): while no surface point has moved by more than d̂/2 in any coordinate since, they hold every pair
+  /// within d̂ (a box of now lies within its box of then grown by d̂/2), so the narrow phase finds the same
+  /// pairs as a new broad phase would (the extra candidates are farther than d̂ and dropped): bit-identical.
+  mutable Eigen::Matrix3Xd candidates_at_;
+  mutable contact::Candidates candidates_;
+  [[nodiscard]] const contact::Candidates& candidates_near(const Eigen::Matrix3Xd& V) const;
 };
 
 /// IPC's automatic barrier stiffness (Li et al. 2020, §4.3 and its code's initial choice) when nothing is in
