@@ -246,6 +246,35 @@ TEST(ContactTerm, MaxStepKeepsEveryPairApartOnRandomSteps) {
   EXPECT_GT(unsafe_full_steps, 10);  // the full steps mostly do pass through: the bound has work to do
 }
 
+TEST(ContactTerm, KeptCandidatesGiveWhatAFreshTermGivesAlongAWalk) {
+  // One term evaluated along a walk of the second cube towards, across and away from the first (moves of
+  // 0.2 d̂ to 3 d̂, so the candidates are kept over some moves and found anew over others) against a fresh
+  // term at each point: the same energy and gradient bit for bit, and pairs in range at some points.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double dhat = 0.05;
+  const TwoCubes cubes(1.0, Vec3(1.2, 0.1, -0.05));
+  const ContactTerm walker(cubes.F, cubes.mesh.vertices, dhat, 1.0);
+  Eigen::Matrix3Xd X = cubes.mesh.vertices;
+  const Eigen::Index n = X.cols() / 2;
+  int with_pairs = 0;
+  for (int k = 0; k < 80; ++k) {
+    const double size = (k % 4 == 3 ? 3.0 : 0.2) * dhat;
+    const Vec3 towards(k < 40 ? -1.0 : 1.0, 0.0, 0.0);  // in, then out
+    for (Eigen::Index v = n; v < 2 * n; ++v)
+      X.col(v) += size * (0.5 * towards + 0.3 * Vec3(u(rng), u(rng), u(rng)));
+    const Eigen::VectorXd x = flatten(X);
+    if (surface_min_distance(cubes.F, X) <= 0.0) continue;  // a walk through: skip the contact-free check
+    const ContactTerm fresh(cubes.F, cubes.mesh.vertices, dhat, 1.0);
+    Eigen::VectorXd g1 = Eigen::VectorXd::Zero(x.size()), g2 = Eigen::VectorXd::Zero(x.size());
+    const double e1 = walker.evaluate(x, &g1, nullptr, PsdProjection::none), e2 = fresh.evaluate(x, &g2, nullptr, PsdProjection::none);
+    ASSERT_EQ(e1, e2) << "step " << k;
+    ASSERT_TRUE(g1 == g2) << "step " << k;
+    if (walker.active_pairs(x) > 0) ++with_pairs;
+  }
+  EXPECT_GT(with_pairs, 3);
+}
+
 TEST(ContactTerm, MaxStepDoesNotLoseAPairEndingInTouchingToTheRoundingOfItsBoxes) {
   // A triangle 0.05 above the top vertex of another comes down to touching it, up to one rounding: at the end
   // its lowest y is the double just above 1, the vertex's is 1. The swept boxes, not grown, do not overlap
