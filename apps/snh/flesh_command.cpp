@@ -68,7 +68,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                   "Barrier stiffness kappa (default: Young's modulus x cell size / dhat^2, about one cell's stiffness)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--friction", o->friction,
-                  "Coulomb friction coefficient mu against the --ground (default 0: frictionless; self-contact stays frictionless)")
+                  "Coulomb friction coefficient mu of the skin on itself (--self-contact) and on the --ground (default 0: frictionless)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params);
@@ -119,12 +119,9 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
       if (cmd->count("--dhat")) j["contact"]["dhat"] = o->dhat;
       if (cmd->count("--contact-stiffness")) j["contact"]["stiffness"] = o->contact_stiffness;
       if (ground) j["colliders"] = {{{"type", "plane"}, {"point", {0.0, o->ground, 0.0}}, {"normal", {0.0, 1.0, 0.0}}}};
-      if (cmd->count("--friction")) {
-        if (!ground) throw SceneError("snh flesh: --friction acts against the --ground: give one");
-        j["contact"]["friction"] = o->friction;
-      }
+      if (cmd->count("--friction")) j["contact"]["friction"] = o->friction;
     } else if (cmd->count("--friction")) {
-      throw SceneError("snh flesh: --friction acts against the --ground: give one");
+      throw SceneError("snh flesh: --friction needs --self-contact or --ground");
     } else if (cmd->count("--dhat") || cmd->count("--contact-stiffness")) {
       throw SceneError("snh flesh: --dhat and --contact-stiffness need --self-contact or --ground");
     }

@@ -71,8 +71,7 @@ PY
 expect_error ground_above 'colliders\[0\]: vertex [0-9]* of the render surface \(welded\) is .* on or behind it at the start' -- \
   "$SNH" flesh "$limb" --resolution 10 --ground 0 --out "$work/bad_ground"
 expect_error dhat_alone 'dhat and --contact-stiffness need --self-contact or --ground' -- "$SNH" flesh "$limb" --dhat 0.1 --out "$work/bad_dhat"
-expect_error friction_alone 'friction acts against the --ground: give one' -- "$SNH" flesh "$limb" --friction 0.5 --out "$work/bad_friction"
-expect_error friction_no_ground 'friction acts against the --ground: give one' -- "$SNH" flesh "$limb" --self-contact --friction 0.5 --out "$work/bad_friction2"
+expect_error friction_alone 'friction needs --self-contact or --ground' -- "$SNH" flesh "$limb" --friction 0.5 --out "$work/bad_friction"
 expect_error dhat_negative 'dhat' -- "$SNH" flesh "$limb" --self-contact --dhat -1 --out "$work/bad_dhat2"
 
 # The hand closing into a fist (scenes/hand_fist.json): every frame converges and the flesh keeps the volume

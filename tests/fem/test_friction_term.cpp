@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <iostream>
 #include <random>
 
@@ -15,6 +16,7 @@
 #include "snh/material/registry.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/surface.hpp"
+#include "snh/sim/kinematics.hpp"
 #include "snh/sim/simulation.hpp"
 #include "fem/problem_fd.hpp"
 
@@ -47,7 +49,7 @@ Eigen::Matrix3Xd near_sphere(int n, std::mt19937_64& rng) {
   return P;
 }
 
-void expect_fd_and_psd(FrictionTerm& term, const Eigen::VectorXd& x, const char* what) {
+void expect_fd_and_psd(LaggedFrictionTerm& term, const Eigen::VectorXd& x, const char* what) {
   Problem problem(DofMap(std::vector<std::uint8_t>(static_cast<std::size_t>(x.size()), 0)));
   problem.add(term);
   const FdErrors e = problem_fd_errors(problem, x);
@@ -219,6 +221,167 @@ TEST(FrictionTerm, ACubeOnATiltedPlaneSlidesAsCoulombSaysOrSticks) {
   EXPECT_LT(std::abs(sticking.base), 0.005);
   EXPECT_LT(std::abs(sticking.late), 0.02);
   EXPECT_LT(std::abs(sticking.late - sticking.early), 0.005);
+}
+
+// ---- between self-contact pairs
+
+/// Two cubes of box_tets(1) side by side along x, `gap` apart (faces parallel: point–triangle, point–edge,
+/// point–point and mollified edge–edge pairs all appear within d̂).
+VolumeMesh two_cubes(double gap) {
+  const VolumeMesh one = box_tets(1);
+  const Eigen::Index n = one.vertex_count();
+  VolumeMesh m = one;
+  m.vertices.resize(3, 2 * n);
+  m.vertices.leftCols(n) = one.vertices;
+  m.vertices.rightCols(n) = one.vertices.colwise() + Vec3(2.0 + gap, 0.13, -0.07);
+  m.cells.resize(4, 2 * one.cells.cols());
+  m.cells << one.cells, one.cells.array() + static_cast<int>(n);
+  return m;
+}
+
+TEST(SelfFrictionTerm, MatchesFiniteDifferencesWhileStickingAndSliding) {
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const double dhat = 0.1, kappa = 10.0;
+  const VolumeMesh m = two_cubes(0.04);
+  const Eigen::Matrix3Xi F = boundary_triangles(m);
+  const Eigen::Index n = m.vertex_count();
+  const Eigen::VectorXd xt = flatten(m.vertices);
+  for (const double slide : {0.01, 0.3}) {  // ε = 0.1: sticking, sliding
+    // On the volume's vertices.
+    auto contact = std::make_shared<ContactTerm>(F, m.vertices, dhat, kappa);
+    ASSERT_GT(contact->active_pairs(xt), 4);
+    SelfFrictionTerm term(contact, Eigen::RowVectorXi::LinSpaced(n, 0, static_cast<int>(n) - 1), Eigen::MatrixXd::Ones(1, n), dhat,
+                          kappa, 0.5, 1.0);
+    term.begin_step(xt, 0.0, 0.1);
+    ASSERT_GT(term.lagged_points(), 4);
+    // Each pair's closest points: their gap (the anchor) is as long as a pair's distance and along its
+    // normal (so the coefficients put the closest points where the distance function does). Every pair but
+    // the parallel edge–edge ones (mollified to no force) is lagged.
+    const std::vector<ContactPair> pairs = contact->pairs(xt);
+    std::size_t forced = 0;
+    for (const ContactPair& p : pairs) forced += p.kind != ContactPair::Kind::edge_edge;
+    EXPECT_GE(term.slips().size(), forced);
+    for (const LaggedSlip& l : term.slips()) {
+      double nearest = INFINITY;
+      for (const ContactPair& p : pairs) nearest = std::min(nearest, std::abs(std::sqrt(p.squared_distance) - l.anchor.norm()));
+      EXPECT_LE(nearest, 1e-12);
+      EXPECT_LE((l.tangent * l.anchor).norm(), 1e-12);
+    }
+    Eigen::Matrix3Xd X = m.vertices;
+    for (Eigen::Index v = n / 2; v < n; ++v) X.col(v) += Vec3(0.0, slide, 0.5 * slide) + 0.002 * Vec3(g(rng), g(rng), g(rng));
+    expect_fd_and_psd(term, flatten(X), slide < 0.1 ? "sticking" : "sliding");
+    // Embedded: each surface point 0.995 of a vertex and 0.005 of the next vertex of its cube.
+    const Eigen::Index half = n / 2;
+    Eigen::MatrixXi vertex(2, n);
+    Eigen::MatrixXd weight(2, n);
+    for (Eigen::Index v = 0; v < n; ++v) {
+      vertex(0, v) = static_cast<int>(v);
+      vertex(1, v) = static_cast<int>((v / half) * half + (v + 1) % half);
+      weight.col(v) << 0.995, 0.005;
+    }
+    auto embedded_contact = std::make_shared<ContactTerm>(F, vertex, weight, m.vertices, dhat, kappa);
+    SelfFrictionTerm embedded(embedded_contact, vertex, weight, dhat, kappa, 0.5, 1.0);
+    embedded.begin_step(xt, 0.0, 0.1);
+    ASSERT_GT(embedded.lagged_points(), 4);
+    expect_fd_and_psd(embedded, flatten(X), slide < 0.1 ? "embedded, sticking" : "embedded, sliding");
+  }
+  // At the start the slips are zero: no force.
+  auto contact = std::make_shared<ContactTerm>(F, m.vertices, dhat, kappa);
+  SelfFrictionTerm term(contact, Eigen::RowVectorXi::LinSpaced(n, 0, static_cast<int>(n) - 1), Eigen::MatrixXd::Ones(1, n), dhat, kappa,
+                        0.5, 1.0);
+  term.begin_step(xt, 0.0, 0.1);
+  Eigen::VectorXd grad = Eigen::VectorXd::Zero(xt.size());
+  term.evaluate(xt, &grad, nullptr, PsdProjection::none);
+  EXPECT_LE(grad.norm(), 1e-12 * term.normal_force());
+  EXPECT_THROW(SelfFrictionTerm(nullptr, Eigen::MatrixXi::Zero(1, 1), Eigen::MatrixXd::Ones(1, 1), dhat, kappa, 0.5, 1.0),
+               std::invalid_argument);
+}
+
+/// Two cubes of box_tets(2) stacked (the upper 0.01 above the lower), the lower one's bottom held, self-
+/// contact between them. First settled for 0.5 s under gravity g cos θ (tan θ = ½) straight down, damped;
+/// then, from there, gravity tilted by θ along x (the same load across the slope, so nothing bounces), 0.6 s
+/// of backward Euler without damping; friction μ between them (none: no friction term). Returns how far the
+/// upper cube's centroid has moved along x from where it settled (its whole mass: m a = m g sin θ − the
+/// friction on it) at t = 0.3 and 0.6 of the tilted run.
+std::pair<double, double> stacked(double mu, bool with_term) {
+  const VolumeMesh one = box_tets(2);
+  const Eigen::Index n = one.vertex_count();
+  VolumeMesh m = one;
+  m.vertices.resize(3, 2 * n);
+  m.vertices.leftCols(n) = one.vertices;
+  m.vertices.rightCols(n) = one.vertices.colwise() + Vec3(0.0, 2.01, 0.0);
+  m.cells.resize(4, 2 * one.cells.cols());
+  m.cells << one.cells, one.cells.array() + static_cast<int>(n);
+  const double theta = std::atan(0.5), dhat = 0.02, kappa = 1e8;
+  KinematicSet bottom;
+  bottom.name = "bottom";
+  for (Eigen::Index v = 0; v < n; ++v)
+    if (m.vertices(1, v) == -1.0) bottom.vertices.push_back(static_cast<int>(v));
+  bottom.provider = std::make_shared<ScriptedMotion>(m.vertices(Eigen::all, bottom.vertices), std::vector<Motion>{});
+  const Eigen::Index all = m.vertex_count();
+  const auto run = [&](const Vec3& gravity, double damping, const Eigen::VectorXd& start, int steps, bool friction,
+                       const std::function<void(int, const Simulation&)>& each) {
+    SimulationSetup setup;
+    setup.mesh = m;
+    setup.materials = {make_material("stable_neo_hookean", {2e7, 2e8})};
+    setup.density = 100.0;
+    setup.integrator = Integrator::backward_euler;
+    setup.dt = 0.01;
+    setup.newton.tolerance = 1e-2;
+    setup.newton.step_tolerance = 1e-7;  // sticking: see slide()
+    setup.linear.name = "ldlt";
+    setup.gravity = gravity;
+    setup.mass_damping = damping;
+    setup.kinematic.push_back(bottom);
+    setup.initial = start;
+    auto contact = std::make_shared<ContactTerm>(boundary_triangles(m), m.vertices, dhat, kappa);
+    setup.terms.push_back(contact);
+    std::shared_ptr<SelfFrictionTerm> term;
+    if (friction) {
+      term = std::make_shared<SelfFrictionTerm>(contact, Eigen::RowVectorXi::LinSpaced(all, 0, static_cast<int>(all) - 1),
+                                                Eigen::MatrixXd::Ones(1, all), dhat, kappa, mu, 1e-3);
+      setup.terms.push_back(term);
+    }
+    Simulation sim(std::move(setup));
+    for (int s = 1; s <= steps; ++s) {
+      const StepReport r = sim.step(0.01 * s);
+      EXPECT_TRUE(r.converged) << "mu " << mu << " step " << s << ": " << r.failure;
+      if (!r.converged) break;
+      each(s, sim);
+    }
+    if (term)  // the lagged normal forces add up to the upper cube's weight across the slope (7 012 N)
+      EXPECT_NEAR(term->normal_force(), 800.0 * 9.8 * std::cos(theta), 0.02 * 7012.0) << "mu " << mu;
+    return sim.x();
+  };
+  const Eigen::VectorXd settled =
+      run(Vec3(0.0, -9.8 * std::cos(theta), 0.0), 20.0, Eigen::Map<const Eigen::VectorXd>(m.vertices.data(), m.vertices.size()), 50,
+          false, [](int, const Simulation&) {});
+  const auto slip = [&](const Eigen::VectorXd& x) { return x(Eigen::seqN(3 * n, n, 3)).mean(); };  // the upper cube's centroid x
+  const double at_start = slip(settled);
+  double early = 0.0;
+  const Eigen::VectorXd end = run(9.8 * Vec3(std::sin(theta), -std::cos(theta), 0.0), 0.0, settled, 60, with_term,
+                                  [&](int s, const Simulation& sim) {
+                                    if (s == 30) early = slip(sim.x()) - at_start;
+                                  });
+  return {early, slip(end) - at_start};
+}
+
+TEST(SelfFrictionTerm, ACubeOnAnotherOnASlopeSlidesAsCoulombSaysOrSticks) {
+  const double theta = std::atan(0.5);
+  // From rest with constant acceleration a: x(0.6) − x(0.3) = a (0.36 − 0.09)/2.
+  const auto acceleration = [](const std::pair<double, double>& x) { return (x.second - x.first) / 0.135; };
+  const auto none = stacked(0.0, false), some = stacked(0.2, true), much = stacked(1.2, true);
+  const double a0 = 9.8 * std::sin(theta), a1 = 9.8 * (std::sin(theta) - 0.2 * std::cos(theta));
+  std::cout << "upper cube's acceleration: frictionless " << acceleration(none) << " (" << a0 << "), μ = 0.2 " << acceleration(some)
+            << " (" << a1 << "); μ = 1.2 moved " << much.second << " (from t = 0.3 " << much.second - much.first << ")\n";
+  EXPECT_NEAR(acceleration(none), a0, 0.05 * a0);
+  EXPECT_NEAR(acceleration(some), a1, 0.05 * a1);
+  // μ = 1.2 > 2 tan θ: it sticks even under the sudden load's overshoot (an undamped elastic stack loaded at
+  // once swings to twice its static shear force, more than 0.8 N can hold for a moment), moving by the two
+  // cubes' shear only.
+  EXPECT_LT(std::abs(much.second), 0.02);
+  EXPECT_LT(std::abs(much.second - much.first), 0.02);
 }
 
 }  // namespace

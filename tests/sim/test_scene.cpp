@@ -181,9 +181,11 @@ TEST(SceneFile, ContactKeysAreChecked) {
             "s.json: contact.friction_velocity: must be > 0, got 0");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction_velocity": 0.1})" + ground)),
             "s.json: contact.friction_velocity: has no effect without friction > 0");
-  EXPECT_EQ(error_of(json::parse(R"({"contact": {"self": true, "dhat": 0.1, "stiffness": 1, "friction": 0.3}})")),
-            "s.json: contact.friction: acts against plane, sphere, capsule and box colliders, and this scene has none (self-contact "
-            "and mesh colliders are frictionless)");
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "friction": 0.3}})")),
+            "s.json: contact.friction: acts in self-contact and against plane, sphere, capsule and box colliders, and this scene has "
+            "none of them (mesh colliders are frictionless)");
+  EXPECT_EQ(parse_scene(json::parse(R"({"contact": {"self": true, "dhat": 0.1, "stiffness": 1, "friction": 0.3}})"), "s.json").contact.friction,
+            0.3);
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "bones": true}})")),
             "s.json: contact.bones: only a flesh scene has bones");
   const std::string contact = R"("contact": {"dhat": 0.1, "stiffness": 1}, )";

@@ -1,13 +1,16 @@
 #include "snh/fem/friction_term.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
+#include <Eigen/Dense>
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 
 #include "snh/contact/barrier.hpp"
+#include "snh/contact/edge_edge_mollifier.hpp"
 #include "snh/fem/hessian_layout.hpp"
 
 namespace snh {
@@ -30,22 +33,106 @@ Slip slip(double y, double eps) {
   return {2.0 / eps - y / (eps * eps), y > 0.0 ? -1.0 / (y * eps * eps) : 0.0, -y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0};
 }
 
+/// The points' embedding checked (sizes, ids, weights).
+void check_points(const Eigen::MatrixXi& vertex, const Eigen::MatrixXd& weight) {
+  if (vertex.rows() != weight.rows() || vertex.cols() != weight.cols())
+    throw std::invalid_argument(
+        fmt::format("friction: {} by {} vertex ids but {} by {} weights", vertex.rows(), vertex.cols(), weight.rows(), weight.cols()));
+  if (vertex.size() > 0 && vertex.minCoeff() < 0) throw std::invalid_argument("friction: a negative vertex id");
+  if (!weight.allFinite()) throw std::invalid_argument("friction: a weight that is not finite");
+}
+
+Vec3 embedded_point(const Eigen::MatrixXi& vertex, const Eigen::MatrixXd& weight, const Eigen::VectorXd& x, Eigen::Index i) {
+  Vec3 p = Vec3::Zero();
+  for (Eigen::Index k = 0; k < vertex.rows(); ++k) {
+    const Eigen::Index v = vertex(k, i);
+    if (3 * v + 3 > x.size()) throw std::logic_error(fmt::format("friction: vertex {} is beyond the {} DOFs given", v, x.size()));
+    p += weight(k, i) * x.segment<3>(3 * v);
+  }
+  return p;
+}
+
+/// The closest points of segments p0p1 and q0q1 as parameters (s, t) in [0, 1]² (clamped; for parallel
+/// segments one of the closest pairs).
+std::pair<double, double> segment_closest(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  if (a <= 0.0 && e <= 0.0) return {0.0, 0.0};
+  if (a <= 0.0) return {0.0, std::clamp(f / e, 0.0, 1.0)};
+  const double c = d1.dot(r);
+  if (e <= 0.0) return {std::clamp(-c / a, 0.0, 1.0), 0.0};
+  const double b = d1.dot(d2), denom = a * e - b * b;
+  double s = denom > 1e-14 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+  double t = (b * s + f) / e;
+  if (t < 0.0) {
+    t = 0.0;
+    s = std::clamp(-c / a, 0.0, 1.0);
+  } else if (t > 1.0) {
+    t = 1.0;
+    s = std::clamp((b - c) / a, 0.0, 1.0);
+  }
+  return {s, t};
+}
+
 }  // namespace
 
-FrictionTerm::FrictionTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, ColliderShape shape, ColliderPose pose, double dhat,
-                           double stiffness, double mu, double velocity)
-    : vertex_(std::move(vertex)), weight_(std::move(weight)), shape_(shape), pose_(std::move(pose)), dhat_(dhat),
-      kappa_(stiffness), mu_(mu), velocity_(velocity) {
-  if (vertex_.rows() != weight_.rows() || vertex_.cols() != weight_.cols())
-    throw std::invalid_argument(fmt::format("friction: {} by {} vertex ids but {} by {} weights", vertex_.rows(), vertex_.cols(),
-                                            weight_.rows(), weight_.cols()));
-  if (vertex_.size() > 0 && vertex_.minCoeff() < 0) throw std::invalid_argument("friction: a negative vertex id");
-  if (!weight_.allFinite()) throw std::invalid_argument("friction: a weight that is not finite");
-  check(std::isfinite(dhat) && dhat > 0.0, "dhat", dhat);
-  check(std::isfinite(stiffness) && stiffness > 0.0, "the stiffness", stiffness);
+// ---- the lagged slips' energy
+
+LaggedFrictionTerm::LaggedFrictionTerm(double mu, double velocity) : mu_(mu), velocity_(velocity) {
   check(std::isfinite(velocity) && velocity > 0.0, "the sticking velocity", velocity);
   if (!(std::isfinite(mu) && mu >= 0.0))
     throw std::invalid_argument(fmt::format("friction: the coefficient {:g} must be finite and >= 0", mu));
+}
+
+double LaggedFrictionTerm::normal_force() const {
+  double sum = 0.0;
+  for (const LaggedSlip& l : lagged_) sum += l.mu_lambda;
+  return mu_ > 0.0 ? sum / mu_ : 0.0;
+}
+
+double LaggedFrictionTerm::energy(const Eigen::VectorXd& x) const { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
+
+double LaggedFrictionTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
+                                    PsdProjection /*projection: PSD as it stands*/) const {
+  double e = 0.0;
+  for (const LaggedSlip& l : lagged_) {
+    Vec3 moved = -l.anchor;
+    for (std::size_t m = 0; m < l.vertex.size(); ++m) {
+      const Eigen::Index v = l.vertex[m];
+      if (3 * v + 3 > x.size()) throw std::logic_error(fmt::format("friction: vertex {} is beyond the {} DOFs given", v, x.size()));
+      moved += l.coef[m] * x.segment<3>(3 * v);
+    }
+    const Vec3 u = l.tangent * moved;
+    if (!u.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+    const double y = u.norm();
+    const Slip f = slip(y, epsilon_);
+    e += l.mu_lambda * f.f0;
+    if (gradient) {
+      const Vec3 g = (l.mu_lambda * f.over_y) * u;  // T u = u
+      for (std::size_t m = 0; m < l.vertex.size(); ++m) gradient->segment<3>(3 * l.vertex[m]) += l.coef[m] * g;
+    }
+    if (hessian) {
+      const Mat3 H = l.mu_lambda * (f.over_y * l.tangent + f.outer * u * u.transpose());
+      for (std::size_t a = 0; a < l.vertex.size(); ++a)
+        for (std::size_t b = a; b < l.vertex.size(); ++b) {
+          // Two coefficients on one vertex add their cross terms to its diagonal block (as PlaneContactTerm).
+          const double w = l.coef[a] * l.coef[b] * (a != b && l.vertex[a] == l.vertex[b] ? 2.0 : 1.0);
+          hessian->add_block(l.vertex[a], l.vertex[b], w * H);
+        }
+    }
+  }
+  return e;
+}
+
+// ---- against a collider
+
+FrictionTerm::FrictionTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, ColliderShape shape, ColliderPose pose, double dhat,
+                           double stiffness, double mu, double velocity)
+    : LaggedFrictionTerm(mu, velocity), vertex_(std::move(vertex)), weight_(std::move(weight)), shape_(shape), pose_(std::move(pose)),
+      dhat_(dhat), kappa_(stiffness) {
+  check_points(vertex_, weight_);
+  check(std::isfinite(dhat) && dhat > 0.0, "dhat", dhat);
+  check(std::isfinite(stiffness) && stiffness > 0.0, "the stiffness", stiffness);
 }
 
 FrictionTerm::FrictionTerm(const std::vector<int>& vertices, ColliderShape shape, ColliderPose pose, double dhat, double stiffness,
@@ -54,15 +141,7 @@ FrictionTerm::FrictionTerm(const std::vector<int>& vertices, ColliderShape shape
                    Eigen::MatrixXd::Ones(1, static_cast<Eigen::Index>(vertices.size())), shape, std::move(pose), dhat, stiffness, mu,
                    velocity) {}
 
-Vec3 FrictionTerm::point_at(const Eigen::VectorXd& x, Eigen::Index i) const {
-  Vec3 p = Vec3::Zero();
-  for (Eigen::Index k = 0; k < vertex_.rows(); ++k) {
-    const Eigen::Index v = vertex_(k, i);
-    if (3 * v + 3 > x.size()) throw std::logic_error(fmt::format("friction: vertex {} is beyond the {} DOFs given", v, x.size()));
-    p += weight_(k, i) * x.segment<3>(3 * v);
-  }
-  return p;
-}
+Vec3 FrictionTerm::point_at(const Eigen::VectorXd& x, Eigen::Index i) const { return embedded_point(vertex_, weight_, x, i); }
 
 void FrictionTerm::begin_step(const Eigen::VectorXd& x, double t0, double t1) {
   lagged_.clear();
@@ -81,43 +160,14 @@ void FrictionTerm::begin_step(const Eigen::VectorXd& x, double t0, double t1) {
     const double lambda = -2.0 * kappa_ * d * contact::barrier_first_derivative(s, s_hat);
     if (!(lambda > 0.0)) continue;
     const Vec3 n = (carry.linear() * (rotation * sd.normal)).normalized();
-    lagged_.push_back({i, mu_ * lambda, Mat3::Identity() - n * n.transpose(), carry * p});
+    LaggedSlip l;
+    l.vertex.assign(vertex_.col(i).data(), vertex_.col(i).data() + vertex_.rows());
+    l.coef.assign(weight_.col(i).data(), weight_.col(i).data() + weight_.rows());
+    l.anchor = carry * p;
+    l.tangent = Mat3::Identity() - n * n.transpose();
+    l.mu_lambda = mu_ * lambda;
+    lagged_.push_back(std::move(l));
   }
-}
-
-double FrictionTerm::normal_force() const {
-  double sum = 0.0;
-  for (const Lagged& l : lagged_) sum += l.lambda;
-  return mu_ > 0.0 ? sum / mu_ : 0.0;
-}
-
-double FrictionTerm::energy(const Eigen::VectorXd& x) const { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
-
-double FrictionTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
-                              PsdProjection /*projection: PSD as it stands*/) const {
-  double e = 0.0;
-  for (const Lagged& l : lagged_) {
-    const Vec3 u = l.tangent * (point_at(x, l.point) - l.anchor);
-    if (!u.allFinite()) return std::numeric_limits<double>::quiet_NaN();
-    const double y = u.norm();
-    const Slip f = slip(y, epsilon_);
-    e += l.lambda * f.f0;
-    if (gradient) {
-      const Vec3 g = (l.lambda * f.over_y) * u;  // T u = u
-      for (Eigen::Index k = 0; k < vertex_.rows(); ++k) gradient->segment<3>(3 * vertex_(k, l.point)) += weight_(k, l.point) * g;
-    }
-    if (hessian) {
-      const Mat3 H = l.lambda * (f.over_y * l.tangent + f.outer * u * u.transpose());
-      for (Eigen::Index a = 0; a < vertex_.rows(); ++a)
-        for (Eigen::Index b = a; b < vertex_.rows(); ++b) {
-          const int va = vertex_(a, l.point), vb = vertex_(b, l.point);
-          // Two weights on one vertex add their cross terms to its diagonal block (as PlaneContactTerm).
-          const double w = weight_(a, l.point) * weight_(b, l.point) * (a != b && va == vb ? 2.0 : 1.0);
-          hessian->add_block(va, vb, w * H);
-        }
-    }
-  }
-  return e;
 }
 
 void FrictionTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) const {
@@ -126,6 +176,90 @@ void FrictionTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) const {
   if (vertex_.rows() < 2) return;  // plain vertices: 3 by 3 blocks on the diagonal
   out.arity = static_cast<int>(vertex_.rows());
   out.vertices.assign(vertex_.data(), vertex_.data() + vertex_.size());
+}
+
+// ---- between self-contact pairs
+
+SelfFrictionTerm::SelfFrictionTerm(std::shared_ptr<const ContactTerm> contact, Eigen::MatrixXi vertex, Eigen::MatrixXd weight,
+                                   double dhat, double stiffness, double mu, double velocity)
+    : LaggedFrictionTerm(mu, velocity), contact_(std::move(contact)), vertex_(std::move(vertex)), weight_(std::move(weight)), dhat_(dhat),
+      kappa_(stiffness) {
+  if (!contact_) throw std::invalid_argument("friction: no contact term");
+  check_points(vertex_, weight_);
+  check(std::isfinite(dhat) && dhat > 0.0, "dhat", dhat);
+  check(std::isfinite(stiffness) && stiffness > 0.0, "the stiffness", stiffness);
+}
+
+void SelfFrictionTerm::begin_step(const Eigen::VectorXd& x, double t0, double t1) {
+  lagged_.clear();
+  epsilon_ = velocity_ * (t1 - t0);
+  if (!(epsilon_ > 0.0) || mu_ == 0.0 || !x.allFinite()) return;
+  const double s_hat = dhat_ * dhat_;
+  using Kind = ContactPair::Kind;
+  for (const ContactPair& pair : contact_->pairs(x)) {
+    const int n = pair.arity();
+    std::array<Vec3, 4> P;
+    for (int j = 0; j < n; ++j) {
+      if (pair.vertices[j] >= vertex_.cols())
+        throw std::logic_error(fmt::format("friction: contact point {} is beyond the {} points given", pair.vertices[j], vertex_.cols()));
+      P[j] = embedded_point(vertex_, weight_, x, pair.vertices[j]);
+    }
+    // The closest points' coefficients on the pair's points: Σ a_j P_j = (closest on one) − (closest on the other).
+    std::array<double, 4> a{1.0, 0.0, 0.0, 0.0};
+    double mollifier = 1.0;
+    switch (pair.kind) {
+      case Kind::point_point: a[1] = -1.0; break;
+      case Kind::point_edge: {
+        const Vec3 e = P[2] - P[1];
+        const double t = e.squaredNorm() > 0.0 ? std::clamp((P[0] - P[1]).dot(e) / e.squaredNorm(), 0.0, 1.0) : 0.0;
+        a[1] = -(1.0 - t);
+        a[2] = -t;
+        break;
+      }
+      case Kind::point_triangle: {
+        const Vec3 e1 = P[2] - P[1], e2 = P[3] - P[1], r = P[0] - P[1];
+        Eigen::Matrix2d G;
+        G << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
+        const Eigen::Vector2d beta = G.ldlt().solve(Eigen::Vector2d(e1.dot(r), e2.dot(r)));
+        a[1] = -(1.0 - beta[0] - beta[1]);
+        a[2] = -beta[0];
+        a[3] = -beta[1];
+        break;
+      }
+      case Kind::edge_edge: {
+        const auto [s, t] = segment_closest(P[0], P[1], P[2], P[3]);
+        a = {1.0 - s, s, -(1.0 - t), -t};
+        mollifier = contact::edge_edge_mollifier(P[0], P[1], P[2], P[3], pair.mollifier_threshold);
+        break;
+      }
+    }
+    Vec3 gap = Vec3::Zero();
+    for (int j = 0; j < n; ++j) gap += a[j] * P[j];
+    const double d = gap.norm(), s = d * d;
+    if (!(d > 0.0) || !(s < s_hat)) continue;
+    const double lambda = -2.0 * kappa_ * pair.weight * mollifier * d * contact::barrier_first_derivative(s, s_hat);
+    if (!(lambda > 0.0)) continue;
+    const Vec3 normal = gap / d;
+    LaggedSlip l;
+    l.anchor = gap;  // u = T (Σ a_j p_j − Σ a_j P_j)
+    l.tangent = Mat3::Identity() - normal * normal.transpose();
+    l.mu_lambda = mu_ * lambda;
+    for (int j = 0; j < n; ++j)
+      for (Eigen::Index k = 0; k < vertex_.rows(); ++k) {
+        l.vertex.push_back(vertex_(k, pair.vertices[j]));
+        l.coef.push_back(a[j] * weight_(k, pair.vertices[j]));
+      }
+    lagged_.push_back(std::move(l));
+  }
+}
+
+void SelfFrictionTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) const {
+  out.arity = 2;
+  out.vertices.clear();
+  for (const LaggedSlip& l : lagged_)
+    for (std::size_t i = 0; i < l.vertex.size(); ++i)
+      for (std::size_t j = i + 1; j < l.vertex.size(); ++j)
+        if (l.vertex[i] != l.vertex[j]) out.vertices.insert(out.vertices.end(), {l.vertex[i], l.vertex[j]});
 }
 
 }  // namespace snh

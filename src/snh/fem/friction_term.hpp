@@ -17,17 +17,51 @@
 // The force resisting slip is at most μ λ (|∇D| = μ λ f1 ≤ μ λ), reached past ε: Coulomb's law with the
 // normal force of the step's start. One lagged pass (the normal force and tangent are not updated and the
 // step solved again, as IPC can): the friction is exact where the normal force changes little over a step.
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "snh/fem/collider_term.hpp"
+#include "snh/fem/contact_term.hpp"
 #include "snh/fem/term.hpp"
 #include "snh/math/types.hpp"
 
 namespace snh {
 
-class FrictionTerm final : public Term {
+/// One lagged slip: u = T (Σ_m a_m x_{v_m} − c), its weight μλ (what both friction terms add up).
+struct LaggedSlip {
+  std::vector<int> vertex;    ///< volume vertices
+  std::vector<double> coef;   ///< a_m
+  Vec3 anchor = Vec3::Zero(); ///< c
+  Mat3 tangent = Mat3::Identity();
+  double mu_lambda = 0.0;
+};
+
+/// The energy Σ μλ f0(|u|) of lagged slips (above), set by begin_step; derivatives through the coefficients
+/// (g_m = a_m μλ (f1/y) u, H_mn = a_m a_n H_u), PSD as they stand.
+class LaggedFrictionTerm : public Term {
+ public:
+  [[nodiscard]] std::string_view name() const override { return "friction"; }
+  [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
+                  PsdProjection projection) const override;
+  /// The slips lagged at the step's start, and the sum of their normal forces λ.
+  [[nodiscard]] int lagged_points() const { return static_cast<int>(lagged_.size()); }
+  [[nodiscard]] double normal_force() const;
+  /// The sticking slip ε = ε_v h of this step.
+  [[nodiscard]] double epsilon() const { return epsilon_; }
+  [[nodiscard]] const std::vector<LaggedSlip>& slips() const { return lagged_; }
+
+ protected:
+  /// Checks μ (≥ 0) and ε_v (> 0); one line.
+  LaggedFrictionTerm(double mu, double velocity);
+  double mu_, velocity_;
+  double epsilon_ = 0.0;
+  std::vector<LaggedSlip> lagged_;
+};
+
+class FrictionTerm final : public LaggedFrictionTerm {
  public:
   /// vertex, weight  k by #points: each point's volume vertices and weights (k = 1, weight 1: plain vertices)
   /// shape, pose     the collider (as ShapeColliderTerm's; an empty pose: fixed)
@@ -42,34 +76,44 @@ class FrictionTerm final : public Term {
   FrictionTerm(const std::vector<int>& vertices, ColliderShape shape, ColliderPose pose, double dhat, double stiffness,
                double mu, double velocity);
 
-  [[nodiscard]] std::string_view name() const override { return "friction"; }
-  [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
-  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
-                  PsdProjection projection) const override;
   void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
   void begin_step(const Eigen::VectorXd& x, double t0, double t1) override;
 
-  /// The points in contact at the step's start, and the sum of their normal forces λ.
-  [[nodiscard]] int lagged_points() const { return static_cast<int>(lagged_.size()); }
-  [[nodiscard]] double normal_force() const;
-  /// The sticking slip ε = ε_v h of this step.
-  [[nodiscard]] double epsilon() const { return epsilon_; }
-
  private:
-  struct Lagged {
-    Eigen::Index point;
-    double lambda;  ///< μ λ
-    Mat3 tangent;   ///< T
-    Vec3 anchor;    ///< c
-  };
   [[nodiscard]] Vec3 point_at(const Eigen::VectorXd& x, Eigen::Index i) const;
   Eigen::MatrixXi vertex_;
   Eigen::MatrixXd weight_;
   ColliderShape shape_;
   ColliderPose pose_;
-  double dhat_, kappa_, mu_, velocity_;
-  double epsilon_ = 0.0;
-  std::vector<Lagged> lagged_;
+  double dhat_, kappa_;
+};
+
+/// Friction between the pairs of a self-contact term (ContactTerm), IPC's: at the step's start, each pair in
+/// range (point–point, point–edge, point–triangle, edge–edge, merged as the term merges them) takes its
+/// normal force λ = −κ w ∂(m b)/∂d (w the pair's weight, m the edge–edge mollifier, 1 otherwise; its
+/// derivative left out, as IPC does), the closest points' coefficients on its points (a = +1 … on one side,
+/// −barycentric weights on the other: Σ a_j p_j is the vector between the closest points) and the tangent
+/// plane normal to that vector; the slip is the relative tangential motion of the closest points,
+/// u = T Σ a_j (p_j − p_j(t0)). Points are the surface's (embedded through their weights, as the term's).
+class SelfFrictionTerm final : public LaggedFrictionTerm {
+ public:
+  /// contact         the self-contact term (its pairs are asked at each step's start)
+  /// vertex, weight  k by #points: the surface's points as the term has them (for a term on volume vertices:
+  ///                 1 by #V, vertex i, weight 1)
+  /// dhat, stiffness the term's d̂ and κ
+  /// Throws std::invalid_argument (one line) as FrictionTerm, or for a null term.
+  SelfFrictionTerm(std::shared_ptr<const ContactTerm> contact, Eigen::MatrixXi vertex, Eigen::MatrixXd weight, double dhat,
+                   double stiffness, double mu, double velocity);
+
+  void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
+  [[nodiscard]] bool stencil_varies() const override { return true; }
+  void begin_step(const Eigen::VectorXd& x, double t0, double t1) override;
+
+ private:
+  std::shared_ptr<const ContactTerm> contact_;
+  Eigen::MatrixXi vertex_;
+  Eigen::MatrixXd weight_;
+  double dhat_, kappa_;
 };
 
 }  // namespace snh

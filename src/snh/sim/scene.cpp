@@ -585,9 +585,14 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
                                                       : 1e-3 * (mesh.vertices.rowwise().maxCoeff() - mesh.vertices.rowwise().minCoeff()).norm();
     if (loaded->flesh) {  // on the render surface, embedded in the volume
       const EmbeddedSurface surface = contact_surface(*loaded->flesh);
-      if (s.contact.self)
-        setup.terms.push_back(std::make_shared<ContactTerm>(surface.triangles, surface.points.vertex, surface.points.weight, mesh.vertices,
-                                                            s.contact.dhat, kappa));
+      if (s.contact.self) {
+        auto self = std::make_shared<ContactTerm>(surface.triangles, surface.points.vertex, surface.points.weight, mesh.vertices,
+                                                  s.contact.dhat, kappa);
+        setup.terms.push_back(self);
+        if (mu > 0.0)
+          setup.terms.push_back(std::make_shared<SelfFrictionTerm>(self, surface.points.vertex, surface.points.weight, s.contact.dhat,
+                                                                   kappa, mu, slip_velocity));
+      }
       for (const PlaneColliderSpec& plane : s.contact.planes) {
         setup.terms.push_back(
             std::make_shared<PlaneContactTerm>(surface.points.vertex, surface.points.weight, plane.point, plane.normal, s.contact.dhat, kappa));
@@ -601,7 +606,15 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
           ++bone_colliders;
         }
     } else {
-      if (s.contact.self) setup.terms.push_back(std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa));
+      if (s.contact.self) {
+        auto self = std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa);
+        setup.terms.push_back(self);
+        if (mu > 0.0) {  // the term's points are the volume's vertices
+          const auto n = static_cast<int>(mesh.vertex_count());
+          setup.terms.push_back(std::make_shared<SelfFrictionTerm>(self, Eigen::RowVectorXi::LinSpaced(n, 0, n - 1), Eigen::MatrixXd::Ones(1, n),
+                                                                   s.contact.dhat, kappa, mu, slip_velocity));
+        }
+      }
       const std::vector<int> surface = vertices_of(F);
       for (const PlaneColliderSpec& plane : s.contact.planes) {
         setup.terms.push_back(

@@ -114,11 +114,11 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
     if (!s.enabled && !list->empty())
       top.fail("colliders need a \"contact\" section (its dhat and stiffness)", "colliders");
   }
-  if (s.friction > 0.0 && s.planes.empty() &&
+  if (s.friction > 0.0 && !s.self && s.planes.empty() &&
       std::none_of(s.colliders.begin(), s.colliders.end(), [](const ColliderSpec& c) { return c.type != ColliderSpec::Type::mesh; }))
     Keys(*top.get("contact"), "contact", top.file())
-        .fail("acts against plane, sphere, capsule and box colliders, and this scene has none (self-contact and mesh colliders "
-              "are frictionless)",
+        .fail("acts in self-contact and against plane, sphere, capsule and box colliders, and this scene has none of them (mesh "
+              "colliders are frictionless)",
               "friction");
   return s;
 }
