@@ -147,13 +147,11 @@ struct Slide {
   double base_early = 0.0, base = 0.0;  ///< the bottom face's mean x at t = ½ and 1 (0 at the start)
 };
 
-/// A cube [−1, 1]³ of tets resting on the plane y = −1.01 under gravity tilted by θ along x (tan θ = 1/2),
-/// for 1 s of backward Euler (h = 0.01); friction μ (none: no friction term at all).
-Slide slide(double mu, bool with_term) {
-  const VolumeMesh m = box_tets(2);
+/// Backward Euler (h = 0.01) of cubes of density 100 with Lamé μ, λ = 10 μ.
+SimulationSetup cube_dynamics(const VolumeMesh& m, double mu) {
   SimulationSetup setup;
   setup.mesh = m;
-  setup.materials = {make_material("stable_neo_hookean", {2e5, 2e6})};
+  setup.materials = {make_material("stable_neo_hookean", {mu, 10.0 * mu})};
   setup.density = 100.0;
   setup.integrator = Integrator::backward_euler;
   setup.dt = 0.01;
@@ -162,6 +160,14 @@ Slide slide(double mu, bool with_term) {
   // energy's rounding above 1e-2: a step rule (a tenth of a micrometre on a cube of 2) stops there.
   setup.newton.step_tolerance = 1e-7;
   setup.linear.name = "ldlt";
+  return setup;
+}
+
+/// A cube [−1, 1]³ of tets resting on the plane y = −1.01 under gravity tilted by θ along x (tan θ = 1/2),
+/// for 1 s of backward Euler (h = 0.01); friction μ (none: no friction term at all).
+Slide slide(double mu, bool with_term) {
+  const VolumeMesh m = box_tets(2);
+  SimulationSetup setup = cube_dynamics(m, 2e5);
   const double theta = std::atan(0.5);
   setup.gravity = 9.8 * Vec3(std::sin(theta), -std::cos(theta), 0.0);
   const Eigen::Matrix3Xi F = boundary_triangles(m);
@@ -322,15 +328,7 @@ std::pair<double, double> stacked(double mu, bool with_term) {
   const Eigen::Index all = m.vertex_count();
   const auto run = [&](const Vec3& gravity, double damping, const Eigen::VectorXd& start, int steps, bool friction,
                        const std::function<void(int, const Simulation&)>& each) {
-    SimulationSetup setup;
-    setup.mesh = m;
-    setup.materials = {make_material("stable_neo_hookean", {2e7, 2e8})};
-    setup.density = 100.0;
-    setup.integrator = Integrator::backward_euler;
-    setup.dt = 0.01;
-    setup.newton.tolerance = 1e-2;
-    setup.newton.step_tolerance = 1e-7;  // sticking: see slide()
-    setup.linear.name = "ldlt";
+    SimulationSetup setup = cube_dynamics(m, 2e7);
     setup.gravity = gravity;
     setup.mass_damping = damping;
     setup.kinematic.push_back(bottom);
