@@ -110,32 +110,66 @@ TEST_F(FleshContact, TheFistWithSelfContactNeverIntersectsItselfAndWithoutItDoes
 }
 
 
-TEST(FleshBones, CapsuleCollidersHoldTheFreeBoundaryVerticesFarFromTheirBonesOnly) {
+TEST(FleshBones, CapsuleCollidersActOnTheSkinNotSkinnedAroundTheirBones) {
   FleshSpec spec;
   spec.model = fs::path(SNH_SOURCE_DIR) / "data" / "hand" / "left.glb";
   spec.resolution = 16;
   spec.keyframes = {{{"wrist"}, {0.0, 1.0}, {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()}}};
   const auto flesh = std::make_shared<const Flesh>(build_flesh(spec, "test"));
-  const double dhat = 1e-4;
+  const RiggedModel& m = flesh->model;
+  const double dhat = flesh_contact_dhat(*flesh);
+  const std::vector<std::vector<int>> points = bone_collider_points(*flesh, dhat);
   const std::vector<std::shared_ptr<Term>> terms = bone_collider_terms(flesh, dhat, 1.0);
-  ASSERT_FALSE(terms.empty());
-  EXPECT_LE(terms.size(), flesh->bones.size());
+  ASSERT_EQ(points.size(), flesh->bones.size());
+  const auto with_points = std::count_if(points.begin(), points.end(), [](const std::vector<int>& p) { return !p.empty(); });
+  ASSERT_GT(with_points, 20);
+  ASSERT_EQ(terms.size(), static_cast<std::size_t>(with_points));
+  // The skin (welded points, each with its first model vertex's skin weights) at rest.
+  const EmbeddedSurface skin = contact_surface(*flesh);
   const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(flesh->volume.vertices.data(), flesh->volume.vertices.size());
-  for (const std::shared_ptr<Term>& t : terms) {
-    const auto* shape = dynamic_cast<const ShapeColliderTerm*>(t.get());
+  const Eigen::Matrix3Xd rest = skin.points.apply(x);
+  std::vector<int> model_vertex(static_cast<std::size_t>(rest.cols()), -1);
+  for (std::size_t v = 0; v < m.weld.size(); ++v)
+    if (model_vertex[static_cast<std::size_t>(m.weld[v])] < 0) model_vertex[static_cast<std::size_t>(m.weld[v])] = static_cast<int>(v);
+  const auto skinned_to = [&](int i, int joint) {
+    for (int k = 0; k < 4; ++k)
+      if (joint >= 0 && m.joint_index(k, model_vertex[static_cast<std::size_t>(i)]) == joint &&
+          m.joint_weight(k, model_vertex[static_cast<std::size_t>(i)]) > 0.0)
+        return true;
+    return false;
+  };
+  std::size_t term = 0;
+  for (std::size_t b = 0; b < points.size(); ++b) {
+    if (points[b].empty()) continue;
+    const Bone& bone = flesh->bones[b];
+    const int parent = m.skeleton.joints[static_cast<std::size_t>(bone.joint)].parent;
+    EXPECT_LT(points[b].size(), static_cast<std::size_t>(rest.cols())) << bone.name;  // its own finger's skin is left out
+    for (const int i : points[b]) {
+      EXPECT_FALSE(skinned_to(i, bone.joint) || skinned_to(i, parent) || skinned_to(i, bone.child)) << bone.name << " point " << i;
+      EXPECT_GT(segment_distance(bone.a, bone.b, rest.col(i)) - bone.radius, 2 * dhat) << bone.name << " point " << i;
+    }
+    // Its term acts on those points and nothing is in range at rest.
+    const auto* shape = dynamic_cast<const ShapeColliderTerm*>(terms[term++].get());
     ASSERT_NE(shape, nullptr);
-    // At rest nothing is in range (the first layer around a capsule and the bound vertices are left out).
-    EXPECT_EQ(t->energy(x), 0.0);
-    EXPECT_GT(shape->min_distance(x), std::max(flesh->cell_size, 2 * dhat));
+    EXPECT_EQ(shape->point_count(), static_cast<Eigen::Index>(points[b].size()));
+    EXPECT_EQ(shape->energy(x), 0.0);
+    EXPECT_GT(shape->min_distance(x), 2 * dhat);
   }
-  // A vertex moved into a bone's capsule makes the energy infinite for that bone's term.
-  const Bone& bone = *std::find_if(flesh->bones.begin(), flesh->bones.end(), [](const Bone& b) { return b.radius > 0.0; });
+  // The middle finger's last bone acts on the ring finger's fingertip, not on its own.
+  const auto bone_named = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find_if(flesh->bones.begin(), flesh->bones.end(), [&](const Bone& b) { return b.name == name; }) -
+                                    flesh->bones.begin());
+  };
+  const std::vector<int>& middle = points.at(bone_named("middle-finger-phalanx-distal>middle-finger-tip"));
+  const int ring = m.skeleton.find("ring-finger-phalanx-distal"), own = m.skeleton.find("middle-finger-phalanx-distal");
+  EXPECT_TRUE(std::any_of(middle.begin(), middle.end(), [&](int i) { return skinned_to(i, ring); }));
+  EXPECT_FALSE(std::any_of(middle.begin(), middle.end(), [&](int i) { return skinned_to(i, own); }));
+  // The skin moved into a bone's capsule makes the energy infinite for that bone's term.
+  const Bone& bone = flesh->bones[bone_named("middle-finger-phalanx-distal>middle-finger-tip")];
+  Eigen::VectorXd y = x;
+  for (Eigen::Index v = 0; v < flesh->volume.vertex_count(); ++v) y.segment<3>(3 * v) = 0.5 * (bone.a + bone.b);
   bool refused = false;
-  for (const std::shared_ptr<Term>& t : terms) {
-    Eigen::VectorXd y = x;
-    for (Eigen::Index v = 0; v < flesh->volume.vertex_count(); ++v) y.segment<3>(3 * v) = 0.5 * (bone.a + bone.b);
-    refused = refused || !std::isfinite(t->energy(y));
-  }
+  for (const std::shared_ptr<Term>& t : terms) refused = refused || !std::isfinite(t->energy(y));
   EXPECT_TRUE(refused);
 }
 
