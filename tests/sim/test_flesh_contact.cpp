@@ -1,13 +1,15 @@
 // Flesh with contact on its render surface (the WebXR hand closing into a fist, scenes/hand_fist.json, the
 // whole clip: the fingers close, then the wrist turns with the fist closed): with self-contact no two triangles
 // of the welded render surface intersect at any frame (the brute-force test of tests/contact/surface_checks.hpp
-// over the whole surface); without it they do. The contact statistics: pairs in range and a smallest
-// distance within (0, d̂) with contact, no contact fields without.
+// over the whole surface), and with the bones' capsules as colliders no skin point they act on enters one;
+// without contact both happen. The contact statistics: pairs in range and a smallest distance within
+// (0, d̂) with contact, no contact fields without. The bones' colliders: which skin points each acts on.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -34,15 +36,19 @@ struct FistRun {
   json stats;
   int frames_intersecting = 0;
   int first_intersecting = -1;
+  /// The smallest distance outside a bone's capsule, at any frame, of the skin points its collider acts on
+  /// (bone_collider_points; negative: inside).
+  double capsule_clearance = INFINITY;
 };
 
-/// The fist (36 frames to t = 3) at the scene's lattice resolution 24, with or without self-contact.
+/// The fist (36 frames to t = 3) at the scene's lattice resolution 24, with or without self-contact (and
+/// with it the bones' capsules).
 FistRun run_fist(bool self_contact, const fs::path& out) {
   const fs::path file = fs::path(SNH_SOURCE_DIR) / "scenes" / "hand_fist.json";
   std::ifstream in(file);
   json j = json::parse(in);
   j["output"] = {{"dir", out.string()}};
-  if (self_contact) j["contact"] = {{"self", true}};
+  if (self_contact) j["contact"] = {{"self", true}, {"bones", true}};
   FistRun run;
   run.scene = parse_scene(j, file);
   std::ostringstream log;
@@ -53,13 +59,25 @@ FistRun run_fist(bool self_contact, const fs::path& out) {
   // Every frame's render surface (model order), welded, checked for intersecting triangles.
   const Flesh& flesh = *run.scene.loaded->flesh;
   const RiggedModel& m = flesh.model;
-  for (int f = 0; f <= j.at("frames").get<int>(); ++f) {
+  const double dhat = self_contact ? run.stats.at("contact").at("dhat").get<double>() : flesh_contact_dhat(flesh);
+  const std::vector<std::vector<int>> colliding = bone_collider_points(flesh, dhat);
+  const int frames = j.at("frames").get<int>();
+  for (int f = 0; f <= frames; ++f) {
     const SurfaceMesh s = read_surface(out / "surface" / fmt::format("{:03d}.obj", f));
     Eigen::Matrix3Xd P(3, m.surface_vertices.cols());
     for (std::size_t v = 0; v < m.weld.size(); ++v) P.col(m.weld[v]) = s.vertices.col(static_cast<Eigen::Index>(v));
     if (surface_intersects(m.surface_triangles, P)) {
       ++run.frames_intersecting;
       if (run.first_intersecting < 0) run.first_intersecting = f;
+    }
+    // Each bone's capsule carried by its joint to the frame's time.
+    const std::vector<Eigen::Affine3d> world = joint_world(flesh, j.at("end_time").get<double>() * f / frames);
+    for (std::size_t b = 0; b < flesh.bones.size(); ++b) {
+      const Bone& bone = flesh.bones[b];
+      const Eigen::Affine3d motion = world[static_cast<std::size_t>(bone.joint)] * flesh.rest_world[static_cast<std::size_t>(bone.joint)].inverse();
+      for (const int i : colliding[b])
+        run.capsule_clearance =
+            std::min(run.capsule_clearance, segment_distance(motion * bone.a, motion * bone.b, P.col(i)) - bone.radius);
     }
   }
   return run;
@@ -75,7 +93,7 @@ class FleshContact : public ::testing::Test {
   static inline fs::path dir_;
 };
 
-TEST_F(FleshContact, TheFistWithSelfContactNeverIntersectsItselfAndWithoutItDoes) {
+TEST_F(FleshContact, TheFistWithSelfContactAndBonesNeverIntersectsItselfOrEntersABoneAndWithoutItDoes) {
   const FistRun without = run_fist(false, dir_ / "without");
   const FistRun with = run_fist(true, dir_ / "with");
   EXPECT_TRUE(without.result.all_converged) << without.log;
@@ -84,6 +102,11 @@ TEST_F(FleshContact, TheFistWithSelfContactNeverIntersectsItselfAndWithoutItDoes
   EXPECT_EQ(with.frames_intersecting, 0) << "first at frame " << with.first_intersecting;
   std::cout << "fist: without contact " << without.frames_intersecting << " of 37 frames intersect (first "
             << without.first_intersecting << ")\n";
+  // The bones' capsules: no skin point they act on is inside one at any frame (without contact some are).
+  EXPECT_GT(with.capsule_clearance, 0.0);
+  EXPECT_LT(without.capsule_clearance, 0.0);
+  std::cout << "fist: smallest distance outside a bone's capsule " << with.capsule_clearance << " with contact and bones, "
+            << without.capsule_clearance << " without contact\n";
 
   // Statistics: with contact, pairs in range at some frames, their smallest distance within (0, d̂), CCD
   // run; without, no contact fields at all.
