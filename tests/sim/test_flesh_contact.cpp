@@ -19,6 +19,7 @@
 
 #include "contact/surface_checks.hpp"
 #include "snh/io/surface_read.hpp"
+#include "snh/rig/gltf.hpp"
 #include "snh/fem/collider_term.hpp"
 #include "snh/sim/flesh.hpp"
 #include "snh/sim/scene.hpp"
@@ -194,6 +195,33 @@ TEST(FleshBones, CapsuleCollidersActOnTheSkinNotSkinnedAroundTheirBones) {
   bool refused = false;
   for (const std::shared_ptr<Term>& t : terms) refused = refused || !std::isfinite(t->energy(y));
   EXPECT_TRUE(refused);
+}
+
+TEST(FleshColliders, ShapesActOnTheSkinAndAStartInsideOneIsRefusedNamingIt) {
+  // A sphere at a skin vertex (the skin inside the lattice: the lattice's boundary would be out of the way)
+  // refused at parse with the render surface named; the same sphere well away from the hand accepted.
+  const fs::path file = fs::path(SNH_SOURCE_DIR) / "scenes" / "hand_fist.json";
+  std::ifstream in(file);
+  const json base = json::parse(in);
+  const RiggedModel m = read_gltf(fs::path(SNH_SOURCE_DIR) / "data" / "hand" / "left.glb");
+  const Eigen::Vector3d at = m.surface_vertices.col(100);
+  const auto scene_with = [&](const Eigen::Vector3d& center) {
+    json j = base;
+    j["flesh"]["resolution"] = 8;
+    j["contact"] = {{"self", false}};
+    j["colliders"] = json::array({{{"type", "sphere"}, {"center", {center[0], center[1], center[2]}}, {"radius", 0.002}}});
+    return parse_scene(j, file);
+  };
+  try {
+    (void)scene_with(at);
+    ADD_FAILURE() << "a sphere at a skin vertex was accepted";
+  } catch (const SceneError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("colliders[0]: vertex "), std::string::npos) << what;
+    EXPECT_NE(what.find("of the render surface (welded) is "), std::string::npos) << what;
+    EXPECT_NE(what.find("from the sphere, on or inside it at the start"), std::string::npos) << what;
+  }
+  EXPECT_NO_THROW((void)scene_with(at + Eigen::Vector3d(0, 0, 1)));
 }
 
 }  // namespace

@@ -31,12 +31,13 @@
 // world space; at_time(t) moves it there. sweep(x, dx, t0, t1) says which fraction of the joint motion —
 // the state from x to x + dx while the collider goes from its pose at t0 to its pose at t1 — keeps clear,
 // each distance keeping a tenth of itself: the simulation splits a step whose sweep is not clear
-// (simulation.cpp). A shape's sweep that is not clear gives the part that keeps a fifth: the shortened part
-// is checked again with its own poses, which lie off the first chord where the shape turns, and a part
-// ending exactly at the tenth would be found a hair short again and again (the fist with its bones'
-// capsules split one step 200 times so, creeping towards the boundary). The motion is taken as linear: for a mesh, every vertex of both bodies on the straight
+// (simulation.cpp). The motion is taken as linear: for a mesh, every vertex of both bodies on the straight
 // line between its two places (CCD); for a shape, each simulated vertex on the straight line between its
-// two places in the shape's own frame (exact for a translation; for a rotation the chord of the arc).
+// two places in the shape's own frame (exact for a translation; for a rotation the chord of the arc). A
+// shape's sweep that is not clear gives the part that keeps a fifth: the shortened part is checked again
+// with its own poses, which lie off the first chord where the shape turns, and a part ending exactly at the
+// tenth would be found a hair short again and again (the fist with its bones' capsules split one step 200
+// times so, creeping towards the boundary).
 //
 // Embedded points (a flesh's render surface inside its lattice or tets): the second constructors take the
 // colliding points as p_i = Σ_k W(k, i) x_{I(k, i)} (fem/embedded_points.hpp). Everything above then runs on
