@@ -141,8 +141,7 @@ void check_contact_start(const Scene& s, const VolumeMesh& mesh, const Eigen::Ve
         if (const double d = shape->point_distance(x0, i); !(d > 0.0))
           throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of {} is {:g} from the {}, on or inside it at the start "
                                        "(contact needs a separated start: {})",
-                                       file, c.index, flesh ? static_cast<int>(i) : start[static_cast<std::size_t>(i)].first, surface,
-                                       d, type_name(c.type), move));
+                                       file, c.index, start[static_cast<std::size_t>(i)].first, surface, d, type_name(c.type), move));
     } else if (!std::isfinite(term->energy(x0))) {
       throw SceneError(fmt::format("{}: colliders[{}]: {} touches the collider's ({}) at the start (distance 0): contact needs a "
                                    "separated start",
