@@ -13,6 +13,7 @@
 
 #include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
+#include "snh/fem/embedded_points.hpp"
 #include "snh/fem/problem.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/box.hpp"
@@ -36,6 +37,16 @@ Eigen::Affine3d tilted_pose(double t) {
   A.linear() = 1.3 * Eigen::AngleAxisd(0.4 + t, Vec3(1, 2, 3).normalized()).toRotationMatrix();
   A.translation() = Vec3(0.3, -0.2, 0.5) + t * Vec3(0.1, 0.0, 0.0);
   return A;
+}
+
+std::vector<int> iota_ids(Eigen::Index n) {
+  std::vector<int> ids(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int>(i);
+  return ids;
+}
+
+std::string fmt_kind(const ColliderShape& s) {
+  return s.kind == Kind::sphere ? "sphere" : s.kind == Kind::capsule ? "capsule" : s.kind == Kind::box ? "box" : "plane";
 }
 
 ColliderShape sphere() { return {Kind::sphere, Vec3(0.1, 0.2, -0.1), Vec3::Zero(), 0.7}; }
@@ -63,31 +74,38 @@ void expect_fd(ShapeColliderTerm& term, const Eigen::Matrix3Xd& X, const char* w
   EXPECT_GE(hessian_min_eigenvalue_ratio(problem, x, PsdProjection::clamp), -1e-9) << what;
 }
 
+/// Places on a shape's surface (base frame) and outward directions there: the capsule's side, both caps (on
+/// and off the axis), near where they meet; the box's faces, edges and corners.
+std::vector<std::pair<Vec3, Vec3>> surface_probes(const ColliderShape& shape) {
+  std::vector<std::pair<Vec3, Vec3>> at;
+  if (shape.kind == Kind::sphere) {
+    for (const Vec3& n : {Vec3(1, 0, 0), Vec3(0.3, -1, 0.2), Vec3(-1, 1, 1), Vec3(0, 0, -1), Vec3(2, 1, -1), Vec3(-1, -1, 0.5)})
+      at.push_back({shape.a + shape.radius * n.normalized(), n});
+  } else if (shape.kind == Kind::capsule) {
+    const Vec3 axis = (shape.b - shape.a).normalized(), side = axis.cross(Vec3(0, 0, 1)).normalized();
+    const Vec3 up(0, 0, 1);
+    at = {{0.5 * (shape.a + shape.b) + 0.3 * side, side}, {shape.a - 0.3 * axis, -axis},
+          {shape.b + 0.3 * (axis + up).normalized(), axis + up}, {shape.a + 0.3 * (up - 0.05 * axis).normalized(), up - 0.05 * axis},
+          {shape.b + 0.3 * (side + 0.02 * axis).normalized(), side + 0.02 * axis}, {shape.a + 0.02 * (shape.b - shape.a) - 0.3 * up, -up}};
+  } else {  // a face, two edges, two corners, a face near an edge
+    const Vec3 h = shape.b, c = shape.a;
+    at = {{c + Vec3(h[0], 0.1, 0.2), Vec3(1, 0, 0)},
+          {c + Vec3(h[0], h[1], 0.1), Vec3(1, 1, 0)},
+          {c + Vec3(-h[0], 0.05, -h[2]), Vec3(-1, 0, -2)},
+          {c + Vec3(h[0], h[1], h[2]), Vec3(1, 2, 1)},
+          {c + Vec3(-h[0], -h[1], h[2]), Vec3(-1, -1, 1)},
+          {c + Vec3(0.1, -h[1], h[2] - 0.01), Vec3(0, -1, 0)}};
+  }
+  return at;
+}
+
 TEST(ShapeColliderTerm, MatchesFiniteDifferencesNearCapsEdgesAndCorners) {
   const double dhat = 0.1, d = 0.04;
   const Eigen::Affine3d pose = tilted_pose(0.7);
   for (const ColliderShape& shape : {sphere(), capsule(), box()}) {
     ShapeColliderTerm term({0, 1, 2, 3, 4, 5}, shape, tilted_pose, dhat, 10.0);
     term.at_time(0.7);
-    std::vector<std::pair<Vec3, Vec3>> at;
-    if (shape.kind == Kind::sphere) {
-      for (const Vec3& n : {Vec3(1, 0, 0), Vec3(0.3, -1, 0.2), Vec3(-1, 1, 1), Vec3(0, 0, -1), Vec3(2, 1, -1), Vec3(-1, -1, 0.5)})
-        at.push_back({shape.a + shape.radius * n.normalized(), n});
-    } else if (shape.kind == Kind::capsule) {  // the side, both caps (on and off the axis), near where they meet
-      const Vec3 axis = (shape.b - shape.a).normalized(), side = axis.cross(Vec3(0, 0, 1)).normalized();
-      const Vec3 up(0, 0, 1);
-      at = {{0.5 * (shape.a + shape.b) + 0.3 * side, side}, {shape.a - 0.3 * axis, -axis},
-            {shape.b + 0.3 * (axis + up).normalized(), axis + up}, {shape.a + 0.3 * (up - 0.05 * axis).normalized(), up - 0.05 * axis},
-            {shape.b + 0.3 * (side + 0.02 * axis).normalized(), side + 0.02 * axis}, {shape.a + 0.02 * (shape.b - shape.a) - 0.3 * up, -up}};
-    } else {  // a face, two edges, two corners, a face near an edge
-      const Vec3 h = shape.b, c = shape.a;
-      at = {{c + Vec3(h[0], 0.1, 0.2), Vec3(1, 0, 0)},
-            {c + Vec3(h[0], h[1], 0.1), Vec3(1, 1, 0)},
-            {c + Vec3(-h[0], 0.05, -h[2]), Vec3(-1, 0, -2)},
-            {c + Vec3(h[0], h[1], h[2]), Vec3(1, 2, 1)},
-            {c + Vec3(-h[0], -h[1], h[2]), Vec3(-1, -1, 1)},
-            {c + Vec3(0.1, -h[1], h[2] - 0.01), Vec3(0, -1, 0)}};
-    }
+    const std::vector<std::pair<Vec3, Vec3>> at = surface_probes(shape);
     // The capsule's caps and the box's edges and corners: the directions above point outward there.
     const Eigen::Matrix3Xd X = near(at, d, pose);
     for (Eigen::Index i = 0; i < X.cols(); ++i)
@@ -374,6 +392,58 @@ TEST(ShapeColliderTerm, AMovingWallHitsACubeInSubStepsOfBackwardEuler) {
   std::cout << "splits " << splits << ", mean x velocity " << sim.v()(Eigen::seqN(0, m.vertex_count(), 3)).mean() << "\n";
 }
 
+/// Targets of a set: its rest positions translated by t·v.
+class Translating final : public KinematicProvider {
+ public:
+  Translating(Eigen::Matrix3Xd rest, Vec3 v) : rest_(std::move(rest)), v_(std::move(v)) {}
+  void targets(double t, Eigen::Matrix3Xd& out) const override { out = rest_.colwise() + t * v_; }
+
+ private:
+  Eigen::Matrix3Xd rest_;
+  Vec3 v_;
+};
+
+TEST(ShapeColliderTerm, AQuasiStaticCarrierTakesTheFreeFleshAlongInTheStepsCheck) {
+  // Quasi-static: a cube whose bottom layer is pinned and a sphere 0.2 from its −x face, all translated by
+  // 0.5 a step along +x (a hand's bones and the capsule of another finger moving together). Checked with
+  // the free vertices held still, the sphere runs into the face each step and every step is split; with a
+  // carrier (the flesh-following frames of a flesh run: here the same translation) the free vertices are
+  // taken along, the check is clear and no step is split. The sphere never reaches the cube.
+  const Vec3 v(5.0, 0.0, 0.0);
+  for (const bool carrier : {false, true}) {
+    const VolumeMesh m = box_tets(2);
+    SimulationSetup setup = cube_setup(m, Integrator::quasi_static);
+    KinematicSet bottom;
+    bottom.name = "bottom";
+    for (Eigen::Index i = 0; i < m.vertex_count(); ++i)
+      if (m.vertices(1, i) == -1.0) bottom.vertices.push_back(static_cast<int>(i));
+    bottom.provider = std::make_shared<Translating>(m.vertices(Eigen::all, bottom.vertices), v);
+    setup.kinematic = {bottom};
+    if (carrier)
+      setup.carrier = [v, n = m.vertex_count()](double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames) {
+        Eigen::Matrix<double, 3, 4> f;
+        f << Mat3::Identity(), t * v;
+        frames.assign(static_cast<std::size_t>(n), f);
+      };
+    const ColliderPose pose = [v](double t) { return Eigen::Affine3d(Eigen::Translation3d(t * v)); };
+    auto sphere = std::make_shared<ShapeColliderTerm>(surface_of(m), ColliderShape{Kind::sphere, Vec3(-1.5, 0, 0), Vec3::Zero(), 0.3},
+                                                      pose, 0.05, 1e3);
+    setup.terms.push_back(sphere);
+    Simulation sim(std::move(setup));
+    int splits = 0;
+    for (int s = 1; s <= 5; ++s) {
+      const StepReport r = sim.step(0.1 * s);
+      ASSERT_TRUE(r.converged) << "step " << s << ": " << r.failure;
+      splits += r.splits;
+      ASSERT_GT(sphere->min_distance(sim.x()), 0.1) << "step " << s;
+    }
+    if (carrier) EXPECT_EQ(splits, 0);
+    else EXPECT_GE(splits, 5);
+    // Carried along rigidly: the cube's free vertices follow the pins.
+    EXPECT_NEAR(sim.x()(Eigen::seqN(0, m.vertex_count(), 3)).mean(), 2.5, 1e-6) << (carrier ? "carried" : "held");
+  }
+}
+
 TEST(ShapeColliderTerm, PinsDrivingTheSurfaceIntoAColliderStopTheRunWithOneLine) {
   // The cube's bottom face pinned and moved down 0.5 onto a plane 0.1 below it: no split can keep the
   // pinned vertices clear; the step fails with the reason, the state stays finite and separated.
@@ -461,6 +531,302 @@ TEST(MotionTransform, MovesPointsAsTheScriptedMotionDoes) {
     const Eigen::Affine3d A = motion_transform(motions, P.rowwise().mean(), t);
     EXPECT_LT(((A.linear() * P).colwise() + A.translation() - Q).norm(), 1e-12) << "t = " << t;
   }
+}
+
+
+// ---- embedded points (a flesh's render surface): the colliding points p = W x, derivatives through the
+// weights, steps bounded on the points' motion W dx.
+
+/// Each point of P in a cell of its own: a cube of side 0.25 (trilinear weights, 8 vertices) or a tet
+/// (barycentric weights, 4 vertices) around it at random, the cells' vertices then moved at random by up to
+/// `jitter` (so that x → p is not affine in a cube).
+struct EmbeddedCells {
+  Eigen::Matrix3Xd rest;  ///< the cells' vertices at rest
+  Eigen::MatrixXi vertex;
+  Eigen::MatrixXd weight;
+  Eigen::VectorXd x;      ///< the cells' vertices moved
+  EmbeddedCells(const Eigen::Matrix3Xd& P, bool hexes, unsigned seed, double jitter = 0.003) {
+    const int k = hexes ? 8 : 4;
+    const Eigen::Index n = P.cols();
+    rest.resize(3, k * n);
+    vertex.resize(k, n);
+    weight.resize(k, n);
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> inner(0.2, 0.8), unit(-1.0, 1.0);
+    const double side = 0.25;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Vec3 p = P.col(i);
+      for (int c = 0; c < k; ++c) vertex(c, i) = static_cast<int>(k * i + c);
+      if (hexes) {
+        const Vec3 u(inner(rng), inner(rng), inner(rng));
+        for (int c = 0; c < 8; ++c) {
+          const Vec3 bit(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+          rest.col(k * i + c) = p + side * (bit - u);
+          weight(c, i) = (bit[0] ? u[0] : 1 - u[0]) * (bit[1] ? u[1] : 1 - u[1]) * (bit[2] ? u[2] : 1 - u[2]);
+        }
+      } else {
+        // Three vertices at random, the fourth where the barycentric weights b put p.
+        Eigen::Vector4d b(inner(rng), inner(rng), inner(rng), inner(rng));
+        b /= b.sum();
+        Vec3 sum = Vec3::Zero();
+        for (int c = 1; c < 4; ++c) {
+          rest.col(k * i + c) = p + side * Vec3(unit(rng), unit(rng), unit(rng)) + side * Vec3::Unit(c - 1);
+          sum += b[c] * rest.col(k * i + c);
+        }
+        rest.col(k * i) = (p - sum) / b[0];
+        for (int c = 0; c < 4; ++c) weight(c, i) = b[c];
+      }
+    }
+    x = flatten(rest);
+    std::uniform_real_distribution<double> move(-jitter, jitter);
+    for (Eigen::Index i = 0; i < x.size(); ++i) x[i] += move(rng);
+  }
+  [[nodiscard]] EmbeddedPoints points() const { return {vertex, weight, "test", rest.cols()}; }
+};
+
+/// The dense Hessian (both halves) and the gradient of one term over every DOF of x, all free.
+std::pair<Eigen::MatrixXd, Eigen::VectorXd> assembled(Term& term, const Eigen::VectorXd& x, PsdProjection projection) {
+  Problem problem(DofMap(std::vector<std::uint8_t>(static_cast<std::size_t>(x.size()), 0)));
+  problem.add(term);
+  Eigen::VectorXd g;
+  HessianMatrix H;
+  problem.evaluate(x, g, &H, projection);
+  return {Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>(), g};
+}
+
+/// Wᵀ g: a gradient over the points pulled back to the cells' vertices.
+Eigen::VectorXd pulled_back(const EmbeddedCells& e, const Eigen::VectorXd& gp) {
+  Eigen::VectorXd gx = Eigen::VectorXd::Zero(e.x.size());
+  for (Eigen::Index i = 0; i < e.vertex.cols(); ++i)
+    for (Eigen::Index c = 0; c < e.vertex.rows(); ++c) gx.segment<3>(3 * e.vertex(c, i)) += e.weight(c, i) * gp.segment<3>(3 * i);
+  return gx;
+}
+
+TEST(ShapeColliderTerm, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights) {
+  const double dhat = 0.1, d = 0.04;
+  const Eigen::Affine3d pose = tilted_pose(0.7);
+  const ColliderShape plane{Kind::plane, Vec3(0, 0, 0), Vec3(0, 2, 0), 0.0};
+  for (const ColliderShape& shape : {sphere(), capsule(), box(), plane})
+    for (const bool hexes : {true, false}) {
+      SCOPED_TRACE(fmt_kind(shape) + (hexes ? " in hexes" : " in tets"));
+      const std::vector<std::pair<Vec3, Vec3>> at =
+          shape.kind == Kind::plane ? std::vector<std::pair<Vec3, Vec3>>{{Vec3(0.2, 0, 0.1), Vec3(0, 1, 0)}, {Vec3(-0.3, 0, 0.4), Vec3(0, 1, 0)}}
+                                    : surface_probes(shape);
+      const EmbeddedCells e(near(at, d, pose), hexes, 21);
+      ShapeColliderTerm term(e.vertex, e.weight, shape, tilted_pose, dhat, 10.0);
+      term.at_time(0.7);
+      ASSERT_EQ(term.point_count(), static_cast<Eigen::Index>(at.size()));
+      for (Eigen::Index i = 0; i < term.point_count(); ++i) {  // the cells' jitter moves the points a little
+        EXPECT_NEAR(term.point_distance(e.x, i), 1.3 * d, 0.02) << "point " << i;
+        EXPECT_LT(term.point_distance(e.x, i), dhat);
+      }
+      expect_fd(term, unflatten(e.x), "embedded");  // gradient, Hessian, and the projected Hessian PSD
+      // The same shape against the points given as plain vertices: the same energy, and its gradient
+      // pulled back by Wᵀ.
+      const Eigen::Matrix3Xd P = e.points().points(e.x);
+      ShapeColliderTerm direct(iota_ids(P.cols()), shape, tilted_pose, dhat, 10.0);
+      direct.at_time(0.7);
+      EXPECT_NEAR(term.energy(e.x), direct.energy(flatten(P)), 1e-12 * direct.energy(flatten(P)));
+      const Eigen::VectorXd gx = pulled_back(e, assembled(direct, flatten(P), PsdProjection::none).second);
+      EXPECT_LE((assembled(term, e.x, PsdProjection::none).second - gx).norm(), 1e-12 * gx.norm());
+    }
+}
+
+TEST(ShapeColliderTerm, IdentityWeightsGiveTheDirectTerm) {
+  const Eigen::Affine3d pose = tilted_pose(0.7);
+  for (const ColliderShape& shape : {sphere(), capsule(), box()}) {
+    const Eigen::Matrix3Xd X = near(surface_probes(shape), 0.03, pose);
+    const auto n = X.cols();
+    ShapeColliderTerm direct(iota_ids(n), shape, tilted_pose, 0.1, 10.0);
+    ShapeColliderTerm embedded(Eigen::RowVectorXi::LinSpaced(n, 0, static_cast<int>(n) - 1), Eigen::RowVectorXd::Ones(n), shape,
+                               tilted_pose, 0.1, 10.0);
+    direct.at_time(0.7);
+    embedded.at_time(0.7);
+    const Eigen::VectorXd x = flatten(X);
+    EXPECT_EQ(direct.energy(x), embedded.energy(x));
+    EXPECT_GT(direct.energy(x), 0.0);
+    for (const PsdProjection p : {PsdProjection::none, PsdProjection::clamp}) {
+      const auto [Hd, gd] = assembled(direct, x, p);
+      const auto [He, ge] = assembled(embedded, x, p);
+      EXPECT_EQ(gd, ge);
+      EXPECT_EQ(Hd, He);
+    }
+    std::mt19937_64 rng(2);
+    std::normal_distribution<double> g(0.0, 0.3);
+    for (int trial = 0; trial < 10; ++trial) {
+      Eigen::VectorXd dx(x.size());
+      for (Eigen::Index i = 0; i < dx.size(); ++i) dx[i] = g(rng);
+      EXPECT_EQ(direct.max_step(x, dx), embedded.max_step(x, dx));
+      EXPECT_EQ(direct.sweep(x, dx, 0.6, 0.8), embedded.sweep(x, dx, 0.6, 0.8));
+    }
+  }
+}
+
+TEST(ShapeColliderTerm, EmbeddedStepsAndSweepsKeepEveryPointOutside) {
+  // Points in deformed cubes near a capsule and a box; random steps of the cells (max_step, the shape at
+  // its pose) and random steps while the shape moves (sweep, a translation: exact). Along the allowed part
+  // every point keeps a tenth of its distance; many steps are limited.
+  int limited = 0;
+  for (const ColliderShape& shape : {capsule(), box()}) {
+    const Eigen::Affine3d pose = tilted_pose(0.3);
+    const EmbeddedCells e(near(surface_probes(shape), 0.05, pose), true, 5, 0.01);
+    ShapeColliderTerm term(e.vertex, e.weight, shape, tilted_pose, 0.1, 1.0);
+    const Vec3 drift(0.2, -0.4, 0.3);
+    ShapeColliderTerm moving(e.vertex, e.weight, shape,
+                             [&](double t) { return Eigen::Translation3d(t * drift) * tilted_pose(0.3); }, 0.1, 1.0);
+    term.at_time(0.3);
+    std::mt19937_64 rng(9);
+    std::normal_distribution<double> g(0.0, 0.2);
+    for (int trial = 0; trial < 40; ++trial) {
+      Eigen::VectorXd dx(e.x.size());
+      for (Eigen::Index i = 0; i < dx.size(); ++i) dx[i] = g(rng);
+      const double alpha = term.max_step(e.x, dx);
+      moving.at_time(0.0);
+      const double beta = moving.sweep(e.x, dx, 0.0, 1.0);
+      ASSERT_GT(alpha, 0.0);
+      ASSERT_GT(beta, 0.0);
+      limited += (alpha < 1.0) + (beta < 1.0);
+      for (Eigen::Index i = 0; i < term.point_count(); ++i) {
+        const double d0 = term.point_distance(e.x, i);
+        ASSERT_GT(d0, 0.0);
+        for (int s = 0; s <= 100; ++s) {
+          ASSERT_GE(term.point_distance(e.x + (alpha * s / 100.0) * dx, i), 0.1 * d0 * (1 - 1e-9)) << "trial " << trial;
+          moving.at_time(beta * s / 100.0);
+          ASSERT_GE(moving.point_distance(e.x + (beta * s / 100.0) * dx, i), 0.1 * d0 * (1 - 1e-9)) << "trial " << trial;
+        }
+      }
+    }
+  }
+  EXPECT_GT(limited, 30);
+}
+
+TEST(MeshColliderTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesAndItsStepsOnThePoints) {
+  // MatchesFiniteDifferencesWithEachPairKind's tet and triangle pair, the tet's vertices now points embedded
+  // in cubes or tets: derivatives by finite differences, the projected Hessian PSD; against the same
+  // surface given directly at the points: the same energy, the gradient pulled back by Wᵀ, and max_step and
+  // sweep equal to the direct term's on the points' motion W dx.
+  Eigen::Matrix3Xd X(3, 4);
+  X << 0, 1, 0, 0.3,  //
+      0, 0, 1, 0.3,    //
+      0, 0, 0, 0.95;
+  Eigen::Matrix3Xi F(3, 4);
+  F << 0, 0, 1, 0, 2, 1, 2, 3, 1, 3, 3, 2;
+  Eigen::Matrix3Xd W(3, 4);
+  W << -0.2, 0.9, 0.1, 0.6,  //
+      0.25, 0.2, 0.9, 0.7,    //
+      1.0, 1.02, 0.99, 0.4;
+  Eigen::Matrix3Xi T(3, 2);
+  T << 0, 0, 1, 2, 2, 3;
+  const ColliderPose pose = [](double t) { return Eigen::Affine3d(Eigen::Translation3d(0, 0, 0.01 * t)); };
+  for (const bool hexes : {true, false})
+    for (const unsigned seed : {1u, 2u}) {
+      SCOPED_TRACE(hexes ? "hexes" : "tets");
+      const EmbeddedCells e(X, hexes, seed, 0.005);
+      MeshColliderTerm term(F, e.vertex, e.weight, e.rest, W, T, pose, 0.3, 5.0);
+      term.at_time(1.0);
+      const Eigen::VectorXd x = e.x;
+      Problem problem(DofMap(std::vector<std::uint8_t>(static_cast<std::size_t>(x.size()), 0)));
+      problem.add(term);
+      ASSERT_GT(term.energy(x), 0.0);
+      ASSERT_TRUE(std::isfinite(term.energy(x)));
+      const FdErrors fd = problem_fd_errors(problem, x);
+      EXPECT_LE(fd.gradient, 1e-6);
+      EXPECT_LE(fd.hessian, 1e-6);
+      const Eigen::MatrixXd Hp = assembled(term, x, PsdProjection::clamp).first;
+      EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Hp).eigenvalues().minCoeff(), -1e-9 * Hp.norm());
+
+      const EmbeddedPoints points = e.points();
+      const Eigen::Matrix3Xd P = points.points(x);
+      MeshColliderTerm direct(F, points.points(flatten(e.rest)), W, T, pose, 0.3, 5.0);
+      direct.at_time(1.0);
+      EXPECT_NEAR(term.energy(x), direct.energy(flatten(P)), 1e-12 * direct.energy(flatten(P)));
+      EXPECT_NEAR(term.min_distance(x), direct.min_distance(flatten(P)), 1e-15);
+      const Eigen::VectorXd gx = pulled_back(e, assembled(direct, flatten(P), PsdProjection::none).second);
+      EXPECT_LE((assembled(term, x, PsdProjection::none).second - gx).norm(), 1e-12 * gx.norm());
+
+      // Steps: a cube's surface embedded likewise under a slab (MaxStepAndSweepNeverCrossOnRandomSteps),
+      // random steps of the cells towards it and random jumps of the slab.
+      const VolumeMesh m = box_tets(2);
+      const Eigen::Matrix3Xi G = boundary_triangles(m);
+      const Slab slab(Vec3(-2, 1.05, -2), Vec3(2, 1.25, 2));
+      const EmbeddedCells c(m.vertices, hexes, seed, 0.005);
+      const EmbeddedPoints cube = c.points();
+      const Eigen::VectorXd y = c.x, q = flatten(cube.points(y));
+      std::mt19937_64 rng(seed);
+      std::uniform_real_distribution<double> u(-1.0, 1.0);
+      int crossing = 0;
+      for (int k = 0; k < 20; ++k) {
+        const Vec3 jump(0.3 * u(rng), -0.6 - 0.8 * std::abs(u(rng)), 0.3 * u(rng));
+        const ColliderPose jumping = [jump](double t) { return Eigen::Affine3d(Eigen::Translation3d(t * jump)); };
+        MeshColliderTerm embedded(G, c.vertex, c.weight, c.rest, slab.V, slab.T, jumping, 0.02, 1.0);
+        MeshColliderTerm plain(G, cube.points(flatten(c.rest)), slab.V, slab.T, jumping, 0.02, 1.0);
+        Eigen::VectorXd dx(y.size());
+        for (Eigen::Index i = 0; i < dx.size(); ++i) dx[i] = 0.05 * u(rng) + (i % 3 == 1 ? 1.0 + 0.5 * std::abs(u(rng)) : 0.0);
+        const Eigen::VectorXd dq = flatten(cube.points(dx));
+        const double a = embedded.max_step(y, dx);
+        EXPECT_EQ(a, plain.max_step(q, dq));
+        ASSERT_GT(a, 0.0);
+        crossing += surfaces_cross(G, cube.points(Eigen::VectorXd(y + dx)), slab.T, slab.V);
+        ASSERT_FALSE(surfaces_cross(G, cube.points(Eigen::VectorXd(y + a * dx)), slab.T, slab.V)) << "step " << k;
+        ASSERT_GT(embedded.min_distance(y + a * dx), 0.0);
+        const Eigen::VectorXd still = Eigen::VectorXd::Zero(y.size());
+        const double b = embedded.sweep(y, still, 0.0, 1.0);
+        EXPECT_EQ(b, plain.sweep(q, Eigen::VectorXd::Zero(q.size()), 0.0, 1.0));
+        const Eigen::VectorXd small = 0.1 * dx;
+        EXPECT_EQ(embedded.sweep(y, small, 0.0, 1.0), plain.sweep(q, flatten(cube.points(small)), 0.0, 1.0));
+        ASSERT_GT(b, 0.0);
+        crossing += surfaces_cross(G, cube.points(y), slab.T, slab.V.colwise() + jump);
+        embedded.at_time(b);
+        ASSERT_FALSE(surfaces_cross(G, cube.points(y), slab.T, embedded.collider_vertices())) << "jump " << k;
+      }
+      EXPECT_GT(crossing, 20);  // most full steps and jumps do cross
+    }
+}
+
+TEST(MeshColliderTerm, IdentityWeightsGiveTheDirectTerm) {
+  const VolumeMesh m = box_tets(2);
+  const Eigen::Matrix3Xi F = boundary_triangles(m);
+  const Slab slab(Vec3(-2, 1.05, -2), Vec3(2, 1.25, 2));
+  const auto n = m.vertex_count();
+  MeshColliderTerm direct(F, m.vertices, slab.V, slab.T, ColliderPose{}, 0.1, 3.0);
+  MeshColliderTerm embedded(F, Eigen::RowVectorXi::LinSpaced(n, 0, static_cast<int>(n) - 1), Eigen::RowVectorXd::Ones(n), m.vertices,
+                            slab.V, slab.T, ColliderPose{}, 0.1, 3.0);
+  const Eigen::VectorXd x = flatten(m.vertices);
+  EXPECT_EQ(direct.energy(x), embedded.energy(x));
+  EXPECT_GT(direct.energy(x), 0.0);
+  for (const PsdProjection p : {PsdProjection::none, PsdProjection::clamp}) {
+    const auto [Hd, gd] = assembled(direct, x, p);
+    const auto [He, ge] = assembled(embedded, x, p);
+    EXPECT_EQ(gd, ge);
+    EXPECT_LE((Hd - He).norm(), 1e-14 * Hd.norm());  // blocks added in the other orientation: symmetric to rounding
+    EXPECT_GT(Hd.norm(), 0.0);
+  }
+  Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+  for (Eigen::Index v = 0; v < n; ++v) dx[3 * v + 1] = 0.5;
+  EXPECT_EQ(direct.max_step(x, dx), embedded.max_step(x, dx));
+  EXPECT_LT(direct.max_step(x, dx), 1.0);
+}
+
+TEST(ShapeColliderTerm, BadEmbeddingsThrow) {
+  const Eigen::MatrixXi ids = Eigen::RowVectorXi::LinSpaced(4, 0, 3);
+  const Eigen::MatrixXd ones = Eigen::RowVectorXd::Ones(4);
+  EXPECT_NO_THROW(ShapeColliderTerm(ids, ones, sphere(), ColliderPose{}, 0.1, 1.0));
+  EXPECT_THROW(ShapeColliderTerm(ids, Eigen::MatrixXd::Ones(2, 4), sphere(), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  Eigen::MatrixXd nan = ones;
+  nan(0, 2) = NAN;
+  EXPECT_THROW(ShapeColliderTerm(ids, nan, sphere(), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  Eigen::MatrixXi negative = ids;
+  negative(0, 1) = -1;
+  EXPECT_THROW(ShapeColliderTerm(negative, ones, sphere(), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  const Slab slab(Vec3(-2, 1.05, -2), Vec3(2, 1.25, 2));
+  Eigen::Matrix3Xi F(3, 1);
+  F << 0, 1, 2;
+  Eigen::MatrixXi far = ids;
+  far(0, 3) = 4;  // beyond the volume's 4 vertices
+  const Eigen::Matrix3Xd rest = Eigen::Matrix3Xd::Random(3, 4);
+  EXPECT_NO_THROW(MeshColliderTerm(F, ids, ones, rest, slab.V, slab.T, ColliderPose{}, 0.1, 1.0));
+  EXPECT_THROW(MeshColliderTerm(F, far, ones, rest, slab.V, slab.T, ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(MeshColliderTerm(F, ids, nan, rest, slab.V, slab.T, ColliderPose{}, 0.1, 1.0), std::invalid_argument);
 }
 
 }  // namespace

@@ -90,7 +90,20 @@ double shape_step(const ColliderShape& shape, const Vec3& q, const Vec3& dq, dou
 
 ShapeColliderTerm::ShapeColliderTerm(std::vector<int> vertices, ColliderShape shape, ColliderPose pose, double dhat,
                                      double stiffness)
-    : vertices_(std::move(vertices)), shape_(std::move(shape)), pose_(std::move(pose)), dhat_(dhat), kappa_(stiffness) {
+    : ShapeColliderTerm(Eigen::Map<const Eigen::RowVectorXi>(vertices.data(), static_cast<Eigen::Index>(vertices.size())),
+                        Eigen::MatrixXd::Ones(1, static_cast<Eigen::Index>(vertices.size())), std::move(shape), std::move(pose),
+                        dhat, stiffness) {
+  embedded_ = false;
+}
+
+ShapeColliderTerm::ShapeColliderTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, ColliderShape shape, ColliderPose pose,
+                                     double dhat, double stiffness)
+    : points_(std::move(vertex), std::move(weight), "collider: points", -1),
+      embedded_(true),
+      shape_(std::move(shape)),
+      pose_(std::move(pose)),
+      dhat_(dhat),
+      kappa_(stiffness) {
   require_positive("dhat", dhat_);
   require_positive("stiffness", kappa_);
   if (!shape_.a.allFinite() || !shape_.b.allFinite() || !std::isfinite(shape_.radius))
@@ -107,8 +120,6 @@ ShapeColliderTerm::ShapeColliderTerm(std::vector<int> vertices, ColliderShape sh
     if (!(shape_.b.minCoeff() > 0.0)) throw std::invalid_argument("collider: the box's half extents must be > 0");
     shape_.radius = 0.0;
   }
-  for (const int v : vertices_)
-    if (v < 0) throw std::invalid_argument(fmt::format("collider: vertex id {} is negative", v));
   frame_ = frame_at(0.0);
 }
 
@@ -130,14 +141,18 @@ ShapeColliderTerm::Frame ShapeColliderTerm::frame_at(double t) const {
 void ShapeColliderTerm::at_time(double t) { frame_ = frame_at(t); }
 
 double ShapeColliderTerm::distance(const Eigen::VectorXd& x, int v) const {
-  if (3 * static_cast<Eigen::Index>(v) + 3 > x.size())
+  if (v < 0 || 3 * static_cast<Eigen::Index>(v) + 3 > x.size())
     throw std::logic_error(fmt::format("collider: vertex {} is beyond the {} DOFs given", v, x.size()));
   return frame_.scale * shape_distance(shape_, frame_.to_base(x.segment<3>(3 * v))).distance;
 }
 
+double ShapeColliderTerm::point_distance(const Eigen::VectorXd& x, Eigen::Index i) const {
+  return frame_.scale * shape_distance(shape_, frame_.to_base(points_.point(x, i))).distance;
+}
+
 double ShapeColliderTerm::min_distance(const Eigen::VectorXd& x) const {
   double d = inf;
-  for (const int v : vertices_) d = std::min(d, distance(x, v));
+  for (Eigen::Index i = 0; i < points_.size(); ++i) d = std::min(d, point_distance(x, i));
   return d;
 }
 
@@ -148,10 +163,8 @@ double ShapeColliderTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gr
   const double s_hat = dhat_ * dhat_;
   const Mat3& R = frame_.rotation;
   double e = 0.0;
-  for (const int v : vertices_) {
-    if (3 * static_cast<Eigen::Index>(v) + 3 > x.size())
-      throw std::logic_error(fmt::format("collider: vertex {} is beyond the {} DOFs given", v, x.size()));
-    const ShapeDistance sd = shape_distance(shape_, frame_.to_base(x.segment<3>(3 * v)), hessian != nullptr);
+  for (Eigen::Index i = 0; i < points_.size(); ++i) {
+    const ShapeDistance sd = shape_distance(shape_, frame_.to_base(points_.point(x, i)), hessian != nullptr);
     const double d = frame_.scale * sd.distance;
     if (std::isnan(d)) return nan;
     if (d <= 0.0) return inf;
@@ -159,28 +172,45 @@ double ShapeColliderTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gr
     if (!(s < s_hat)) continue;
     const double b1 = contact::barrier_first_derivative(s, s_hat);
     const Vec3 n = R * sd.normal;  // ∇d in world space
-    e += kappa_ * contact::barrier(s, s_hat);
-    if (gradient) gradient->segment<3>(3 * v) += (kappa_ * b1 * 2.0 * d) * n;
+    contact::Derivatives<3> point;  // over the point p
+    point.value = kappa_ * contact::barrier(s, s_hat);
+    e += point.value;
+    point.gradient = (kappa_ * b1 * 2.0 * d) * n;
     if (hessian) {
       const double c = kappa_ * (4.0 * s * contact::barrier_second_derivative(s, s_hat) + 2.0 * b1);
       if (projection != PsdProjection::none) {  // the exact projection (header)
-        hessian->add_block(v, v, std::max(c, 0.0) * n * n.transpose());
+        point.hessian = std::max(c, 0.0) * n * n.transpose();
       } else {
         // ∇²d in world space: R (∇²d in the base frame) Rᵀ / scale.
         const Mat3 Hd = R * sd.hessian * R.transpose() / frame_.scale;
-        hessian->add_block(v, v, c * n * n.transpose() + (kappa_ * 2.0 * d * b1) * Hd);
+        point.hessian = c * n * n.transpose() + (kappa_ * 2.0 * d * b1) * Hd;
       }
     }
+    if (embedded_) {  // through the weights (embedded_points.hpp)
+      points_.scatter(point, {static_cast<int>(i), -1, -1, -1}, gradient, hessian);
+      continue;
+    }
+    const int v = points_.vertex()(0, i);
+    if (gradient) gradient->segment<3>(3 * v) += point.gradient;
+    if (hessian) hessian->add_block(v, v, point.hessian);
   }
   return e;
+}
+
+void ShapeColliderTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) const {
+  out.vertices.clear();
+  out.arity = 0;
+  if (!embedded_ || points_.arity() < 2) return;  // plain vertices: a diagonal Hessian
+  out.arity = static_cast<int>(points_.arity());    // each point's cell
+  out.vertices.assign(points_.vertex().data(), points_.vertex().data() + points_.vertex().size());
 }
 
 double ShapeColliderTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
   if (!x.allFinite() || !dx.allFinite()) return 1.0;  // the line search rejects what follows
   double t = 1.0;
-  for (const int v : vertices_) {
-    const Vec3 q = frame_.to_base(x.segment<3>(3 * v));
-    const Vec3 dq = frame_.rotation.transpose() * dx.segment<3>(3 * v) / frame_.scale;
+  for (Eigen::Index i = 0; i < points_.size(); ++i) {
+    const Vec3 q = frame_.to_base(points_.point(x, i));
+    const Vec3 dq = frame_.rotation.transpose() * points_.point(dx, i) / frame_.scale;  // the point moves by W dx
     if (dq == Vec3::Zero()) continue;
     t = std::min(t, shape_step(shape_, q, dq));
   }
@@ -191,18 +221,44 @@ double ShapeColliderTerm::sweep(const Eigen::VectorXd& x, const Eigen::VectorXd&
   if (!pose_) return 1.0;
   const Frame f0 = frame_at(t0), f1 = frame_at(t1);
   double t = 1.0;
-  for (const int v : vertices_) {
-    const Vec3 q0 = f0.to_base(x.segment<3>(3 * v)), q1 = f1.to_base(x.segment<3>(3 * v) + dx.segment<3>(3 * v));
-    t = std::min(t, shape_step(shape_, q0, q1 - q0));
+  for (Eigen::Index i = 0; i < points_.size(); ++i) {
+    const Vec3 p = points_.point(x, i);
+    const Vec3 q0 = f0.to_base(p), q1 = f1.to_base(p + points_.point(dx, i));
+    // Not clear (a tenth): the part that keeps a fifth, so that the shortened part's own sweep, whose poses
+    // lie off this chord, is clear with room rather than a hair short of it again and again.
+    if (const double clear = shape_step(shape_, q0, q1 - q0); clear < 1.0) t = std::min(t, shape_step(shape_, q0, q1 - q0, 0.2));
   }
   return t;
 }
 
 // ---------------------------------------------------------------------------------------------------------
 
+namespace {
+
+std::vector<int> iota(Eigen::Index n) {
+  std::vector<int> ids(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int>(i);
+  return ids;
+}
+
+}  // namespace
+
 MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, Eigen::Matrix3Xd V,
                                    const Eigen::Matrix3Xi& T, ColliderPose pose, double dhat, double stiffness)
-    : volume_vertices_(rest.cols()), base_(std::move(V)), collider_T_(T), pose_(std::move(pose)), dhat_(dhat), kappa_(stiffness) {
+    : MeshColliderTerm(F, EmbeddedPoints::plain(iota(rest.cols()), "collider: surface"), rest, rest.cols(), false, std::move(V), T,
+                       std::move(pose), dhat, stiffness) {}
+
+MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, Eigen::MatrixXi vertex, Eigen::MatrixXd weight,
+                                   const Eigen::Matrix3Xd& volume_rest, Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T,
+                                   ColliderPose pose, double dhat, double stiffness)
+    : MeshColliderTerm(F, EmbeddedPoints(std::move(vertex), std::move(weight), "collider: surface points", volume_rest.cols()),
+                       volume_rest, volume_rest.cols(), true, std::move(V), T, std::move(pose), dhat, stiffness) {}
+
+MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, const EmbeddedPoints& all, const Eigen::Matrix3Xd& rest,
+                                   Eigen::Index volume_vertices, bool embedded, Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T,
+                                   ColliderPose pose, double dhat, double stiffness)
+    : embedded_(embedded), volume_vertices_(volume_vertices), base_(std::move(V)), collider_T_(T), pose_(std::move(pose)),
+      dhat_(dhat), kappa_(stiffness) {
   require_positive("dhat", dhat_);
   require_positive("stiffness", kappa_);
   if (!rest.allFinite() || !base_.allFinite()) throw std::invalid_argument("collider: positions are not all finite");
@@ -215,22 +271,24 @@ MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, const Eigen::Matri
         throw std::invalid_argument(fmt::format("collider: {} triangle {} repeats a vertex", what, t));
     }
   };
-  check(F, rest.cols(), "surface");
+  check(F, all.size(), "surface");
   check(T, base_.cols(), "mesh");
   std::vector<int> ids(F.data(), F.data() + F.size());
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   surface_vertices_ = std::move(ids);
+  points_ = all.select(surface_vertices_);
   const auto ns = static_cast<int>(surface_vertices_.size());
-  std::vector<int> local(static_cast<std::size_t>(rest.cols()), -1);
+  std::vector<int> local(static_cast<std::size_t>(all.size()), -1);
   for (int i = 0; i < ns; ++i) local[static_cast<std::size_t>(surface_vertices_[static_cast<std::size_t>(i)])] = i;
   triangles_simulated_ = static_cast<int>(F.cols());
   F_.resize(3, F.cols() + T.cols());
   F_.leftCols(F.cols()) = F.unaryExpr([&](int v) { return local[static_cast<std::size_t>(v)]; });
   F_.rightCols(T.cols()) = T.array() + ns;
   E_ = contact::surface_edges(F_);
+  // The simulated surface at rest: its vertices, or the points W X of the volume at rest.
   rest_.resize(3, ns + base_.cols());
-  for (int i = 0; i < ns; ++i) rest_.col(i) = rest.col(surface_vertices_[static_cast<std::size_t>(i)]);
+  rest_.leftCols(ns) = points_.points(Eigen::Map<const Eigen::VectorXd>(rest.data(), rest.size()));
   rest_.rightCols(base_.cols()) = base_;
   placed_ = placed_at(0.0);
 }
@@ -250,7 +308,7 @@ Eigen::Matrix3Xd MeshColliderTerm::combined(const Eigen::VectorXd& x, const Eige
     throw std::logic_error(fmt::format("collider: {} DOFs for {} vertices", x.size(), volume_vertices_));
   const auto ns = static_cast<Eigen::Index>(surface_vertices_.size());
   Eigen::Matrix3Xd V(3, ns + collider.cols());
-  for (Eigen::Index i = 0; i < ns; ++i) V.col(i) = x.segment<3>(3 * surface_vertices_[static_cast<std::size_t>(i)]);
+  V.leftCols(ns) = points_.points(x);  // plain vertices: their coordinates, bit for bit
   V.rightCols(collider.cols()) = collider;
   return V;
 }
@@ -288,6 +346,12 @@ double MeshColliderTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gra
                     : contact::point_triangle_barrier(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3]), s_hat, project);
     if (!std::isfinite(d.value)) return d.value;  // in contact (+∞) or undefined (NaN)
     e += kappa_ * d.value;
+    if (embedded_) {  // the simulated points' rows only, through their weights (the collider's slots −1)
+      d.gradient *= kappa_;
+      d.hessian *= kappa_;
+      points_.scatter(d, simulated_slots(id), gradient, hessian);
+      continue;
+    }
     // The simulated vertices' blocks only (the collider's vertices are not DOFs).
     for (int i = 0; i < 4; ++i) {
       if (id[i] >= ns) continue;
@@ -308,12 +372,24 @@ void MeshColliderTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
   if (!x.allFinite()) return;
   const Eigen::Matrix3Xd V = combined(x, placed_);
   const auto ns = static_cast<int>(surface_vertices_.size());
-  for (const Candidate& c : candidates(V, V, dhat_))
+  for (const Candidate& c : candidates(V, V, dhat_)) {
+    if (embedded_) {  // every volume vertex of the simulated points' cells
+      points_.couple(simulated_slots(c.local), 4, out.vertices);
+      continue;
+    }
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j)
         if (c.local[i] < ns && c.local[j] < ns)
           out.vertices.insert(out.vertices.end(), {surface_vertices_[static_cast<std::size_t>(c.local[i])],
                                                    surface_vertices_[static_cast<std::size_t>(c.local[j])]});
+  }
+}
+
+std::array<int, 4> MeshColliderTerm::simulated_slots(const std::array<int, 4>& local) const {
+  std::array<int, 4> out = local;
+  for (int& i : out)
+    if (i >= static_cast<int>(surface_vertices_.size())) i = -1;
+  return out;
 }
 
 double MeshColliderTerm::min_distance(const Eigen::VectorXd& x) const {

@@ -34,7 +34,20 @@
 // each distance keeping a tenth of itself: the simulation splits a step whose sweep is not clear
 // (simulation.cpp). The motion is taken as linear: for a mesh, every vertex of both bodies on the straight
 // line between its two places (CCD); for a shape, each simulated vertex on the straight line between its
-// two places in the shape's own frame (exact for a translation; for a rotation the chord of the arc).
+// two places in the shape's own frame (exact for a translation; for a rotation the chord of the arc). A
+// shape's sweep that is not clear gives the part that keeps a fifth: the shortened part is checked again
+// with its own poses, which lie off the first chord where the shape turns, and a part ending exactly at the
+// tenth would be found a hair short again and again (the fist with its bones' capsules split one step 200
+// times so, creeping towards the boundary).
+//
+// Embedded points (a flesh's render surface inside its lattice or tets): the second constructors take the
+// colliding points as p_i = Σ_k W(k, i) x_{I(k, i)} (fem/embedded_points.hpp). Everything above then runs on
+// the points: a shape's distance, barrier and derivatives per point, a mesh's candidates between the
+// points' surface and the collider's; the derivatives over the points (a mesh pair's 12 by 12 Hessian
+// projected first, then its simulated points' rows kept) are pulled back by the chain rule, g_x = Jᵀ g_p and
+// H_x = Jᵀ H_p J, so the Hessian stays PSD; the stencil couples each point's cell (a shape: fixed, the
+// cells' own coupling; a mesh: the cells of each pair's simulated points); max_step and sweep run on the
+// points' motion W dx, exact as the map is linear. The direct constructors keep their own arithmetic.
 #include <array>
 #include <functional>
 #include <vector>
@@ -42,6 +55,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "snh/fem/embedded_points.hpp"
 #include "snh/fem/term.hpp"
 #include "snh/math/types.hpp"
 
@@ -80,11 +94,17 @@ class ShapeColliderTerm final : public Term {
   /// Throws std::invalid_argument (one line) for a shape that is not valid (radius, half extents, normal,
   /// non-finite numbers), d̂ or κ not finite and > 0, or a negative vertex id.
   ShapeColliderTerm(std::vector<int> vertices, ColliderShape shape, ColliderPose pose, double dhat, double stiffness);
+  /// Embedded points (a flesh's render surface): vertex and weight k by #p, point i = Σ_k weight(k, i)
+  /// x_{vertex(k, i)} (see "Embedded points" above). Throws as above, and for shapes that differ or a
+  /// non-finite weight.
+  ShapeColliderTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, ColliderShape shape, ColliderPose pose, double dhat,
+                    double stiffness);
 
   [[nodiscard]] std::string_view name() const override { return "collider"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                   PsdProjection projection) const override;
+  void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
   [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
   void at_time(double t) override;
   [[nodiscard]] bool moving() const override { return static_cast<bool>(pose_); }
@@ -92,7 +112,11 @@ class ShapeColliderTerm final : public Term {
 
   /// The distance of vertex v from the shape at its current pose (negative inside).
   [[nodiscard]] double distance(const Eigen::VectorXd& x, int v) const;
-  /// The smallest distance over the vertices at the current pose.
+  /// The number of colliding points (the vertices given, or the embedded points).
+  [[nodiscard]] Eigen::Index point_count() const { return points_.size(); }
+  /// The distance of point i (the i-th vertex given, or the i-th embedded point) at the current pose.
+  [[nodiscard]] double point_distance(const Eigen::VectorXd& x, Eigen::Index i) const;
+  /// The smallest distance over the points at the current pose (+∞ without points).
   [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const;
 
  private:
@@ -103,7 +127,8 @@ class ShapeColliderTerm final : public Term {
     [[nodiscard]] Vec3 to_base(const Vec3& x) const { return rotation.transpose() * (x - translation) / scale; }
   };
   [[nodiscard]] Frame frame_at(double t) const;
-  std::vector<int> vertices_;
+  EmbeddedPoints points_;  ///< plain vertices: one weight 1 each
+  bool embedded_ = false;
   ColliderShape shape_;
   ColliderPose pose_;
   Frame frame_;
@@ -119,6 +144,11 @@ class MeshColliderTerm final : public Term {
   /// non-finite positions, d̂ or κ not finite and > 0.
   MeshColliderTerm(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T,
                    ColliderPose pose, double dhat, double stiffness);
+  /// An embedded simulated surface: F's ids are points, point i = Σ_k weight(k, i) x_{vertex(k, i)} (vertex
+  /// and weight k by #p; volume_rest 3 by #V the volume at rest, whose W X give the mollifier thresholds).
+  /// Throws as above, and for shapes that differ, a non-finite weight or a volume vertex id out of range.
+  MeshColliderTerm(const Eigen::Matrix3Xi& F, Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const Eigen::Matrix3Xd& volume_rest,
+                   Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T, ColliderPose pose, double dhat, double stiffness);
 
   [[nodiscard]] std::string_view name() const override { return "mesh collider"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
@@ -138,6 +168,10 @@ class MeshColliderTerm final : public Term {
   [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const;
 
  private:
+  /// Both constructors: the simulated surface F over the points `all` (rest positions `rest_points`).
+  MeshColliderTerm(const Eigen::Matrix3Xi& F, const EmbeddedPoints& all, const Eigen::Matrix3Xd& rest_points,
+                   Eigen::Index volume_vertices, bool embedded, Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T, ColliderPose pose,
+                   double dhat, double stiffness);
   struct Candidate {
     bool edge_edge;
     std::array<int, 4> local;  ///< combined ids (simulated surface vertices first, then the collider's)
@@ -147,10 +181,14 @@ class MeshColliderTerm final : public Term {
   [[nodiscard]] Eigen::Matrix3Xd combined(const Eigen::VectorXd& x, const Eigen::Matrix3Xd& collider) const;
   /// The candidates between the two bodies over the step V0 → V1 within dhat.
   [[nodiscard]] std::vector<Candidate> candidates(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, double dhat) const;
+  /// A candidate's combined ids with the collider's replaced by −1 (EmbeddedPoints::scatter's slots).
+  [[nodiscard]] std::array<int, 4> simulated_slots(const std::array<int, 4>& local) const;
   /// The smallest CCD fraction of the candidates for the step V0 → V0 + D.
   [[nodiscard]] double ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D) const;
   [[nodiscard]] Eigen::Matrix3Xd placed_at(double t) const;
-  std::vector<int> surface_vertices_;  ///< volume id of each simulated surface vertex (local id order)
+  std::vector<int> surface_vertices_;  ///< the given id (vertex or point) of each simulated surface vertex (local id order)
+  EmbeddedPoints points_;              ///< the simulated surface's points in local order (plain: one weight 1 each)
+  bool embedded_ = false;
   Eigen::Index volume_vertices_ = 0;
   int triangles_simulated_ = 0;        ///< triangles below this index are the simulated surface's
   Eigen::Matrix3Xi F_;                 ///< combined triangles

@@ -102,22 +102,11 @@ ContactTerm::ContactTerm(Eigen::Matrix3Xi F, Eigen::MatrixXi vertex, Eigen::Matr
   check_positive("dhat", dhat_);
   check_positive("stiffness", kappa_);
   if (!volume_rest.allFinite()) throw std::invalid_argument("contact: the rest positions are not all finite");
-  if (vertex.rows() != weight.rows() || vertex.cols() != weight.cols() || vertex.rows() < 1)
-    throw std::invalid_argument(fmt::format("contact: embedded vertex ids ({} by {}) and weights ({} by {}) differ in shape",
-                                            vertex.rows(), vertex.cols(), weight.rows(), weight.cols()));
-  if (!weight.allFinite()) throw std::invalid_argument("contact: the embedding's weights are not all finite");
-  for (Eigen::Index i = 0; i < vertex.size(); ++i)
-    if (vertex.data()[i] < 0 || vertex.data()[i] >= volume_vertices_)
-      throw std::invalid_argument(fmt::format("contact: embedded point {} has volume vertex id {} outside [0, {})",
-                                              i / vertex.rows(), vertex.data()[i], volume_vertices_));
-  number_surface(vertex.cols());
-  // Only the points the triangles use, in the local order.
-  vertex_.resize(vertex.rows(), static_cast<Eigen::Index>(surface_vertices_.size()));
-  weight_.resize(weight.rows(), vertex_.cols());
-  for (Eigen::Index i = 0; i < vertex_.cols(); ++i) {
-    vertex_.col(i) = vertex.col(surface_vertices_[static_cast<std::size_t>(i)]);
-    weight_.col(i) = weight.col(surface_vertices_[static_cast<std::size_t>(i)]);
-  }
+  if (vertex.rows() < 1)
+    throw std::invalid_argument(fmt::format("contact: embedded vertex ids ({} by {}) need at least one row", vertex.rows(), vertex.cols()));
+  const EmbeddedPoints all(std::move(vertex), std::move(weight), "contact: embedded surface", volume_vertices_);
+  number_surface(all.size());
+  points_ = all.select(surface_vertices_);  // only the points the triangles use, in the local order
   surface_rest_ = positions(Eigen::Map<const Eigen::VectorXd>(volume_rest.data(), volume_rest.size()));
 }
 
@@ -151,12 +140,7 @@ Eigen::Matrix3Xd ContactTerm::positions(const Eigen::VectorXd& x) const {
     for (Eigen::Index i = 0; i < V.cols(); ++i) V.col(i) = x.segment<3>(3 * surface_vertices_[static_cast<std::size_t>(i)]);
     return V;
   }
-  for (Eigen::Index i = 0; i < V.cols(); ++i) {
-    Vec3 p = Vec3::Zero();
-    for (Eigen::Index k = 0; k < vertex_.rows(); ++k) p += weight_(k, i) * x.segment<3>(3 * vertex_(k, i));
-    V.col(i) = p;
-  }
-  return V;
+  return points_.points(x);
 }
 
 template <int N>
@@ -169,48 +153,7 @@ void ContactTerm::scatter(const Derivatives<N>& d, const std::array<int, 4>& ids
     scatter_direct(d, global, gradient, hessian);
     return;
   }
-  const Eigen::Index k = vertex_.rows();
-  if (gradient)
-    for (int i = 0; i < M; ++i)
-      for (Eigen::Index c = 0; c < k; ++c)
-        gradient->segment<3>(3 * vertex_(c, ids[i])) += weight_(c, ids[i]) * d.gradient.template segment<3>(3 * i);
-  if (!hessian) return;
-  // J (N by 3U): the pair's coordinates as linear functions of its U distinct volume vertices; H_x = Jᵀ H J.
-  std::vector<int> volume;
-  pair_volume_vertices(ids, M, volume);
-  const auto U = static_cast<Eigen::Index>(volume.size());
-  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(M, U);  // C(i, u): point i's weight on volume vertex u
-  for (int i = 0; i < M; ++i)
-    for (Eigen::Index c = 0; c < k; ++c) {
-      const auto u = std::lower_bound(volume.begin(), volume.end(), vertex_(c, ids[i])) - volume.begin();
-      C(i, u) += weight_(c, ids[i]);
-    }
-  Eigen::MatrixXd HJ(N, 3 * U);  // H J
-  for (int i = 0; i < M; ++i)
-    for (Eigen::Index u = 0; u < U; ++u) {
-      Mat3 sum = Mat3::Zero();
-      for (int j = 0; j < M; ++j) sum += C(j, u) * d.hessian.template block<3, 3>(3 * i, 3 * j);
-      HJ.block<3, 3>(3 * i, 3 * u) = sum;
-    }
-  for (Eigen::Index u = 0; u < U; ++u)
-    for (Eigen::Index v = u; v < U; ++v) {
-      Mat3 block = Mat3::Zero();
-      for (int i = 0; i < M; ++i) block += C(i, u) * HJ.block<3, 3>(3 * i, 3 * v);
-      hessian->add_block(volume[static_cast<std::size_t>(u)], volume[static_cast<std::size_t>(v)], block);
-    }
-}
-
-void ContactTerm::pair_volume_vertices(const std::array<int, 4>& ids, int arity, std::vector<int>& out) const {
-  out.clear();
-  for (int i = 0; i < arity; ++i) {
-    const int p = ids[static_cast<std::size_t>(i)];
-    if (embedded_)
-      for (Eigen::Index c = 0; c < vertex_.rows(); ++c) out.push_back(vertex_(c, p));
-    else
-      out.push_back(surface_vertices_[static_cast<std::size_t>(p)]);
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
+  points_.scatter(d, ids, gradient, hessian);
 }
 
 const std::vector<ContactPair>& ContactTerm::pairs_at(const Eigen::VectorXd& x, const Eigen::Matrix3Xd** P) const {
@@ -384,12 +327,7 @@ void ContactTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
         for (int j = i + 1; j < p.arity(); ++j) out.vertices.insert(out.vertices.end(), {p.vertices[i], p.vertices[j]});
     return;
   }
-  std::vector<int> volume;
-  for (const ContactPair& p : pairs_at(x)) {
-    pair_volume_vertices(p.vertices, p.arity(), volume);
-    for (std::size_t i = 0; i < volume.size(); ++i)
-      for (std::size_t j = i + 1; j < volume.size(); ++j) out.vertices.insert(out.vertices.end(), {volume[i], volume[j]});
-  }
+  for (const ContactPair& p : pairs_at(x)) points_.couple(p.vertices, p.arity(), out.vertices);
 }
 
 double ContactTerm::min_distance(const Eigen::VectorXd& x) const {
@@ -442,32 +380,17 @@ PlaneContactTerm::PlaneContactTerm(std::vector<int> vertices, const Eigen::Vecto
 
 PlaneContactTerm::PlaneContactTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const Eigen::Vector3d& point,
                                    const Eigen::Vector3d& normal, double dhat, double stiffness)
-    : vertex_(std::move(vertex)), weight_(std::move(weight)), point_(point), dhat_(dhat), kappa_(stiffness) {
+    : points_(std::move(vertex), std::move(weight), "contact: plane points", -1), point_(point), dhat_(dhat), kappa_(stiffness) {
   check_positive("dhat", dhat_);
   check_positive("stiffness", kappa_);
   if (!point.allFinite()) throw std::invalid_argument("contact: the plane's point is not finite");
   if (!normal.allFinite() || !(normal.norm() > 0.0))
     throw std::invalid_argument("contact: the plane's normal must be finite and non-zero");
   normal_ = normal.normalized();
-  if (vertex_.rows() != weight_.rows() || vertex_.cols() != weight_.cols() || (vertex_.rows() < 1 && vertex_.cols() > 0))
-    throw std::invalid_argument(fmt::format("contact: plane vertex ids ({} by {}) and weights ({} by {}) differ in shape",
-                                            vertex_.rows(), vertex_.cols(), weight_.rows(), weight_.cols()));
-  if (!weight_.allFinite()) throw std::invalid_argument("contact: the plane's point weights are not all finite");
-  for (Eigen::Index i = 0; i < vertex_.size(); ++i)
-    if (vertex_.data()[i] < 0) throw std::invalid_argument(fmt::format("contact: plane vertex id {} is negative", vertex_.data()[i]));
 }
 
-double PlaneContactTerm::distance(const Eigen::VectorXd& x, Eigen::Index i) const { return normal_.dot(point_at(x, i) - point_); }
-
-Eigen::Vector3d PlaneContactTerm::point_at(const Eigen::VectorXd& x, Eigen::Index i) const {
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  for (Eigen::Index k = 0; k < vertex_.rows(); ++k) {
-    const int v = vertex_(k, i);
-    if (3 * static_cast<Eigen::Index>(v) + 3 > x.size())
-      throw std::logic_error(fmt::format("plane contact: vertex {} is beyond the {} DOFs given", v, x.size()));
-    p += weight_(k, i) * x.segment<3>(3 * v);
-  }
-  return p;
+double PlaneContactTerm::distance(const Eigen::VectorXd& x, Eigen::Index i) const {
+  return normal_.dot(points_.point(x, i) - point_);
 }
 
 double PlaneContactTerm::energy(const Eigen::VectorXd& x) const {
@@ -477,9 +400,11 @@ double PlaneContactTerm::energy(const Eigen::VectorXd& x) const {
 double PlaneContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                                   PsdProjection projection) const {
   const Timed timed(counters_.seconds);
+  const Eigen::MatrixXi& V = points_.vertex();
+  const Eigen::MatrixXd& W = points_.weight();
   const double s_hat = dhat_ * dhat_;
   double e = 0.0;
-  for (Eigen::Index i = 0; i < vertex_.cols(); ++i) {
+  for (Eigen::Index i = 0; i < points_.size(); ++i) {
     const double d = distance(x, i);
     if (std::isnan(d)) return std::numeric_limits<double>::quiet_NaN();
     if (d <= 0.0) return std::numeric_limits<double>::infinity();
@@ -489,16 +414,16 @@ double PlaneContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gra
     e += kappa_ * contact::barrier(s, s_hat);
     // Through the weights: ∂p/∂x_a = w_a I, so g_a = w_a g_p and H_ab = w_a w_b H_pp (a rank-one c n nᵀ).
     if (gradient)
-      for (Eigen::Index k = 0; k < vertex_.rows(); ++k)
-        gradient->segment<3>(3 * vertex_(k, i)) += (weight_(k, i) * (kappa_ * b1 * 2.0 * d)) * normal_;
+      for (Eigen::Index k = 0; k < points_.arity(); ++k)
+        gradient->segment<3>(3 * V(k, i)) += (W(k, i) * (kappa_ * b1 * 2.0 * d)) * normal_;
     if (hessian) {
       double c = kappa_ * (4.0 * s * contact::barrier_second_derivative(s, s_hat) + 2.0 * b1);
       if (projection != PsdProjection::none) c = std::max(c, 0.0);  // clamped, as the pairs' projection
-      for (Eigen::Index a = 0; a < vertex_.rows(); ++a)
-        for (Eigen::Index b = a; b < vertex_.rows(); ++b) {
+      for (Eigen::Index a = 0; a < points_.arity(); ++a)
+        for (Eigen::Index b = a; b < points_.arity(); ++b) {
           // Two weights on one vertex (not in a cell, but allowed) add their cross terms to its diagonal block.
-          const double w = weight_(a, i) * weight_(b, i) * (a != b && vertex_(a, i) == vertex_(b, i) ? 2.0 : 1.0);
-          hessian->add_block(vertex_(a, i), vertex_(b, i), (w * c) * normal_ * normal_.transpose());
+          const double w = W(a, i) * W(b, i) * (a != b && V(a, i) == V(b, i) ? 2.0 : 1.0);
+          hessian->add_block(V(a, i), V(b, i), (w * c) * normal_ * normal_.transpose());
         }
     }
   }
@@ -508,18 +433,18 @@ double PlaneContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gra
 void PlaneContactTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) const {
   out.vertices.clear();
   out.arity = 0;
-  if (vertex_.rows() < 2) return;  // plain vertices: a diagonal Hessian
-  out.arity = static_cast<int>(vertex_.rows());
-  out.vertices.assign(vertex_.data(), vertex_.data() + vertex_.size());
+  if (points_.arity() < 2) return;  // plain vertices: a diagonal Hessian
+  out.arity = static_cast<int>(points_.arity());
+  out.vertices.assign(points_.vertex().data(), points_.vertex().data() + points_.vertex().size());
 }
 
 double PlaneContactTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
   const Timed timed(counters_.seconds);
   ++counters_.ccd_calls;
-  counters_.ccd_tests += vertex_.cols();
+  counters_.ccd_tests += points_.size();
   double t = 1.0;
-  for (Eigen::Index i = 0; i < vertex_.cols(); ++i) {
-    const double d = distance(x, i), approach = -normal_.dot(point_at(dx, i));  // the point moves by W dx
+  for (Eigen::Index i = 0; i < points_.size(); ++i) {
+    const double d = distance(x, i), approach = -normal_.dot(points_.point(dx, i));  // the point moves by W dx
     // d + t·(−approach) ≥ d/10  ⇔  t ≤ 0.9 d / approach (exact for the linear motion)
     if (d > 0.0 && approach > 0.0) t = std::min(t, 0.9 * d / approach);
   }
@@ -528,14 +453,14 @@ double PlaneContactTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorX
 
 int PlaneContactTerm::active_pairs(const Eigen::VectorXd& x) const {
   int n = 0;
-  for (Eigen::Index i = 0; i < vertex_.cols(); ++i)
+  for (Eigen::Index i = 0; i < points_.size(); ++i)
     if (distance(x, i) < dhat_) ++n;
   return n;
 }
 
 double PlaneContactTerm::min_distance(const Eigen::VectorXd& x) const {
   double m = dhat_;
-  for (Eigen::Index i = 0; i < vertex_.cols(); ++i) m = std::min(m, distance(x, i));
+  for (Eigen::Index i = 0; i < points_.size(); ++i) m = std::min(m, distance(x, i));
   return m;
 }
 

@@ -56,6 +56,7 @@
 
 #include "snh/contact/broad_phase.hpp"
 #include "snh/contact/distance_core.hpp"
+#include "snh/fem/embedded_points.hpp"
 #include "snh/fem/term.hpp"
 
 namespace snh {
@@ -150,16 +151,13 @@ class ContactTerm final : public ContactTermBase {
   template <int N>
   void scatter(const contact::Derivatives<N>& d, const std::array<int, 4>& ids, Eigen::VectorXd* gradient,
                const HessianValues* hessian) const;
-  /// The volume vertices of a pair's points (local ids), each once.
-  void pair_volume_vertices(const std::array<int, 4>& ids, int arity, std::vector<int>& out) const;
   Eigen::Matrix3Xi F_, local_F_;        ///< triangles in the given ids and in surface ids
   Eigen::Matrix2Xi E_, local_E_;        ///< edges likewise
   std::vector<int> surface_vertices_;   ///< the given id of each surface vertex, increasing
   Eigen::Matrix3Xd surface_rest_;       ///< rest positions of the surface vertices
   Eigen::Index volume_vertices_ = 0;    ///< #V of the x the term is given
   bool embedded_ = false;
-  Eigen::MatrixXi vertex_;              ///< embedded: k by #surface vertices, volume vertex ids
-  Eigen::MatrixXd weight_;              ///< embedded: their weights
+  EmbeddedPoints points_;               ///< embedded: the surface's points, in local order
   double dhat_, kappa_;
   mutable Eigen::VectorXd cache_x_;     ///< pairs_at's last x (empty: none)
   mutable Eigen::Matrix3Xd cache_positions_;
@@ -214,10 +212,7 @@ class PlaneContactTerm final : public ContactTermBase {
   [[nodiscard]] double distance(const Eigen::VectorXd& x, Eigen::Index i) const;
 
  private:
-  /// Point i for positions x (or its motion for a step x): Σ_k w(k, i) x_{vertex(k, i)}.
-  [[nodiscard]] Eigen::Vector3d point_at(const Eigen::VectorXd& x, Eigen::Index i) const;
-  Eigen::MatrixXi vertex_;  ///< k by #p (k = 1 for plain vertices)
-  Eigen::MatrixXd weight_;
+  EmbeddedPoints points_;  ///< k by #p (k = 1 for plain vertices)
   Eigen::Vector3d point_, normal_;
   double dhat_, kappa_;
 };

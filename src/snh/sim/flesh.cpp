@@ -202,23 +202,60 @@ std::function<void(double, std::vector<Eigen::Matrix<double, 3, 4>>&)> flesh_car
   };
 }
 
-std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Flesh> flesh, double dhat, double stiffness) {
-  const Eigen::Matrix3Xd& X = flesh->volume.vertices;
-  std::vector<char> kinematic(static_cast<std::size_t>(X.cols()), 0);
-  for (const int v : flesh->binding.vertex) kinematic[static_cast<std::size_t>(v)] = 1;
-  const Eigen::Matrix3Xi F = boundary_triangles(flesh->volume);
-  std::vector<char> on_boundary(static_cast<std::size_t>(X.cols()), 0);
-  for (Eigen::Index i = 0; i < F.size(); ++i) on_boundary[static_cast<std::size_t>(F.data()[i])] = 1;
-  const double margin = std::max(flesh->cell_size, 2.0 * dhat);
-  std::vector<std::shared_ptr<Term>> terms;
-  for (const Bone& bone : flesh->bones) {
+std::vector<std::vector<int>> bone_collider_points(const Flesh& flesh, double dhat) {
+  const RiggedModel& m = flesh.model;
+  const EmbeddedSurface skin = contact_surface(flesh);
+  const Eigen::Matrix3Xd rest = skin.points.apply(flesh.volume.vertices);
+  const auto n = static_cast<Eigen::Index>(rest.cols());
+  // Each welded point's skin weights: those of its first model vertex (as contact_surface embeds it).
+  std::vector<int> model_vertex(static_cast<std::size_t>(n), -1);
+  for (std::size_t v = 0; v < m.weld.size(); ++v)
+    if (int& first = model_vertex[static_cast<std::size_t>(m.weld[v])]; first < 0) first = static_cast<int>(v);
+  const auto skinned_to = [&](Eigen::Index i, int joint) {
+    const auto v = static_cast<Eigen::Index>(model_vertex[static_cast<std::size_t>(i)]);
+    for (int k = 0; k < 4; ++k)
+      if (joint >= 0 && m.joint_index(k, v) == joint && m.joint_weight(k, v) > 0.0) return true;
+    return false;
+  };
+  // The bone each volume vertex hangs on: hard-bound, or released at a joint (then soft or free); −1: none.
+  std::vector<int> bone_of(static_cast<std::size_t>(flesh.volume.vertex_count()), -1);
+  std::vector<char> hard(bone_of.size(), 0);
+  for (const Binding* b : {&flesh.released, &flesh.binding})
+    for (std::size_t i = 0; i < b->vertex.size(); ++i) bone_of[static_cast<std::size_t>(b->vertex[i])] = b->bone[i];
+  for (const int v : flesh.binding.vertex) hard[static_cast<std::size_t>(v)] = 1;
+  const Eigen::MatrixXi& cell = skin.points.vertex;
+  const double margin = 2.0 * dhat;
+  std::vector<std::vector<int>> out(flesh.bones.size());
+  for (std::size_t b = 0; b < flesh.bones.size(); ++b) {
+    const Bone& bone = flesh.bones[b];
     if (!(bone.radius > 0.0)) continue;
-    std::vector<int> vertices;
-    for (Eigen::Index v = 0; v < X.cols(); ++v)
-      if (on_boundary[static_cast<std::size_t>(v)] && !kinematic[static_cast<std::size_t>(v)] &&
-          segment_distance(bone.a, bone.b, X.col(v)) - bone.radius > margin)
-        vertices.push_back(static_cast<int>(v));
-    if (vertices.empty()) continue;
+    const int parent = m.skeleton.joints[static_cast<std::size_t>(bone.joint)].parent;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      // Flesh that bends around the capsule's ends: skinned to its joint, the joint's parent or its child.
+      if (skinned_to(i, bone.joint) || skinned_to(i, parent) || skinned_to(i, bone.child)) continue;
+      // Flesh that hangs on the bone (a vertex of its cell bound to it), or that nothing can move (its cell
+      // all bound: bones carry it, the barrier could not hold it off).
+      bool on_bone = false, all_hard = true;
+      for (Eigen::Index k = 0; k < cell.rows(); ++k) {
+        on_bone = on_bone || bone_of[static_cast<std::size_t>(cell(k, i))] == static_cast<int>(b);
+        all_hard = all_hard && hard[static_cast<std::size_t>(cell(k, i))];
+      }
+      if (on_bone || all_hard) continue;
+      // Out of range at rest, with room: the rest state stays the first frame's solution.
+      if (segment_distance(bone.a, bone.b, rest.col(i)) - bone.radius > margin) out[b].push_back(static_cast<int>(i));
+    }
+  }
+  return out;
+}
+
+std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Flesh> flesh, double dhat, double stiffness) {
+  const EmbeddedSurface skin = contact_surface(*flesh);
+  const std::vector<std::vector<int>> colliding = bone_collider_points(*flesh, dhat);
+  std::vector<std::shared_ptr<Term>> terms;
+  for (std::size_t b = 0; b < flesh->bones.size(); ++b) {
+    const Bone& bone = flesh->bones[b];
+    const std::vector<int>& points = colliding[b];
+    if (points.empty()) continue;
     ColliderShape shape;
     shape.kind = bone.a == bone.b ? ColliderShape::Kind::sphere : ColliderShape::Kind::capsule;
     shape.a = bone.a;
@@ -228,13 +265,14 @@ std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Fle
     // The joint's motion from rest is rigid up to the rounding of the file's single-precision transforms:
     // taken as the nearest rotation (polar decomposition) and the mean scale, as the shape needs.
     ColliderPose pose = [flesh, joint = bone.joint, rest_inverse](double t) {
-      Eigen::Affine3d m = joint_world(*flesh, t)[static_cast<std::size_t>(joint)] * rest_inverse;
-      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.linear(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Affine3d a = joint_world(*flesh, t)[static_cast<std::size_t>(joint)] * rest_inverse;
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(a.linear(), Eigen::ComputeFullU | Eigen::ComputeFullV);
       Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
-      m.linear() = svd.singularValues().mean() * r;
-      return m;
+      a.linear() = svd.singularValues().mean() * r;
+      return a;
     };
-    terms.push_back(std::make_shared<ShapeColliderTerm>(std::move(vertices), shape, std::move(pose), dhat, stiffness));
+    terms.push_back(std::make_shared<ShapeColliderTerm>(skin.points.vertex(Eigen::all, points), skin.points.weight(Eigen::all, points),
+                                                        shape, std::move(pose), dhat, stiffness));
   }
   return terms;
 }

@@ -128,13 +128,21 @@ struct EmbeddedSurface {
 [[nodiscard]] double flesh_contact_stiffness(const Flesh& flesh, double youngs, double dhat);
 
 /// The bones' capsules as moving colliders (one ShapeColliderTerm per bone: a capsule, or a sphere for a
-/// point bone, carried by its joint) against the flesh that is not bound to them: the volume's boundary
-/// vertices that are free (not hard-bound: soft or released ones count) and lie farther than a cell (and than 2 d̂) outside the capsule at
-/// rest: the first layer around a capsule hangs on its bound vertices and is left out, so that the rest
-/// state has nothing in range. A finger's flesh pressed onto another finger's (or the palm's) bone stops
-/// at its capsule. Bones whose capsule has no such vertex get no term.
+/// point bone, carried by its joint) against the skin that is not bound to them: the render surface's points
+/// (contact_surface, embedded in the volume) that are
+///   - not skinned to the bone's joint, nor to that joint's parent or the bone's child joint (the flesh that
+///     folds around the capsule's ends as those joints bend: the capsules of a bent joint overlap it);
+///   - not hanging on the bone (no vertex of the point's cell bound to it, hard or released) and not carried
+///     by bones alone (a cell all hard-bound: the barrier could not hold such a point off);
+///   - farther than 2 d̂ outside the capsule at rest (nothing in range at the start: the rest state stays the
+///     solution of the first frame; where a capsule pokes out of the skin, the skin next to it is left out).
+/// A finger's skin pressed onto another finger's (or the palm's) bone stops at its capsule. Bones whose
+/// capsule has no such point get no term.
 [[nodiscard]] std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Flesh> flesh, double dhat,
                                                                      double stiffness);
+/// The points each bone's capsule acts on (welded ids of contact_surface's points), per bone in flesh.bones'
+/// order (empty for a bone without a radius or without such points).
+[[nodiscard]] std::vector<std::vector<int>> bone_collider_points(const Flesh& flesh, double dhat);
 
 /// The joints' world transforms at time t of the clip.
 [[nodiscard]] std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t);

@@ -100,12 +100,16 @@ ColliderShape collider_shape(const ColliderSpec& c) {
 }
 
 /// The term of a sphere, capsule, box, mesh or moving plane collider over the surface F of the mesh (rest
-/// positions `rest`), its pose following its motions.
+/// positions `rest`), its pose following its motions. With `points` (a flesh's render surface) F's ids are
+/// those points, embedded in the mesh, and the collider acts on them.
 std::shared_ptr<Term> collider_term(const ColliderSpec& c, const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, double dhat,
-                                    double kappa) {
+                                    double kappa, const Embedding* points = nullptr) {
+  const ColliderPose pose = collider_pose(c);
   if (c.type == ColliderSpec::Type::mesh)
-    return std::make_shared<MeshColliderTerm>(F, rest, c.vertices, c.triangles, collider_pose(c), dhat, kappa);
-  return std::make_shared<ShapeColliderTerm>(vertices_of(F), collider_shape(c), collider_pose(c), dhat, kappa);
+    return points ? std::make_shared<MeshColliderTerm>(F, points->vertex, points->weight, rest, c.vertices, c.triangles, pose, dhat, kappa)
+                  : std::make_shared<MeshColliderTerm>(F, rest, c.vertices, c.triangles, pose, dhat, kappa);
+  return points ? std::make_shared<ShapeColliderTerm>(points->vertex, points->weight, collider_shape(c), pose, dhat, kappa)
+                : std::make_shared<ShapeColliderTerm>(vertices_of(F), collider_shape(c), pose, dhat, kappa);
 }
 
 /// A fixed plane as a shape (for friction).
@@ -116,61 +120,56 @@ std::string_view type_name(ColliderSpec::Type t) {
   return names[static_cast<int>(t)];
 }
 
-/// Contact needs a separated start: every vertex of the mesh's boundary surface strictly above each plane
-/// collider, and (self-contact) no two of its primitives touching (a barrier is +∞ there, and Newton could
-/// only report a state that is not finite).
+/// Contact needs a separated start: every vertex of the mesh's boundary surface (a flesh's: of its render
+/// surface) strictly above each plane and outside each shape collider, none touching a mesh collider, and
+/// (self-contact) no two of its primitives touching (a barrier is +∞ there, and Newton could only report a
+/// state that is not finite).
 void check_contact_start(const Scene& s, const VolumeMesh& mesh, const Eigen::VectorXd& x0, const std::string& file) {
   if (!s.contact.enabled) return;
-  if (s.loaded && s.loaded->flesh) {  // the render surface, embedded in the volume
-    const EmbeddedSurface surface = contact_surface(*s.loaded->flesh);
-    const Eigen::Matrix3Xd P = surface.points.apply(x0);
-    for (std::size_t i = 0; i < s.contact.planes.size(); ++i) {
-      const PlaneColliderSpec& plane = s.contact.planes[i];
-      for (Eigen::Index v = 0; v < P.cols(); ++v)
-        if (const double d = plane.normal.dot(P.col(v) - plane.point); !(d > 0.0))
-          throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of the render surface (welded) is {:g} from the plane, on or "
-                                       "behind it at the start (contact needs a separated start: move the plane)",
-                                       file, i, v, d));
-    }
-    if (s.contact.self) {
-      const ContactTerm self(surface.triangles, surface.points.vertex, surface.points.weight, mesh.vertices, s.contact.dhat, 1.0);
-      if (!std::isfinite(self.energy(x0)))
-        throw SceneError(fmt::format("{}: contact.self: the render surface touches itself at the start (two of its triangles at "
-                                     "distance 0): contact needs a separated start",
-                                     file));
-    }
-    return;
+  const bool flesh = s.loaded && s.loaded->flesh;
+  EmbeddedSurface skin;  // a flesh's render surface, embedded in the volume
+  if (flesh) skin = contact_surface(*s.loaded->flesh);
+  const Eigen::Matrix3Xi F = flesh ? skin.triangles : boundary_triangles(mesh);
+  const Embedding* points = flesh ? &skin.points : nullptr;
+  // The surface's vertices at the start: (id as reported, position).
+  std::vector<std::pair<int, Eigen::Vector3d>> start;
+  if (flesh) {
+    const Eigen::Matrix3Xd P = skin.points.apply(x0);
+    for (Eigen::Index v = 0; v < P.cols(); ++v) start.emplace_back(static_cast<int>(v), P.col(v));
+  } else {
+    for (const int v : vertices_of(F)) start.emplace_back(v, x0.segment<3>(3 * v));
   }
-  const Eigen::Matrix3Xi F = boundary_triangles(mesh);
-  const std::vector<int> surface = vertices_of(F);
-  for (std::size_t i = 0; i < s.contact.planes.size(); ++i) {
-    const PlaneColliderSpec& plane = s.contact.planes[i];
-    for (int v : surface) {
-      const double d = plane.normal.dot(x0.segment<3>(3 * v) - plane.point);
-      if (!(d > 0.0))
-        throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of the mesh's surface is {:g} from the plane, on or behind it at "
-                                     "the start (contact needs a separated start: move the plane or the mesh)",
-                                     file, plane.index, v, d));
-    }
-  }
+  const char* surface = flesh ? "the render surface (welded)" : "the mesh's surface";
+  const char* move = flesh ? "move the collider" : "move the collider or the mesh";
+  for (const PlaneColliderSpec& plane : s.contact.planes)
+    for (const auto& [v, p] : start)
+      if (const double d = plane.normal.dot(p - plane.point); !(d > 0.0))
+        throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of {} is {:g} from the plane, on or behind it at the start "
+                                     "(contact needs a separated start: {})",
+                                     file, plane.index, v, surface, d, flesh ? "move the plane" : "move the plane or the mesh"));
   for (const ColliderSpec& c : s.contact.colliders) {
-    const std::shared_ptr<Term> term = collider_term(c, F, mesh.vertices, s.contact.dhat, 1.0);
+    const std::shared_ptr<Term> term = collider_term(c, F, mesh.vertices, s.contact.dhat, 1.0, points);
     if (const auto* shape = dynamic_cast<const ShapeColliderTerm*>(term.get())) {
-      for (int v : surface)
-        if (const double d = shape->distance(x0, v); !(d > 0.0))
-          throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of the mesh's surface is {:g} from the {}, on or inside it at the "
-                                       "start (contact needs a separated start: move the collider or the mesh)",
-                                       file, c.index, v, d, type_name(c.type)));
+      for (Eigen::Index i = 0; i < shape->point_count(); ++i)
+        if (const double d = shape->point_distance(x0, i); !(d > 0.0))
+          throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of {} is {:g} from the {}, on or inside it at the start "
+                                       "(contact needs a separated start: {})",
+                                       file, c.index, start[static_cast<std::size_t>(i)].first, surface, d, type_name(c.type), move));
     } else if (!std::isfinite(term->energy(x0))) {
-      throw SceneError(fmt::format("{}: colliders[{}]: the mesh's surface touches the collider's ({}) at the start (distance 0): "
-                                   "contact needs a separated start",
-                                   file, c.index, c.file.string()));
+      throw SceneError(fmt::format("{}: colliders[{}]: {} touches the collider's ({}) at the start (distance 0): contact needs a "
+                                   "separated start",
+                                   file, c.index, surface, c.file.string()));
     }
   }
-  if (s.contact.self && !std::isfinite(ContactTerm(F, mesh.vertices, s.contact.dhat, 1.0).energy(x0)))
-    throw SceneError(fmt::format("{}: contact.self: the mesh's surface touches itself at the start (two of its triangles at "
-                                 "distance 0): contact needs a separated start",
-                                 file));
+  if (!s.contact.self) return;
+  const bool touching = flesh ? !std::isfinite(ContactTerm(skin.triangles, skin.points.vertex, skin.points.weight, mesh.vertices,
+                                                           s.contact.dhat, 1.0)
+                                                   .energy(x0))
+                              : !std::isfinite(ContactTerm(F, mesh.vertices, s.contact.dhat, 1.0).energy(x0));
+  if (touching)
+    throw SceneError(fmt::format("{}: contact.self: {} touches itself at the start (two of its triangles at distance 0): contact "
+                                 "needs a separated start",
+                                 file, surface));
 }
 
 /// Two pin sets may share a vertex, each holding its own coordinates; a moving set must then not move the
@@ -579,12 +578,12 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
       kappa = as_scene_error([&] { return ipc_barrier_stiffness(diagonal, s.contact.dhat, mass, h); });
     }
     const Eigen::Matrix3Xi F = boundary_triangles(mesh);
-    // Lagged Coulomb friction (μ > 0) against the planes and shapes, on the points they keep out.
+    // Lagged Coulomb friction (μ > 0) in self-contact and against the planes and shapes, on the points they keep out.
     const double mu = s.contact.friction;
     slip_velocity = s.contact.friction_velocity > 0.0 ? s.contact.friction_velocity
                                                       : 1e-3 * (mesh.vertices.rowwise().maxCoeff() - mesh.vertices.rowwise().minCoeff()).norm();
+    const EmbeddedSurface surface = loaded->flesh ? contact_surface(*loaded->flesh) : EmbeddedSurface{};
     if (loaded->flesh) {  // on the render surface, embedded in the volume
-      const EmbeddedSurface surface = contact_surface(*loaded->flesh);
       if (s.contact.self) {
         auto self = std::make_shared<ContactTerm>(surface.triangles, surface.points.vertex, surface.points.weight, mesh.vertices,
                                                   s.contact.dhat, kappa);
@@ -615,21 +614,24 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
                                                                    s.contact.dhat, kappa, mu, slip_velocity));
         }
       }
-      const std::vector<int> surface = vertices_of(F);
+      const std::vector<int> boundary = vertices_of(F);
       for (const PlaneColliderSpec& plane : s.contact.planes) {
         setup.terms.push_back(
-            std::make_shared<PlaneContactTerm>(surface, plane.point, plane.normal, s.contact.dhat, kappa));
+            std::make_shared<PlaneContactTerm>(boundary, plane.point, plane.normal, s.contact.dhat, kappa));
         if (mu > 0.0)
           setup.terms.push_back(
-              std::make_shared<FrictionTerm>(surface, plane_shape(plane), ColliderPose{}, s.contact.dhat, kappa, mu, slip_velocity));
+              std::make_shared<FrictionTerm>(boundary, plane_shape(plane), ColliderPose{}, s.contact.dhat, kappa, mu, slip_velocity));
       }
     }
-    // Shapes and meshes act on the volume's boundary (a flesh's lattice encloses its skin: the skin stays out too).
+    // Shapes and meshes act on the volume's boundary, or on a flesh's render surface (its points embedded).
     for (const ColliderSpec& c : s.contact.colliders) {
-      setup.terms.push_back(collider_term(c, F, mesh.vertices, s.contact.dhat, kappa));
+      setup.terms.push_back(collider_term(c, loaded->flesh ? surface.triangles : F, mesh.vertices, s.contact.dhat, kappa,
+                                          loaded->flesh ? &surface.points : nullptr));
       if (mu > 0.0 && c.type != ColliderSpec::Type::mesh)
-        setup.terms.push_back(std::make_shared<FrictionTerm>(vertices_of(F), collider_shape(c), collider_pose(c), s.contact.dhat, kappa,
-                                                             mu, slip_velocity));
+        setup.terms.push_back(loaded->flesh ? std::make_shared<FrictionTerm>(surface.points.vertex, surface.points.weight, collider_shape(c),
+                                                                             collider_pose(c), s.contact.dhat, kappa, mu, slip_velocity)
+                                            : std::make_shared<FrictionTerm>(vertices_of(F), collider_shape(c), collider_pose(c),
+                                                                             s.contact.dhat, kappa, mu, slip_velocity));
     }
   }
   for (const std::shared_ptr<Term>& t : setup.terms)

@@ -107,22 +107,45 @@ void accumulate(NewtonReport& sum, const NewtonReport& r) {
 
 }  // namespace
 
+bool Simulation::carried_check() const {
+  if (dynamic() || !setup_.carrier) return false;
+  return std::any_of(setup_.terms.begin(), setup_.terms.end(), [](const std::shared_ptr<Term>& t) { return t->moving(); });
+}
+
+Eigen::VectorXd Simulation::carry(const Eigen::VectorXd& x, double from, double to) const {
+  using Frame = Eigen::Matrix<double, 3, 4>;
+  std::vector<Frame> at_from, at_to;
+  setup_.carrier(from, at_from);
+  setup_.carrier(to, at_to);
+  Eigen::VectorXd out(x.size());
+  for (Eigen::Index v = 0; v < x.size() / 3; ++v) {  // as solve()'s carried guess: into the frame at `from`, out at `to`
+    const Frame& f = at_from[static_cast<std::size_t>(v)];
+    const Frame& g = at_to[static_cast<std::size_t>(v)];
+    const Eigen::Vector3d y = f.leftCols<3>().partialPivLu().solve(x.segment<3>(3 * v) - f.col(3));
+    out.segment<3>(3 * v) = g.leftCols<3>() * y + g.col(3);
+  }
+  return out;
+}
+
 double Simulation::clearance(double from, double to, double h) {
   if (setup_.terms.empty()) return 1.0;
   // The pins' jump to their targets at `to` (and, for backward Euler, the free DOFs' inertial prediction:
-  // the guess the solve starts from).
-  Eigen::VectorXd moved = x_;
+  // the guess the solve starts from; with carried_check(), the free DOFs carried along: the guess's base).
+  const bool carried = carried_check();
+  Eigen::VectorXd moved = carried ? carry(x_, from, to) : x_;
   if (dynamic()) moved += h * v_;
   place_kinematic(moved, to);
   const Eigen::VectorXd dx = moved - x_;
   double alpha = 1.0;
   for (const std::shared_ptr<Term>& term : setup_.terms)
     if (term->moving()) alpha = std::min(alpha, term->sweep(x_, dx, from, to));
-  if (alpha < 1.0 || setup_.kinematic.empty()) return alpha;
-  // The other contact terms: the pins' jump alone (the free DOFs' move is the guess's, bounded in solve()).
+  if (alpha < 1.0 || (setup_.kinematic.empty() && !carried)) return alpha;
+  // The other contact terms: the pins' jump alone (the free DOFs' move is the guess's, bounded in solve()),
+  // or with carried_check() the same carried move.
   Eigen::VectorXd jump = x_;
   place_kinematic(jump, to);
   jump -= x_;
+  if (carried) jump = dx;
   if (jump.isZero(0.0)) return alpha;
   for (const std::shared_ptr<Term>& term : setup_.terms) term->at_time(to);
   for (const std::shared_ptr<Term>& term : setup_.terms)
@@ -260,13 +283,15 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
     // Contact terms bound the move from x_n (its kinematic DOFs already at t) to the guess by continuous
     // collision detection, so that the guess never jumps through a contact (a term without a bound, as
     // every one but contact, says 1: the guess is then unchanged).
-    Eigen::VectorXd base = x_n;
+    // With carried_check() the base is x_n carried to t, which step() checked instead.
+    Eigen::VectorXd base = carried_check() ? carry(x_n, time_, t) : x_n;
     for (Eigen::Index d = 0; d < base.size(); ++d)
       if (!dofs_.is_free(d)) base[d] = guess[d];  // the kinematic DOFs as placed (providers asked once a step)
     const Eigen::VectorXd dx = dofs_.gather_free(guess) - dofs_.gather_free(base);
     // A moving collider's bound is its sweep from (x_n, its pose at the last time) to (the guess, its pose
     // at t), which step() found clear for backward Euler's prediction (base itself may be inside it at t);
-    // quasi-statically base is clear of it (step() checked the pins' jump) and its max_step applies.
+    // quasi-statically base is clear of it (step() checked the pins' jump, or the carried move) and its
+    // max_step applies.
     double alpha = 1.0;
     const Eigen::VectorXd dx_full = dofs_.expand(dx);
     for (const std::shared_ptr<Term>& term : setup_.terms)

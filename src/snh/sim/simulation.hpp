@@ -145,6 +145,11 @@ class Simulation {
   /// sweeps (against the pins' jump and the inertial prediction) and the other terms' bounds on the pins'
   /// jump keep clear.
   double clearance(double from, double to, double h);
+  /// Quasi-static with a carrier and a moving collider (a flesh's bones' capsules): the free vertices are
+  /// taken along with the carrier (not held still) in the step's check and as the guess's base.
+  [[nodiscard]] bool carried_check() const;
+  /// x carried by the carrier's frames from time `from` to `to` (every vertex: frame(to) · frame(from)⁻¹).
+  [[nodiscard]] Eigen::VectorXd carry(const Eigen::VectorXd& x, double from, double to) const;
   SimulationSetup setup_;
   ElasticTerm elastic_;
   DofMap dofs_;
