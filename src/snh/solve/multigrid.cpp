@@ -747,18 +747,23 @@ bool MultigridPreconditioner::Impl::prepare_smoother(Level& L) {
       if (L.row_node[e] < i) to = a.cast<float>();
       else to = a.transpose().cast<float>();
     }
+  int failed = 0;  // nodes whose block is not positive definite (each node's inverse is its own: any order)
+#pragma omp parallel for schedule(static) reduction(+ : failed) if (parallel(L))
   for (int i = 0; i < L.nodes; ++i) {
     Eigen::Matrix3d D = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&L.A.val[9 * static_cast<std::size_t>(L.diagonal[i])]);
     for (int a = 0; a < 3; ++a)
       if (!L.free[3 * i + a]) D(a, a) = 1.0;
     const Eigen::LLT<Eigen::Matrix3d> llt(D);
-    if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().array() > 0.0).all()) return false;
+    if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().array() > 0.0).all()) {
+      ++failed;
+      continue;
+    }
     Eigen::Matrix3d inv = llt.solve(Eigen::Matrix3d::Identity());
     for (int a = 0; a < 3; ++a)
       if (!L.free[3 * i + a]) inv.row(a).setZero(), inv.col(a).setZero();
     Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&L.inverse[9 * static_cast<std::size_t>(i)]) = inv;
   }
-  return true;
+  return failed == 0;
 }
 
 bool MultigridPreconditioner::Impl::values(const SparseLower& A, double shift, bool refresh) {
