@@ -56,7 +56,7 @@ struct Blocks {
       col.insert(col.end(), r.begin(), r.end());
       start.push_back(static_cast<int>(col.size()));
     }
-    val.assign(9 * col.size(), 0.0);
+    val.assign(9 * col.size() + 1, 0.0);  // one more: subtract_product() reads 4 doubles from a block's last row
   }
 };
 
@@ -933,9 +933,23 @@ void forward_residual(Level& L, bool parallel) {
   }
 }
 
+/// Four doubles from p on.
+inline Lanes lanes4(const double* p) {
+#ifdef __AVX__
+  return Lanes(_mm256_loadu_pd(p));
+#else
+  Lanes v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+#endif
+}
+
 /// y = b − A x (b may be null: y = −A x) from A's lower block triangle, by L's chunks in parallel: each
 /// chunk's rows in order, then each row's sum and the chunks' spills into it in chunk order (a fixed order:
-/// the result does not depend on the thread count).
+/// the result does not depend on the thread count). Four lanes at a time: a block's rows r_k (4 doubles from
+/// each, the fourth the next row's first: it meets x's zero lane, or goes to the spill's unused one) give
+/// row i's sums lane by lane, t_k += r_k ∘ x_j, added across the lanes at the row's end, and the spill
+/// −= Σ_k r_k x_ik.
 void subtract_product(Level& L, const double* x, const double* b, double* y, bool parallel) {
   const double* val = L.A.val.data();
   const int chunks = static_cast<int>(L.chunk_low.size());
@@ -947,16 +961,20 @@ void subtract_product(Level& L, const double* x, const double* b, double* y, boo
       const int low = L.chunk_low[c];
       std::fill(spill, L.spill.data() + L.chunk_offset[c + 1], 0.0);
       for (int i = L.chunk_start[c]; i < L.chunk_start[c + 1]; ++i) {
-        double s[3] = {b ? b[3 * i] : 0.0, b ? b[3 * i + 1] : 0.0, b ? b[3 * i + 2] : 0.0};
+        const Lanes xi = lanes3(x + 3 * i);
+        Lanes t0{}, t1{}, t2{};
         const int end = L.A.start[i + 1] - 1;  // the diagonal block
         for (int k = L.A.start[i]; k < end; ++k) {
           const double* a = val + 9 * static_cast<std::size_t>(k);
-          const int j = L.A.col[k];
-          subtract(a, x + 3 * j, s);
-          subtract_transposed(a, x + 3 * i, spill + 3 * (j - low));
+          const Lanes r0 = lanes4(a), r1 = lanes4(a + 3), r2 = lanes4(a + 6), xj = lanes3(x + 3 * L.A.col[k]);
+          t0 += r0 * xj, t1 += r1 * xj, t2 += r2 * xj;
+          double* to = spill + 3 * (L.A.col[k] - low);
+          store3(lanes3(to) - (r0 * xi[0] + r1 * xi[1] + r2 * xi[2]), to);
         }
-        subtract(val + 9 * static_cast<std::size_t>(end), x + 3 * i, s);
-        std::copy_n(s, 3, y + 3 * i);
+        const double* d = val + 9 * static_cast<std::size_t>(end);
+        t0 += lanes4(d) * xi, t1 += lanes4(d + 3) * xi, t2 += lanes4(d + 6) * xi;
+        const Lanes* t[3] = {&t0, &t1, &t2};
+        for (int a = 0; a < 3; ++a) y[3 * i + a] = (b ? b[3 * i + a] : 0.0) - (((*t[a])[0] + (*t[a])[1]) + (*t[a])[2]);
       }
     }
 #pragma omp for schedule(static)
