@@ -133,9 +133,9 @@ struct InvariantEnergy {
   /// entry comes straight from the formula above (∂²J/∂F_ij∂F_kl = ε_ikm ε_jln F_mn), summed in hessian()'s
   /// order, so the values are w·hessian(F)'s to the bit (tested), without the 9×9 matrix, its products and
   /// its zeros (half of the slices' entries come from ∂²J/∂F², zero elsewhere). Zero where undefined.
-  [[nodiscard]] std::array<Mat3, 6> weighted_hessian_slices(const Mat3& F, double w) const
-    requires(!Derived::uses_I1)
-  {
+  template <class D = Derived>  // a template: Derived is complete only where this is used
+    requires(!D::uses_I1)
+  [[nodiscard]] std::array<Mat3, 6> weighted_hessian_slices(const Mat3& F, double w) const {
     std::array<Mat3, 6> out;
     if (!defined(F)) {
       for (Mat3& m : out) m.setZero();
