@@ -65,7 +65,8 @@ double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix
   if (grad) grad->setZero();
   if (K) std::fill(K, K + packed_size<N>, 0.0);
   // The analytic Hessian of an energy of the invariants comes as its six slices straight from its formula,
-  // the same values as the 9x9 matrix scaled by w (tested), in a third of the time (bench_assembly).
+  // the same values as the 9x9 matrix scaled by w (tested), without building it (bench_assembly: the true
+  // Hessian's assembly 2.97 -> 2.47 us per hex).
   constexpr bool sliced = has_hessian_slices<M>;
   const bool slices = sliced && K && p == PsdProjection::none;
   for (int q = 0; q < Q; ++q) {
