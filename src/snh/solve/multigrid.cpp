@@ -873,10 +873,10 @@ inline Lanes widen4(const float* p) {
 inline Lanes lanes3(const double* p) { return Lanes{p[0], p[1], p[2], 0.0}; }
 inline void store3(const Lanes& v, double* p) { p[0] = v[0], p[1] = v[1], p[2] = v[2]; }
 
-/// s −= a x for a 3×3 single-precision block a stored by columns, reading 12 floats (each column's fourth lane
-/// is the float after it: it goes to s's unused lane). Lane k is s_k − ((a_k0 x_0 + a_k1 x_1) + a_k2 x_2): the same operations
-/// in the same order as subtract() on the block by rows, so the results are the same to the bit, in a third
-/// of the instructions.
+/// s −= a x for a 3×3 single-precision block a stored by columns, reading 12 floats (each column's fourth
+/// lane is the float after it: it goes to s's unused lane). Lane k is s_k − ((a_k0 x_0 + a_k1 x_1) + a_k2 x_2):
+/// the same operations in the same order as subtract() on the block by rows, so the results are the same to
+/// the bit, in a third of the instructions.
 inline void subtract_columns(const float* a, const double* x, Lanes& s) {
   s -= widen4(a) * x[0] + widen4(a + 3) * x[1] + widen4(a + 6) * x[2];
 }
