@@ -88,5 +88,30 @@ TYPED_TEST(Derivatives, SvdFormMatchesFForm) {
   }
 }
 
+// The element loop's slices of the Hessian (energies without I1): w·hessian(F)'s entries, bit for bit, at
+// upright, inverted and (where undefined: zero) any F, with a weight that is not a power of two.
+TYPED_TEST(Derivatives, HessianSlicesAreTheWeightedHessian) {
+  if constexpr (!test::uses_trace_of_S<TypeParam>() && requires(const TypeParam& m, const Mat3& F) { m.weighted_hessian_slices(F, 1.0); }) {
+    std::mt19937_64 rng(303);
+    for (const Lame& p : test::parameter_sets()) {
+      const TypeParam m(p);
+      for (int i = 0; i < 40; ++i) {
+        const Mat3 F = test::sample_F(rng, 0.3, 1.7, i % 4);
+        const double w = 0.37 + 0.01 * i;
+        const Mat9 H = m.hessian(F) * w;
+        const std::array<Mat3, 6> slices = m.weighted_hessian_slices(F, w);
+        for (int a = 0; a < 3; ++a)
+          for (int k = 0; k <= a; ++k)
+            for (int j = 0; j < 3; ++j)
+              for (int l = 0; l < 3; ++l)
+                ASSERT_EQ(slices[a * (a + 1) / 2 + k](j, l), H(3 * j + a, 3 * l + k))
+                    << TypeParam::name << " slice (" << a << ", " << k << ") at (" << j << ", " << l << "), F=\n" << F;
+      }
+    }
+  } else {
+    GTEST_SKIP() << "an energy of I1: its Hessian comes from the eigensystem";
+  }
+}
+
 }  // namespace
 }  // namespace snh

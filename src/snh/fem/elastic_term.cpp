@@ -37,34 +37,55 @@ template <int N>
 constexpr int packed_size = 6 * N * N;
 constexpr int packed_pair(int i, int k) { return i * (i + 1) / 2 + k; }
 
+/// Adds the stiffness of one quadrature point to the packed K: with vec(F)_{3j+i} = Σ_a x_{a,i} G_{a,j},
+/// K_ik(a, b) = w Σ_{j,l} G_{a,j} H_{3j+i,3l+k} G_{b,l}, that is K_ik = G H_ik Gᵀ with H_ik the 3x3 matrix
+/// (j, l) ↦ w H_{3j+i,3l+k}, which slice(i, k, j, l) gives.
+template <int N, class Slice>
+void add_point_stiffness(const Eigen::Matrix<double, N, 3>& G, const Slice& slice, double* K) {
+  using NxN = Eigen::Matrix<double, N, N>;
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k <= i; ++k) {
+      Eigen::Matrix<double, N, 3> GH;
+      for (int l = 0; l < 3; ++l)
+        GH.col(l) = G.col(0) * slice(i, k, 0, l) + G.col(1) * slice(i, k, 1, l) + G.col(2) * slice(i, k, 2, l);
+      Eigen::Map<NxN> Kik(K + N * N * packed_pair(i, k));
+      for (int b = 0; b < N; ++b) Kik.col(b) += GH.col(0) * G(b, 0) + GH.col(1) * G(b, 1) + GH.col(2) * G(b, 2);
+    }
+}
+
+/// Whether M gives its analytic Hessian as weighted slices (energies of I2 and I3: InvariantEnergy).
+template <class M>
+constexpr bool has_hessian_slices = requires(const M& m, const Mat3& F) { m.weighted_hessian_slices(F, 1.0); };
+
 /// Energy, gradient (3 by N) and packed stiffness (packed_size<N> values) of one element at node positions X.
 template <class M, int N, int Q>
 double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix<double, 3, N>& X,
                      Eigen::Matrix<double, 3, N>* grad, double* K, PsdProjection p) {
-  using NxN = Eigen::Matrix<double, N, N>;
   double psi = 0.0;
   if (grad) grad->setZero();
   if (K) std::fill(K, K + packed_size<N>, 0.0);
+  // The analytic Hessian of an energy of the invariants comes as its six slices straight from its formula,
+  // the same values as the 9x9 matrix scaled by w (tested), without building it (bench_assembly: the true
+  // Hessian's assembly 2.97 -> 2.47 us per hex).
+  constexpr bool sliced = has_hessian_slices<M>;
+  const bool slices = sliced && K && p == PsdProjection::none;
   for (int q = 0; q < Q; ++q) {
     const Eigen::Matrix<double, N, 3>& G = r.G[q];
     const double w = r.weight[q];
     const Mat3 F = X * G;
-    PointTerms t = point_terms(m, F, grad != nullptr, K != nullptr, p);  // one SVD at most
+    PointTerms t = point_terms(m, F, grad != nullptr, K != nullptr && !slices, p);  // one SVD at most
     psi += w * t.psi;
     if (grad) grad->noalias() += (w * t.P) * G.transpose();
-    if (K) {
-      // With vec(F)_{3j+i} = Σ_a x_{a,i} G_{a,j}: K_ik(a, b) = w Σ_{j,l} G_{a,j} H_{3j+i,3l+k} G_{b,l}, that is
-      // K_ik = G H_ik Gᵀ with H_ik the 3x3 matrix (j, l) ↦ w H_{3j+i,3l+k}.
-      t.H *= w;
-      for (int i = 0; i < 3; ++i)
-        for (int k = 0; k <= i; ++k) {
-          Eigen::Matrix<double, N, 3> GH;
-          for (int l = 0; l < 3; ++l)
-            GH.col(l) = G.col(0) * t.H(i, 3 * l + k) + G.col(1) * t.H(3 + i, 3 * l + k) + G.col(2) * t.H(6 + i, 3 * l + k);
-          Eigen::Map<NxN> Kik(K + N * N * packed_pair(i, k));
-          for (int b = 0; b < N; ++b) Kik.col(b) += GH.col(0) * G(b, 0) + GH.col(1) * G(b, 1) + GH.col(2) * G(b, 2);
-        }
+    if (!K) continue;
+    if constexpr (sliced) {
+      if (slices) {
+        const std::array<Mat3, 6> h = m.weighted_hessian_slices(F, w);
+        add_point_stiffness<N>(G, [&h](int i, int k, int j, int l) { return h[packed_pair(i, k)](j, l); }, K);
+        continue;
+      }
     }
+    t.H *= w;
+    add_point_stiffness<N>(G, [&t](int i, int k, int j, int l) { return t.H(3 * j + i, 3 * l + k); }, K);
   }
   return psi;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // Energies written in the invariants I1 = tr S = Σσ, I2 = ‖F‖² = I_C, I3 = J, and the general
 // eigensystem of Smith, de Goes & Kim 2019 built from their derivatives (MATH.md §4).
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -126,6 +127,44 @@ struct InvariantEnergy {
       }
       return H;
     }
+  }
+  /// w ∂P/∂F, the analytic Hessian of an energy without I1 times w, as the six 3×3 slices an element's
+  /// stiffness is made of (elastic_term.cpp): slice i(i+1)/2 + k, i ≥ k, holds (j, l) ↦ w H_{3j+i, 3l+k}. Each
+  /// entry comes straight from the formula above (∂²J/∂F_ij∂F_kl = ε_ikm ε_jln F_mn), summed in hessian()'s
+  /// order, so the values are w·hessian(F)'s to the bit (tested), without the 9×9 matrix, its products and
+  /// its zeros (half of the slices' entries come from ∂²J/∂F², zero elsewhere). Zero where undefined.
+  template <class D = Derived>  // a template: Derived is complete only where this is used
+    requires(!D::uses_I1)
+  [[nodiscard]] std::array<Mat3, 6> weighted_hessian_slices(const Mat3& F, double w) const {
+    std::array<Mat3, 6> out;
+    if (!defined(F)) {
+      for (Mat3& m : out) m.setZero();
+      return out;
+    }
+    const InvariantDerivatives d = self().derivatives(0.0, F.squaredNorm(), F.determinant());
+    const Mat3 g = det_gradient(F);
+    const double twice_d2 = 2.0 * d.d2, four_d22 = 4.0 * d.d22, twice_d23 = 2.0 * d.d23;
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k <= i; ++k) {
+        Mat3& slice = out[static_cast<std::size_t>(i * (i + 1) / 2 + k)];
+        // ε_ikm: m is the third index when i ≠ k, with the sign of the permutation (i, k, m).
+        const int m = 3 - i - k;
+        const double eps_ik = i == k ? 0.0 : ((k - i + 3) % 3 == 1 ? 1.0 : -1.0);
+        for (int j = 0; j < 3; ++j)
+          for (int l = 0; l < 3; ++l) {
+            const int n = 3 - j - l;
+            const double eps_jl = j == l ? 0.0 : ((l - j + 3) % 3 == 1 ? 1.0 : -1.0);
+            // ε_ikm ε_jln F_mn is ±F_mn or zero, as det_hessian()'s entries: exactly.
+            const double hJ = eps_ik * eps_jl == 0.0 ? 0.0 : eps_ik * eps_jl * F(m, n);
+            double h = d.d3 * hJ;
+            if (i == k && j == l) h += twice_d2;
+            h += (d.d33 * g(i, j)) * g(k, l);
+            if (d.d22 != 0.0) h += (four_d22 * F(i, j)) * F(k, l);
+            if (d.d23 != 0.0) h += twice_d23 * (F(i, j) * g(k, l) + F(k, l) * g(i, j));
+            slice(j, l) = h * w;
+          }
+      }
+    return out;
   }
 
  private:
