@@ -348,8 +348,9 @@ std::pair<double, double> stacked(double mu, bool with_term) {
       if (!r.converged) break;
       each(s, sim);
     }
-    if (term)  // the lagged normal forces add up to the upper cube's weight across the slope (7 012 N)
+    if (term) {  // the lagged normal forces add up to the upper cube's weight across the slope (7 012 N)
       EXPECT_NEAR(term->normal_force(), 800.0 * 9.8 * std::cos(theta), 0.02 * 7012.0) << "mu " << mu;
+    }
     return sim.x();
   };
   const Eigen::VectorXd settled =
