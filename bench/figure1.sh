@@ -14,7 +14,8 @@
 # Environment: SNH (default build/release/apps/snh), FRAMES (20), END_TIME (1.6667, seconds of the clip),
 #   SOLVER (mg; any --solver name), THREADS (0: all cores), JOINT_CELLS (free: see `snh flesh --help`),
 #   OUT (default /tmp/snh-figure1/E-SOLVER), COMPARE (a second solver, e.g. cholmod: runs it too and prints
-#   the largest distance between the two runs' render surfaces, to show the same answer).
+#   the largest distance between the two runs' render surfaces, to show the same answer), CONTACT (1: self-contact
+#   of the skin, as scenes/hand_fist_contact.json, so that the closing fingers do not squeeze flesh through itself).
 set -euo pipefail
 ELEMENTS="${1:-45809}"
 case "$ELEMENTS" in '' | *[!0-9]*) echo "figure1.sh: ELEMENTS must be a positive whole number, got '$ELEMENTS'" >&2; exit 2 ;; esac
@@ -29,9 +30,9 @@ mkdir -p "$OUT"
 
 # scene RES SOLVER DIR FILE: the fist scene at lattice resolution RES.
 scene() {
-  "$PY" - "$root" "$1" "$2" "$3" "$4" "$FRAMES" "$END_TIME" "$JOINT_CELLS" <<'EOF'
+  "$PY" - "$root" "$1" "$2" "$3" "$4" "$FRAMES" "$END_TIME" "$JOINT_CELLS" "${CONTACT:-0}" <<'EOF'
 import json, sys
-root, res, solver, out, path, frames, end, joints = sys.argv[1:9]
+root, res, solver, out, path, frames, end, joints, contact = sys.argv[1:10]
 s = json.load(open(f"{root}/scenes/hand_fist.json"))
 s["flesh"]["model"] = f"{root}/data/hand/left.glb"
 s["flesh"]["resolution"] = int(res)
@@ -39,6 +40,8 @@ s["flesh"]["joint_cells"] = joints
 s["frames"], s["end_time"] = int(frames), float(end)
 s["solver"] = {"linear": solver}
 s["output"] = {"dir": out}
+if contact == "1":
+    s["contact"] = {"self": True}
 json.dump(s, open(path, "w"), indent=1)
 EOF
 }
