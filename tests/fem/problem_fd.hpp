@@ -3,6 +3,8 @@
 // against differences of the energy, the assembled (unprojected) Hessian against differences of the
 // gradient, each the best relative error over ε = 1e-3, 1e-4, 1e-5.
 #include <algorithm>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -52,6 +54,16 @@ inline double hessian_min_eigenvalue_ratio(Problem& p, const Eigen::VectorXd& x,
   p.evaluate(x, g, &H, projection);
   const Eigen::MatrixXd Hd = Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>();
   return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Hd).eigenvalues().minCoeff() / Hd.norm();
+}
+
+/// The dense Hessian (both halves) and the gradient of one term over every DOF of x, all free.
+inline std::pair<Eigen::MatrixXd, Eigen::VectorXd> assembled(Term& term, const Eigen::VectorXd& x, PsdProjection projection) {
+  Problem problem(DofMap(std::vector<std::uint8_t>(static_cast<std::size_t>(x.size()), 0)));
+  problem.add(term);
+  Eigen::VectorXd g;
+  HessianMatrix H;
+  problem.evaluate(x, g, &H, projection);
+  return {Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>(), g};
 }
 
 }  // namespace snh

@@ -584,16 +584,6 @@ struct EmbeddedCells {
   [[nodiscard]] EmbeddedPoints points() const { return {vertex, weight, "test", rest.cols()}; }
 };
 
-/// The dense Hessian (both halves) and the gradient of one term over every DOF of x, all free.
-std::pair<Eigen::MatrixXd, Eigen::VectorXd> assembled(Term& term, const Eigen::VectorXd& x, PsdProjection projection) {
-  Problem problem(DofMap(std::vector<std::uint8_t>(static_cast<std::size_t>(x.size()), 0)));
-  problem.add(term);
-  Eigen::VectorXd g;
-  HessianMatrix H;
-  problem.evaluate(x, g, &H, projection);
-  return {Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>(), g};
-}
-
 /// Wᵀ g: a gradient over the points pulled back to the cells' vertices.
 Eigen::VectorXd pulled_back(const EmbeddedCells& e, const Eigen::VectorXd& gp) {
   Eigen::VectorXd gx = Eigen::VectorXd::Zero(e.x.size());

@@ -556,16 +556,6 @@ struct EmbeddedTwoTets {
   }
 };
 
-/// The dense Hessian (both halves) and the gradient of a problem over every DOF of x, all free.
-std::pair<Eigen::MatrixXd, Eigen::VectorXd> assembled(Term& term, const Eigen::VectorXd& x, PsdProjection projection) {
-  Problem problem(DofMap(std::vector<std::uint8_t>(static_cast<std::size_t>(x.size()), 0)));
-  problem.add(term);
-  Eigen::VectorXd g;
-  HessianMatrix H;
-  problem.evaluate(x, g, &H, projection);
-  return {Eigen::MatrixXd(H.matrix).selfadjointView<Eigen::Lower>(), g};
-}
-
 TEST(ContactTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesThroughItsWeights) {
   Eigen::Matrix<double, 3, 4> B;  // as VertexTriangleAndEdgeEdgePairsMatchFiniteDifferences
   B << 0.5, 0.5, 0.3, 0.8,  //
