@@ -123,10 +123,10 @@ ShapeColliderTerm::ShapeColliderTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd wei
   frame_ = frame_at(0.0);
 }
 
-ShapeColliderTerm::Frame ShapeColliderTerm::frame_at(double t) const {
-  Frame f;
-  if (!pose_) return f;
-  const Eigen::Affine3d A = pose_(t);
+ColliderFrame collider_frame(const ColliderPose& pose, double t) {
+  ColliderFrame f;
+  if (!pose) return f;
+  const Eigen::Affine3d A = pose(t);
   const Mat3 L = A.linear();
   f.scale = L.col(0).norm();
   if (!(f.scale > 0.0) || !std::isfinite(f.scale) || !A.translation().allFinite() ||

@@ -84,6 +84,17 @@ struct ShapeDistance {
 /// In the shape's frame. Throws nothing; a point on a segment or a box core gives the normal 0.
 [[nodiscard]] ShapeDistance shape_distance(const ColliderShape& shape, const Vec3& q, bool hessian = false);
 
+/// A shape's pose at one time as a similarity: world x = scale·R q + t.
+struct ColliderFrame {
+  Mat3 rotation = Mat3::Identity();
+  Vec3 translation = Vec3::Zero();
+  double scale = 1.0;
+  [[nodiscard]] Vec3 to_base(const Vec3& x) const { return rotation.transpose() * (x - translation) / scale; }
+};
+/// The pose at t (the identity for an empty pose). Throws std::invalid_argument (one line) where it is not
+/// a rotation, translation and uniform scale.
+[[nodiscard]] ColliderFrame collider_frame(const ColliderPose& pose, double t);
+
 /// The largest τ ∈ [0, 1] such that q + τ' dq stays at distance ≥ keep·d(q) from the shape for all τ' ≤ τ
 /// (d convex along the line); 0 when q is not outside.
 [[nodiscard]] double shape_step(const ColliderShape& shape, const Vec3& q, const Vec3& dq, double keep = 0.1);
@@ -120,13 +131,8 @@ class ShapeColliderTerm final : public Term {
   [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const;
 
  private:
-  struct Frame {  ///< world x = scale·R q + t
-    Mat3 rotation = Mat3::Identity();
-    Vec3 translation = Vec3::Zero();
-    double scale = 1.0;
-    [[nodiscard]] Vec3 to_base(const Vec3& x) const { return rotation.transpose() * (x - translation) / scale; }
-  };
-  [[nodiscard]] Frame frame_at(double t) const;
+  using Frame = ColliderFrame;
+  [[nodiscard]] Frame frame_at(double t) const { return collider_frame(pose_, t); }
   EmbeddedPoints points_;  ///< plain vertices: one weight 1 each
   bool embedded_ = false;
   ColliderShape shape_;

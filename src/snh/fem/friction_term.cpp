@@ -33,25 +33,6 @@ Slip slip(double y, double eps) {
   return {2.0 / eps - y / (eps * eps), y > 0.0 ? -1.0 / (y * eps * eps) : 0.0, -y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0};
 }
 
-/// The points' embedding checked (sizes, ids, weights).
-void check_points(const Eigen::MatrixXi& vertex, const Eigen::MatrixXd& weight) {
-  if (vertex.rows() != weight.rows() || vertex.cols() != weight.cols())
-    throw std::invalid_argument(
-        fmt::format("friction: {} by {} vertex ids but {} by {} weights", vertex.rows(), vertex.cols(), weight.rows(), weight.cols()));
-  if (vertex.size() > 0 && vertex.minCoeff() < 0) throw std::invalid_argument("friction: a negative vertex id");
-  if (!weight.allFinite()) throw std::invalid_argument("friction: a weight that is not finite");
-}
-
-Vec3 embedded_point(const Eigen::MatrixXi& vertex, const Eigen::MatrixXd& weight, const Eigen::VectorXd& x, Eigen::Index i) {
-  Vec3 p = Vec3::Zero();
-  for (Eigen::Index k = 0; k < vertex.rows(); ++k) {
-    const Eigen::Index v = vertex(k, i);
-    if (3 * v + 3 > x.size()) throw std::logic_error(fmt::format("friction: vertex {} is beyond the {} DOFs given", v, x.size()));
-    p += weight(k, i) * x.segment<3>(3 * v);
-  }
-  return p;
-}
-
 /// The closest points of segments p0p1 and q0q1 as parameters (s, t) in [0, 1]² (clamped; for parallel
 /// segments one of the closest pairs).
 std::pair<double, double> segment_closest(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
@@ -128,9 +109,8 @@ double LaggedFrictionTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g
 
 FrictionTerm::FrictionTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, ColliderShape shape, ColliderPose pose, double dhat,
                            double stiffness, double mu, double velocity)
-    : LaggedFrictionTerm(mu, velocity), vertex_(std::move(vertex)), weight_(std::move(weight)), shape_(shape), pose_(std::move(pose)),
-      dhat_(dhat), kappa_(stiffness) {
-  check_points(vertex_, weight_);
+    : LaggedFrictionTerm(mu, velocity), points_(std::move(vertex), std::move(weight), "friction", -1), shape_(shape),
+      pose_(std::move(pose)), dhat_(dhat), kappa_(stiffness) {
   check(std::isfinite(dhat) && dhat > 0.0, "dhat", dhat);
   check(std::isfinite(stiffness) && stiffness > 0.0, "the stiffness", stiffness);
 }
@@ -141,28 +121,26 @@ FrictionTerm::FrictionTerm(const std::vector<int>& vertices, ColliderShape shape
                    Eigen::MatrixXd::Ones(1, static_cast<Eigen::Index>(vertices.size())), shape, std::move(pose), dhat, stiffness, mu,
                    velocity) {}
 
-Vec3 FrictionTerm::point_at(const Eigen::VectorXd& x, Eigen::Index i) const { return embedded_point(vertex_, weight_, x, i); }
-
 void FrictionTerm::begin_step(const Eigen::VectorXd& x, double t0, double t1) {
   lagged_.clear();
   epsilon_ = velocity_ * (t1 - t0);
   if (!(epsilon_ > 0.0) || mu_ == 0.0 || !x.allFinite()) return;  // no step in time, or no friction
-  const Eigen::Affine3d at0 = pose_ ? pose_(t0) : Eigen::Affine3d::Identity();
-  const Eigen::Affine3d carry = pose_ ? Eigen::Affine3d(pose_(t1) * at0.inverse()) : Eigen::Affine3d::Identity();
-  const double scale = at0.linear().col(0).norm();  // a similarity (ShapeColliderTerm checks the pose)
-  const Mat3 rotation = at0.linear() / scale;
+  const ColliderFrame at0 = collider_frame(pose_, t0);
+  const Eigen::Affine3d carry = pose_ ? Eigen::Affine3d(pose_(t1) * pose_(t0).inverse()) : Eigen::Affine3d::Identity();
   const double s_hat = dhat_ * dhat_;
-  for (Eigen::Index i = 0; i < vertex_.cols(); ++i) {
-    const Vec3 p = point_at(x, i);
-    const ShapeDistance sd = shape_distance(shape_, rotation.transpose() * (p - at0.translation()) / scale);
-    const double d = scale * sd.distance, s = d * d;
+  const Eigen::MatrixXi& vertex = points_.vertex();
+  const Eigen::MatrixXd& weight = points_.weight();
+  for (Eigen::Index i = 0; i < points_.size(); ++i) {
+    const Vec3 p = points_.point(x, i);
+    const ShapeDistance sd = shape_distance(shape_, at0.to_base(p));
+    const double d = at0.scale * sd.distance, s = d * d;
     if (!(d > 0.0) || !(s < s_hat)) continue;
     const double lambda = -2.0 * kappa_ * d * contact::barrier_first_derivative(s, s_hat);
     if (!(lambda > 0.0)) continue;
-    const Vec3 n = (carry.linear() * (rotation * sd.normal)).normalized();
+    const Vec3 n = (carry.linear() * (at0.rotation * sd.normal)).normalized();
     LaggedSlip l;
-    l.vertex.assign(vertex_.col(i).data(), vertex_.col(i).data() + vertex_.rows());
-    l.coef.assign(weight_.col(i).data(), weight_.col(i).data() + weight_.rows());
+    l.vertex.assign(vertex.col(i).data(), vertex.col(i).data() + vertex.rows());
+    l.coef.assign(weight.col(i).data(), weight.col(i).data() + weight.rows());
     l.anchor = carry * p;
     l.tangent = Mat3::Identity() - n * n.transpose();
     l.mu_lambda = mu_ * lambda;
@@ -173,19 +151,18 @@ void FrictionTerm::begin_step(const Eigen::VectorXd& x, double t0, double t1) {
 void FrictionTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) const {
   out.vertices.clear();
   out.arity = 0;
-  if (vertex_.rows() < 2) return;  // plain vertices: 3 by 3 blocks on the diagonal
-  out.arity = static_cast<int>(vertex_.rows());
-  out.vertices.assign(vertex_.data(), vertex_.data() + vertex_.size());
+  if (points_.arity() < 2) return;  // plain vertices: 3 by 3 blocks on the diagonal
+  out.arity = static_cast<int>(points_.arity());
+  out.vertices.assign(points_.vertex().data(), points_.vertex().data() + points_.vertex().size());
 }
 
 // ---- between self-contact pairs
 
 SelfFrictionTerm::SelfFrictionTerm(std::shared_ptr<const ContactTerm> contact, Eigen::MatrixXi vertex, Eigen::MatrixXd weight,
                                    double dhat, double stiffness, double mu, double velocity)
-    : LaggedFrictionTerm(mu, velocity), contact_(std::move(contact)), vertex_(std::move(vertex)), weight_(std::move(weight)), dhat_(dhat),
-      kappa_(stiffness) {
+    : LaggedFrictionTerm(mu, velocity), contact_(std::move(contact)), points_(std::move(vertex), std::move(weight), "friction", -1),
+      dhat_(dhat), kappa_(stiffness) {
   if (!contact_) throw std::invalid_argument("friction: no contact term");
-  check_points(vertex_, weight_);
   check(std::isfinite(dhat) && dhat > 0.0, "dhat", dhat);
   check(std::isfinite(stiffness) && stiffness > 0.0, "the stiffness", stiffness);
 }
@@ -200,9 +177,9 @@ void SelfFrictionTerm::begin_step(const Eigen::VectorXd& x, double t0, double t1
     const int n = pair.arity();
     std::array<Vec3, 4> P;
     for (int j = 0; j < n; ++j) {
-      if (pair.vertices[j] >= vertex_.cols())
-        throw std::logic_error(fmt::format("friction: contact point {} is beyond the {} points given", pair.vertices[j], vertex_.cols()));
-      P[j] = embedded_point(vertex_, weight_, x, pair.vertices[j]);
+      if (pair.vertices[j] >= points_.size())
+        throw std::logic_error(fmt::format("friction: contact point {} is beyond the {} points given", pair.vertices[j], points_.size()));
+      P[j] = points_.point(x, pair.vertices[j]);
     }
     // The closest points' coefficients on the pair's points: Σ a_j P_j = (closest on one) − (closest on the other).
     std::array<double, 4> a{1.0, 0.0, 0.0, 0.0};
@@ -245,9 +222,9 @@ void SelfFrictionTerm::begin_step(const Eigen::VectorXd& x, double t0, double t1
     l.tangent = Mat3::Identity() - normal * normal.transpose();
     l.mu_lambda = mu_ * lambda;
     for (int j = 0; j < n; ++j)
-      for (Eigen::Index k = 0; k < vertex_.rows(); ++k) {
-        l.vertex.push_back(vertex_(k, pair.vertices[j]));
-        l.coef.push_back(a[j] * weight_(k, pair.vertices[j]));
+      for (Eigen::Index k = 0; k < points_.arity(); ++k) {
+        l.vertex.push_back(points_.vertex()(k, pair.vertices[j]));
+        l.coef.push_back(a[j] * points_.weight()(k, pair.vertices[j]));
       }
     lagged_.push_back(std::move(l));
   }

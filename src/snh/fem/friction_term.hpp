@@ -24,6 +24,7 @@
 
 #include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
+#include "snh/fem/embedded_points.hpp"
 #include "snh/fem/term.hpp"
 #include "snh/math/types.hpp"
 
@@ -80,9 +81,7 @@ class FrictionTerm final : public LaggedFrictionTerm {
   void begin_step(const Eigen::VectorXd& x, double t0, double t1) override;
 
  private:
-  [[nodiscard]] Vec3 point_at(const Eigen::VectorXd& x, Eigen::Index i) const;
-  Eigen::MatrixXi vertex_;
-  Eigen::MatrixXd weight_;
+  EmbeddedPoints points_;  ///< plain vertices: one weight 1 each
   ColliderShape shape_;
   ColliderPose pose_;
   double dhat_, kappa_;
@@ -111,8 +110,7 @@ class SelfFrictionTerm final : public LaggedFrictionTerm {
 
  private:
   std::shared_ptr<const ContactTerm> contact_;
-  Eigen::MatrixXi vertex_;
-  Eigen::MatrixXd weight_;
+  EmbeddedPoints points_;
   double dhat_, kappa_;
 };
 
