@@ -180,24 +180,29 @@ bool surfaces_cross(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& V, const 
   return edges_through(F, V, T, W) || edges_through(T, W, F, V);
 }
 
+/// One tet (simulated: X, its surface F) under a small tilted triangle pair (the collider: W, T): a tet vertex
+/// under a collider triangle, a collider vertex over a tet face, and crossing edges close together.
+struct TetUnderTriangles {
+  Eigen::Matrix3Xd X{3, 4}, W{3, 4};
+  Eigen::Matrix3Xi F{3, 4}, T{3, 2};
+  TetUnderTriangles() {
+    X << 0, 1, 0, 0.3,  //
+        0, 0, 1, 0.3,    //
+        0, 0, 0, 0.95;
+    F << 0, 0, 1, 0, 2, 1, 2, 3, 1, 3, 3, 2;
+    W << -0.2, 0.9, 0.1, 0.6,  //
+        0.25, 0.2, 0.9, 0.7,    //
+        1.0, 1.02, 0.99, 0.4;
+    T << 0, 0, 1, 2, 2, 3;
+  }
+};
+
 TEST(MeshColliderTerm, MatchesFiniteDifferencesWithEachPairKind) {
-  // One tet (simulated) under a small tilted triangle pair (the collider): a tet vertex under a collider
-  // triangle, a collider vertex over a tet face, and crossing edges, all within d̂.
-  Eigen::Matrix3Xd X(3, 4);
-  X << 0, 1, 0, 0.3,  //
-      0, 0, 1, 0.3,    //
-      0, 0, 0, 0.95;
-  const Eigen::Matrix3Xi F = [] {
-    Eigen::Matrix3Xi f(3, 4);
-    f << 0, 0, 1, 0, 2, 1, 2, 3, 1, 3, 3, 2;
-    return f;
-  }();
-  Eigen::Matrix3Xd W(3, 4);
-  W << -0.2, 0.9, 0.1, 0.6,  //
-      0.25, 0.2, 0.9, 0.7,    //
-      1.0, 1.02, 0.99, 0.4;
-  Eigen::Matrix3Xi T(3, 2);
-  T << 0, 0, 1, 2, 2, 3;
+  const TetUnderTriangles fixture;
+  const Eigen::Matrix3Xd& X = fixture.X;
+  const Eigen::Matrix3Xi& F = fixture.F;
+  const Eigen::Matrix3Xd& W = fixture.W;
+  const Eigen::Matrix3Xi& T = fixture.T;
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-0.01, 0.01);
   for (int trial = 0; trial < 3; ++trial) {
@@ -695,18 +700,11 @@ TEST(MeshColliderTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesAndItsStepsOnThe
   // in cubes or tets: derivatives by finite differences, the projected Hessian PSD; against the same
   // surface given directly at the points: the same energy, the gradient pulled back by Wᵀ, and max_step and
   // sweep equal to the direct term's on the points' motion W dx.
-  Eigen::Matrix3Xd X(3, 4);
-  X << 0, 1, 0, 0.3,  //
-      0, 0, 1, 0.3,    //
-      0, 0, 0, 0.95;
-  Eigen::Matrix3Xi F(3, 4);
-  F << 0, 0, 1, 0, 2, 1, 2, 3, 1, 3, 3, 2;
-  Eigen::Matrix3Xd W(3, 4);
-  W << -0.2, 0.9, 0.1, 0.6,  //
-      0.25, 0.2, 0.9, 0.7,    //
-      1.0, 1.02, 0.99, 0.4;
-  Eigen::Matrix3Xi T(3, 2);
-  T << 0, 0, 1, 2, 2, 3;
+  const TetUnderTriangles fixture;
+  const Eigen::Matrix3Xd& X = fixture.X;
+  const Eigen::Matrix3Xi& F = fixture.F;
+  const Eigen::Matrix3Xd& W = fixture.W;
+  const Eigen::Matrix3Xi& T = fixture.T;
   const ColliderPose pose = [](double t) { return Eigen::Affine3d(Eigen::Translation3d(0, 0, 0.01 * t)); };
   for (const bool hexes : {true, false})
     for (const unsigned seed : {1u, 2u}) {
