@@ -583,6 +583,13 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     slip_velocity = s.contact.friction_velocity > 0.0 ? s.contact.friction_velocity
                                                       : 1e-3 * (mesh.vertices.rowwise().maxCoeff() - mesh.vertices.rowwise().minCoeff()).norm();
     const EmbeddedSurface surface = loaded->flesh ? contact_surface(*loaded->flesh) : EmbeddedSurface{};
+    // Friction against a plane or shape, on the points it keeps out: a flesh's skin, or the volume's boundary.
+    const auto friction = [&](const ColliderShape& shape, ColliderPose pose) {
+      return loaded->flesh ? std::make_shared<FrictionTerm>(surface.points.vertex, surface.points.weight, shape, std::move(pose),
+                                                            s.contact.dhat, kappa, mu, slip_velocity)
+                           : std::make_shared<FrictionTerm>(vertices_of(F), shape, std::move(pose), s.contact.dhat, kappa, mu,
+                                                            slip_velocity);
+    };
     if (loaded->flesh) {  // on the render surface, embedded in the volume
       if (s.contact.self) {
         auto self = std::make_shared<ContactTerm>(surface.triangles, surface.points.vertex, surface.points.weight, mesh.vertices,
@@ -596,8 +603,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
         setup.terms.push_back(
             std::make_shared<PlaneContactTerm>(surface.points.vertex, surface.points.weight, plane.point, plane.normal, s.contact.dhat, kappa));
         if (mu > 0.0)
-          setup.terms.push_back(std::make_shared<FrictionTerm>(surface.points.vertex, surface.points.weight, plane_shape(plane),
-                                                               ColliderPose{}, s.contact.dhat, kappa, mu, slip_velocity));
+          setup.terms.push_back(friction(plane_shape(plane), ColliderPose{}));
       }
       if (s.contact.bones)
         for (std::shared_ptr<Term>& t : bone_collider_terms(loaded->flesh, s.contact.dhat, kappa)) {
@@ -619,8 +625,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
         setup.terms.push_back(
             std::make_shared<PlaneContactTerm>(boundary, plane.point, plane.normal, s.contact.dhat, kappa));
         if (mu > 0.0)
-          setup.terms.push_back(
-              std::make_shared<FrictionTerm>(boundary, plane_shape(plane), ColliderPose{}, s.contact.dhat, kappa, mu, slip_velocity));
+          setup.terms.push_back(friction(plane_shape(plane), ColliderPose{}));
       }
     }
     // Shapes and meshes act on the volume's boundary, or on a flesh's render surface (its points embedded).
@@ -628,10 +633,7 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
       setup.terms.push_back(collider_term(c, loaded->flesh ? surface.triangles : F, mesh.vertices, s.contact.dhat, kappa,
                                           loaded->flesh ? &surface.points : nullptr));
       if (mu > 0.0 && c.type != ColliderSpec::Type::mesh)
-        setup.terms.push_back(loaded->flesh ? std::make_shared<FrictionTerm>(surface.points.vertex, surface.points.weight, collider_shape(c),
-                                                                             collider_pose(c), s.contact.dhat, kappa, mu, slip_velocity)
-                                            : std::make_shared<FrictionTerm>(vertices_of(F), collider_shape(c), collider_pose(c),
-                                                                             s.contact.dhat, kappa, mu, slip_velocity));
+        setup.terms.push_back(friction(collider_shape(c), collider_pose(c)));
     }
   }
   for (const std::shared_ptr<Term>& t : setup.terms)
