@@ -14,7 +14,7 @@ struct Box {
   Eigen::Vector3d lo, hi;
   int kind = 0;  ///< 0 vertex, 1 edge, 2 triangle
   int id = 0;
-  int index = 0;  ///< in the list of all boxes
+  Eigen::Matrix<long long, 3, 1> low_cell = Eigen::Matrix<long long, 3, 1>::Zero();  ///< the grid cell of lo
 };
 
 bool overlap(const Box& a, const Box& b) {
@@ -24,7 +24,7 @@ bool overlap(const Box& a, const Box& b) {
 template <int K>
 Box box_of(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, const Eigen::Matrix<int, K, 1>& ids, double grow,
            int kind, int id) {
-  Box b{V0.col(ids[0]), V0.col(ids[0]), kind, id, 0};
+  Box b{V0.col(ids[0]), V0.col(ids[0]), kind, id};
   for (int k = 0; k < K; ++k) {
     b.lo = b.lo.cwiseMin(V0.col(ids[k])).cwiseMin(V1.col(ids[k]));
     b.hi = b.hi.cwiseMax(V0.col(ids[k])).cwiseMax(V1.col(ids[k]));
@@ -107,25 +107,23 @@ Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, c
     return static_cast<std::uint64_t>(c[0] | (c[1] << kBits) | (c[2] << (2 * kBits)));
   };
   constexpr std::uint64_t mask = (std::uint64_t{1} << kIndexBits) - 1;
-  // The candidates: a vertex and a triangle not its own, two edges sharing no vertex, boxes overlapping.
+  // The candidates among boxes that overlap: a vertex and a triangle not its own, two edges sharing no vertex.
   const auto vertex_triangle = [&](const Box& v, const Box& t) {
-    if (overlap(v, t) && !(F.col(t.id).array() == v.id).any()) out.vertex_triangle.push_back({v.id, t.id});
+    if (!(F.col(t.id).array() == v.id).any()) out.vertex_triangle.push_back({v.id, t.id});
   };
   const auto edge_edge = [&](const Box& a, const Box& b) {
     const Eigen::Vector2i ea = E.col(a.id), eb = E.col(b.id);
-    if (overlap(a, b) && ea[0] != eb[0] && ea[0] != eb[1] && ea[1] != eb[0] && ea[1] != eb[1])
+    if (ea[0] != eb[0] && ea[0] != eb[1] && ea[1] != eb[0] && ea[1] != eb[1])
       out.edge_edge.push_back({std::min(a.id, b.id), std::max(a.id, b.id)});
   };
   if (boxes.size() >= (std::size_t{1} << kIndexBits))
     throw std::invalid_argument("broad_phase: " + std::to_string(boxes.size()) + " primitives, more than the 2^25 it can index");
   std::vector<std::uint64_t> entries;  // key << kIndexBits | box, sorted: boxes of a cell together, by kind
   std::vector<int> oversize;
-  std::vector<Eigen::Matrix<long long, 3, 1>> low_cell(boxes.size());
   entries.reserve(8 * boxes.size());
   for (std::size_t i = 0; i < boxes.size(); ++i) {
-    boxes[i].index = static_cast<int>(i);
     const Eigen::Matrix<long long, 3, 1> a = cell(boxes[i].lo), b = cell(boxes[i].hi);
-    low_cell[i] = a;
+    boxes[i].low_cell = a;
     if ((b - a + Eigen::Matrix<long long, 3, 1>::Ones()).prod() > kMaxCells) {
       oversize.push_back(static_cast<int>(i));
       continue;
@@ -148,7 +146,7 @@ Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, c
     const std::uint64_t here = entries[g] >> kIndexBits;
     while (end < entries.size() && entries[end] >> kIndexBits == here) ++end;
     const std::size_t edges = begin_of(1, g, end), triangles = begin_of(2, edges, end);
-    const auto reported_here = [&](const Box& a, const Box& b) { return key(low_cell[a.index].cwiseMax(low_cell[b.index])) == here; };
+    const auto reported_here = [&](const Box& a, const Box& b) { return key(a.low_cell.cwiseMax(b.low_cell)) == here; };
     for (std::size_t i = g; i < edges; ++i) {
       const Box& v = boxes[entries[i] & mask];
       for (std::size_t j = triangles; j < end; ++j) {
@@ -168,6 +166,7 @@ Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, c
   for (const int i : oversize) {
     const Box& a = boxes[static_cast<std::size_t>(i)];
     for (const Box& b : boxes) {
+      if (!overlap(a, b)) continue;
       if (a.kind == 1 && b.kind == 1 && a.id != b.id) edge_edge(a, b);
       else if (a.kind == 0 && b.kind == 2) vertex_triangle(a, b);
       else if (a.kind == 2 && b.kind == 0) vertex_triangle(b, a);
@@ -175,7 +174,7 @@ Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, c
   }
   std::sort(out.vertex_triangle.begin(), out.vertex_triangle.end());
   std::sort(out.edge_edge.begin(), out.edge_edge.end());
-  // Unique by construction (each pair is met once, when its later box opens); unique() keeps that honest.
+  // The grid meets each pair once; two oversize boxes meet twice (once from each): unique() drops the second.
   out.vertex_triangle.erase(std::unique(out.vertex_triangle.begin(), out.vertex_triangle.end()),
                             out.vertex_triangle.end());
   out.edge_edge.erase(std::unique(out.edge_edge.begin(), out.edge_edge.end()), out.edge_edge.end());
