@@ -21,6 +21,7 @@
 #include "snh/sim/kinematics.hpp"
 #include "snh/sim/simulation.hpp"
 #include "contact/surface_checks.hpp"
+#include "sim/face_pins.hpp"
 #include "fem/problem_fd.hpp"
 
 namespace snh {
@@ -267,14 +268,7 @@ TEST(MeshColliderTerm, MaxStepAndSweepNeverCrossOnRandomSteps) {
 // ---- simulations
 
 /// The mesh's bottom layer (y = -1) as a kinematic set following these motions.
-KinematicSet bottom_pins(const VolumeMesh& m, std::vector<Motion> motions) {
-  KinematicSet bottom;
-  bottom.name = "bottom";
-  for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
-    if (m.vertices(1, v) == -1.0) bottom.vertices.push_back(static_cast<int>(v));
-  bottom.provider = std::make_shared<ScriptedMotion>(m.vertices(Eigen::all, bottom.vertices), std::move(motions));
-  return bottom;
-}
+KinematicSet bottom_pins(const VolumeMesh& m, std::vector<Motion> motions) { return face_pins(m, 1, -1.0, std::move(motions), "bottom"); }
 
 SimulationSetup cube_setup(const VolumeMesh& m, Integrator integrator) {
   SimulationSetup setup;

@@ -19,6 +19,7 @@
 #include "snh/sim/kinematics.hpp"
 #include "snh/sim/simulation.hpp"
 #include "fem/problem_fd.hpp"
+#include "sim/face_pins.hpp"
 
 namespace snh {
 namespace {
@@ -320,11 +321,7 @@ std::pair<double, double> stacked(double mu, bool with_term) {
   m.cells.resize(4, 2 * one.cells.cols());
   m.cells << one.cells, one.cells.array() + static_cast<int>(n);
   const double theta = std::atan(0.5), dhat = 0.02, kappa = 1e8;
-  KinematicSet bottom;
-  bottom.name = "bottom";
-  for (Eigen::Index v = 0; v < n; ++v)
-    if (m.vertices(1, v) == -1.0) bottom.vertices.push_back(static_cast<int>(v));
-  bottom.provider = std::make_shared<ScriptedMotion>(m.vertices(Eigen::all, bottom.vertices), std::vector<Motion>{});
+  const KinematicSet bottom = face_pins(m, 1, -1.0, {}, "bottom");  // the lower cube's base
   const Eigen::Index all = m.vertex_count();
   const auto run = [&](const Vec3& gravity, double damping, const Eigen::VectorXd& start, int steps, bool friction,
                        const std::function<void(int, const Simulation&)>& each) {

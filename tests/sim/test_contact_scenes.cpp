@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "contact/surface_checks.hpp"
+#include "sim/face_pins.hpp"
 #include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
 #include "snh/material/registry.hpp"
@@ -51,16 +52,6 @@ VolumeMesh cut_box(int res, const Vec3& lo, const Vec3& hi) {
   for (std::size_t c = 0; c < kept.size(); ++c)
     for (int k = 0; k < 4; ++k) m.cells(k, static_cast<Eigen::Index>(c)) = id[static_cast<std::size_t>(box.cells(k, kept[c]))];
   return m;
-}
-
-/// The vertices with coordinate `axis` equal to `value`, held by `motions`.
-KinematicSet face_pins(const VolumeMesh& m, int axis, double value, std::vector<Motion> motions, const char* name) {
-  KinematicSet set;
-  set.name = name;
-  for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
-    if (m.vertices(axis, v) == value) set.vertices.push_back(static_cast<int>(v));
-  set.provider = std::make_shared<ScriptedMotion>(m.vertices(Eigen::all, set.vertices), std::move(motions));
-  return set;
 }
 
 struct BarRun {
