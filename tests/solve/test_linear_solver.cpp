@@ -236,8 +236,14 @@ TEST(ConjugateGradients, TakesAnyPreconditionerAndReportsHowItStopped) {
   EXPECT_EQ(r.status, CgStatus::converged);
   EXPECT_LE(residual(A, x, b), 1e-10 * b.norm());
   EXPECT_EQ(M.calls, r.iterations + 1) << "one application per iteration and one at the start";
-  EXPECT_EQ(conjugate_gradients(A, b, M, 1e-14 * b.norm(), 2, x).status, CgStatus::exhausted);
-  EXPECT_EQ(conjugate_gradients(C, b, JacobiPreconditioner(C), 1e-10, 1000, x).status, CgStatus::indefinite);
+  EXPECT_NEAR(r.residual, residual(A, x, b), 1e-12 * b.norm()) << "the residual reported is the returned x's";
+  const CgResult two = conjugate_gradients(A, b, M, 1e-14 * b.norm(), 2, x);
+  EXPECT_EQ(two.status, CgStatus::exhausted);
+  EXPECT_NEAR(two.residual, residual(A, x, b), 1e-12 * b.norm());
+  EXPECT_GT(two.residual, 1e-3 * b.norm());
+  const CgResult bad = conjugate_gradients(C, b, JacobiPreconditioner(C), 1e-10, 1000, x);
+  EXPECT_EQ(bad.status, CgStatus::indefinite);
+  EXPECT_NEAR(bad.residual, residual(C, x, b), 1e-9 * b.norm()) << "the iterate before the non-positive curvature";
 }
 
 }  // namespace

@@ -22,6 +22,7 @@
 #include "snh/sim/scene.hpp"
 #include "snh/sim/stretch.hpp"
 #include "snh/solve/multigrid.hpp"
+#include "snh/solve/newton.hpp"
 
 namespace snh {
 namespace {
@@ -297,6 +298,44 @@ TEST_P(IndefiniteMatrix, SolverRecognisesItAndShiftsWhenRequired) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Multigrid, IndefiniteMatrix, testing::Values("mg", "amg"));
+
+// Truncated Newton: a box squashed through itself (every free vertex's height reflected through the pinned
+// base and halved, so every cell is inverted) is unfolded by Newton, whose true Hessian is indefinite on the
+// way. mg and amg truncate some of their conjugate-gradient solves at negative curvature (LinearSolver::
+// last_truncated) instead of falling back to the projected Hessian, and reach the direct solver's rest state.
+class TruncatedNewton : public testing::TestWithParam<const char*> {};
+
+TEST_P(TruncatedNewton, UnfoldsAnInvertedBoxToTheDirectSolversAnswer) {
+  const std::string name = GetParam();
+  const VolumeMesh mesh = name == "mg" ? box_hexes(10) : box_tets(6);  // mg: enough DOFs for two levels
+  const std::vector<std::uint8_t> kinematic = pins(mesh);
+  Eigen::VectorXd x0 = Eigen::Map<const Eigen::VectorXd>(mesh.vertices.data(), mesh.vertices.size());
+  const double lo = mesh.vertices.row(1).minCoeff();
+  for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
+    if (!kinematic[3 * v + 1]) x0[3 * v + 1] = lo - 0.5 * (x0[3 * v + 1] - lo);
+  NewtonReport report[2];
+  Eigen::VectorXd x[2];
+  int k = 0;
+  for (const std::string& solver : {std::string("cholmod"), name}) {
+    ElasticTerm elastic(mesh, make_material("stable_neo_hookean", Lame{1.0, 9.0}));
+    Problem problem{DofMap(kinematic)};
+    problem.add(elastic);
+    const std::vector<int>& free = problem.dofs().free_index();
+    auto linear = make_linear_solver({.name = solver}, {.mesh = &mesh, .free_index = &free});
+    x[k] = x0;
+    report[k] = newton_solve(problem, x[k], *linear, {.tolerance = 1e-8});
+    ASSERT_TRUE(report[k].converged) << solver << ": " << report[k].failure;
+    ++k;
+  }
+  EXPECT_EQ(report[0].truncated_steps, 0) << "a direct solver never truncates";
+  EXPECT_GT(report[1].truncated_steps, 0) << name << " met no negative curvature: the box is not inverted enough to test";
+  std::cout << name << ": " << report[1].iterations << " Newton iterations (" << report[1].truncated_steps << " truncated, "
+            << report[1].true_hessian_steps << " on the true Hessian); cholmod " << report[0].iterations << "\n";
+  EXPECT_NEAR(report[1].energy, report[0].energy, 1e-10);
+  EXPECT_LT((x[1] - x[0]).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+INSTANTIATE_TEST_SUITE_P(Multigrid, TruncatedNewton, testing::Values("mg", "amg"));
 
 namespace fs = std::filesystem;
 

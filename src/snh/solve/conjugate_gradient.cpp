@@ -19,7 +19,7 @@ CgResult cg(const Product& product, const Eigen::VectorXd& b, const Precondition
   M.apply(r, z);
   Eigen::VectorXd p = z;
   double rz = r.dot(z);
-  while (r.norm() > stop) {
+  while ((result.residual = r.norm()) > stop) {
     if (result.iterations >= max_iterations) {
       result.status = CgStatus::exhausted;
       return result;

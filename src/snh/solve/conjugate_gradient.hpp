@@ -41,6 +41,7 @@ enum class CgStatus {
 struct CgResult {
   CgStatus status = CgStatus::converged;
   int iterations = 0;
+  double residual = 0.0;  ///< ‖b − A x‖ of the returned x (as the iteration updated it)
 };
 
 /// Solves A x = b from x = 0 until ‖Ax − b‖ ≤ stop.

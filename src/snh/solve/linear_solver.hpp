@@ -63,8 +63,15 @@ class LinearSolver {
   [[nodiscard]] virtual bool try_factorize(const SparseLower& A) = 0;
   /// x with A x = b for the last prepared A; non-finite entries if A turned out not positive definite
   /// after try_factorize(). Conjugate gradients stop at ‖Ax − b‖ ≤ max(tolerance ‖b‖, enough): the
-  /// caller may accept an absolute residual `enough` (Newton: a tenth of its own tolerance).
+  /// caller may accept an absolute residual `enough` (Newton: a tenth of its own tolerance). An inexact
+  /// solver (inexact(): mg, amg) that meets non-positive curvature after try_factorize() and after at least
+  /// one step of conjugate gradients, at an iterate x with ‖Ax − b‖ ≤ ½‖b‖, instead returns that x
+  /// (truncated Newton: it minimises the quadratic model over the directions of positive curvature seen, so
+  /// bᵀx > 0), and last_truncated() says so.
   [[nodiscard]] virtual Eigen::VectorXd solve(const Eigen::VectorXd& b, double enough = 0.0) = 0;
+  /// True when the last solve() stopped at a direction of non-positive curvature and returned the iterate
+  /// before it (see solve()).
+  [[nodiscard]] virtual bool last_truncated() const { return false; }
   /// Conjugate-gradient iterations of the last solve (0 for a plain direct solve).
   [[nodiscard]] virtual int last_iterations() const { return 0; }
   /// Numeric factorizations so far (including shifted retries); 0 for PCG.

@@ -74,7 +74,9 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
 
     t = Clock::now();
     // The true Hessian when it is positive definite (a direct solver's Cholesky succeeds, or PCG meets
-    // no non-positive curvature) and gives a descent direction; otherwise the projected Hessian.
+    // no non-positive curvature) and gives a descent direction, or when an inexact solver (mg, amg) met
+    // negative curvature late enough to return the iterate before it (truncated Newton, LinearSolver::solve);
+    // otherwise the projected Hessian.
     problem.hessian(x, H, first);
     report.assembly_seconds += seconds_since(t);
     t = Clock::now();
@@ -89,7 +91,10 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
       d = solver.solve(-g, enough);
       report.linear_iterations += solver.last_iterations();
       have_step = d.allFinite() && g.dot(d) < 0.0;
-      if (have_step) ++report.true_hessian_steps;
+      if (have_step) {
+        ++report.true_hessian_steps;
+        if (solver.last_truncated()) ++report.truncated_steps;
+      }
     }
     if (!have_step) {
       if (try_true) {  // H held the true Hessian: assemble the projected one

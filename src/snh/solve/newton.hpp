@@ -59,6 +59,9 @@ struct NewtonReport {
   int linear_iterations = 0;      ///< conjugate-gradient iterations, in total (0 for plain direct solves)
   int factorizations = 0;         ///< numeric factorizations by the linear solver (0 for PCG)
   int true_hessian_steps = 0;     ///< iterations that used the unprojected Hessian
+  /// Of those, the steps an inexact solver truncated at a direction of negative curvature (truncated Newton,
+  /// LinearSolver::last_truncated): the true Hessian was indefinite, and its step was taken all the same.
+  int truncated_steps = 0;
   double residual = 0.0;          ///< final ‖g‖
   double energy = 0.0;            ///< final energy
   std::vector<double> residuals;  ///< ‖g‖ at the start of each iteration and at the end
