@@ -62,6 +62,9 @@ struct NewtonReport {
   /// Of those, the steps an inexact solver truncated at a direction of negative curvature (truncated Newton,
   /// LinearSolver::last_truncated): the true Hessian was indefinite, and its step was taken all the same.
   int truncated_steps = 0;
+  /// Iterations that solved with the last iteration's matrix (chord steps: an inexact solver, after a step
+  /// within ten times the step rule's bound), sparing an assembly and a preconditioner set-up.
+  int chord_steps = 0;
   double residual = 0.0;          ///< final ‖g‖
   double energy = 0.0;            ///< final energy
   std::vector<double> residuals;  ///< ‖g‖ at the start of each iteration and at the end
