@@ -79,6 +79,11 @@ class ElasticTerm final : public Term {
   /// group order.
   template <class Body>
   void for_each_group(Body&& body) const;
+  /// Calls body(material, rest, begin, end) for each run of consecutive cells [begin, end) of one material, in
+  /// cell order: for work that adds into no shared vertex (an energy alone, per-cell values), where cell order
+  /// keeps neighbouring cells' vertices and rest data together in memory.
+  template <class Body>
+  void for_each_run(Body&& body) const;
 
   VolumeMesh mesh_;
   std::vector<AnyMaterial> materials_;
