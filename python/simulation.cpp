@@ -163,6 +163,8 @@ class PySimulation {
     s["linear_iterations"] = r.newton.linear_iterations;
     s["factorizations"] = r.newton.factorizations;
     s["true_hessian_steps"] = r.newton.true_hessian_steps;
+    s["truncated_steps"] = r.newton.truncated_steps;
+    s["chord_steps"] = r.newton.chord_steps;
     s["residual"] = r.newton.residual;
     s["residuals"] = r.newton.residuals;
     s["energy"] = r.newton.energy;

@@ -43,6 +43,7 @@ def test_stretch_equals_tetcli(tmp_path):
         sim.targets = targets
         stats = sim.step(s)
         assert stats["converged"] and stats["residual"] < 1e-3
+        assert stats["truncated_steps"] == 0 and stats["chord_steps"] == 0  # only mg and amg take them
         assert read_obj_vertices(out / f"{s:03d}.obj") == as_obj_text(sim.positions), f"step {s}"
     assert sim.steps == steps and sim.time == steps
 
@@ -171,6 +172,22 @@ def test_quasi_static_release_returns_to_rest():
     assert stats["converged"] and stats["elastic_energy"] < 1e-12
     np.testing.assert_allclose(sim2.positions, V, atol=1e-8)
     assert sim2.free_dofs.tolist() == list(range(27, 3 * len(V)))
+
+
+def test_multigrid_reports_its_chord_steps():
+    # A box stretched by a tenth and let go: mg's last Newton iteration solves with the matrix it holds (a
+    # chord step, after a step within ten times the step rule) and the answer is CHOLMOD's to that rule.
+    V, C, _ = snh.box("hex8", 10)
+    pinned = np.flatnonzero(V[:, 1] == V[:, 1].min())
+    x0 = V.copy()
+    x0[:, 1] = V[:, 1].min() + 1.1 * (V[:, 1] - V[:, 1].min())
+    runs = {}
+    for solver in ("cholmod", "mg"):
+        sim = snh.Simulation(V, C, SNH, pinned, initial=x0, solver=solver, tolerance=1e-14, step_tolerance=1e-5)
+        runs[solver] = (sim.step(), sim.positions)
+    assert runs["cholmod"][0]["chord_steps"] == 0
+    assert runs["mg"][0]["converged"] and runs["mg"][0]["chord_steps"] >= 1
+    np.testing.assert_allclose(runs["mg"][1], runs["cholmod"][1], atol=2e-4)  # 20 step rules
 
 
 def test_bad_input():

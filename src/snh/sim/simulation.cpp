@@ -98,6 +98,8 @@ void accumulate(NewtonReport& sum, const NewtonReport& r) {
   sum.linear_iterations += r.linear_iterations;
   sum.factorizations += r.factorizations;
   sum.true_hessian_steps += r.true_hessian_steps;
+  sum.truncated_steps += r.truncated_steps;
+  sum.chord_steps += r.chord_steps;
   sum.residual = std::max(sum.residual, r.residual);
   sum.energy = r.energy;
   sum.assembly_seconds += r.assembly_seconds;
