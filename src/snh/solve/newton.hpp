@@ -63,7 +63,7 @@ struct NewtonReport {
   /// LinearSolver::last_truncated): the true Hessian was indefinite, and its step was taken all the same.
   int truncated_steps = 0;
   /// Iterations that solved with the last iteration's matrix (chord steps: an inexact solver, after a step
-  /// within ten times the step rule's bound), sparing an assembly and a preconditioner set-up.
+  /// within 30 times the step rule's bound), sparing an assembly and a preconditioner set-up.
   int chord_steps = 0;
   double residual = 0.0;          ///< final ‖g‖
   double energy = 0.0;            ///< final energy
