@@ -107,6 +107,28 @@ void accumulate(NewtonReport& sum, const NewtonReport& r) {
   sum.residuals.insert(sum.residuals.end(), r.residuals.begin(), r.residuals.end());
 }
 
+using Frame = Eigen::Matrix<double, 3, 4>;  ///< a carrier's frame of one vertex: [linear part | origin]
+
+/// x (3 #V) in each vertex's frame: y_v = A_v⁻¹ (x_v − o_v).
+Eigen::VectorXd into_frames(const std::vector<Frame>& frames, const Eigen::VectorXd& x) {
+  Eigen::VectorXd y(x.size());
+  for (Eigen::Index v = 0; v < x.size() / 3; ++v) {
+    const Frame& f = frames[static_cast<std::size_t>(v)];
+    y.segment<3>(3 * v) = f.leftCols<3>().partialPivLu().solve(x.segment<3>(3 * v) - f.col(3));
+  }
+  return y;
+}
+
+/// Coordinates y (3 #V) in each vertex's frame back out of it: x_v = A_v y_v + o_v.
+Eigen::VectorXd out_of_frames(const std::vector<Frame>& frames, const Eigen::VectorXd& y) {
+  Eigen::VectorXd x(y.size());
+  for (Eigen::Index v = 0; v < y.size() / 3; ++v) {
+    const Frame& f = frames[static_cast<std::size_t>(v)];
+    x.segment<3>(3 * v) = f.leftCols<3>() * y.segment<3>(3 * v) + f.col(3);
+  }
+  return x;
+}
+
 }  // namespace
 
 bool Simulation::carried_check() const {
@@ -115,18 +137,10 @@ bool Simulation::carried_check() const {
 }
 
 Eigen::VectorXd Simulation::carry(const Eigen::VectorXd& x, double from, double to) const {
-  using Frame = Eigen::Matrix<double, 3, 4>;
   std::vector<Frame> at_from, at_to;
   setup_.carrier(from, at_from);
   setup_.carrier(to, at_to);
-  Eigen::VectorXd out(x.size());
-  for (Eigen::Index v = 0; v < x.size() / 3; ++v) {  // as solve()'s carried guess: into the frame at `from`, out at `to`
-    const Frame& f = at_from[static_cast<std::size_t>(v)];
-    const Frame& g = at_to[static_cast<std::size_t>(v)];
-    const Eigen::Vector3d y = f.leftCols<3>().partialPivLu().solve(x.segment<3>(3 * v) - f.col(3));
-    out.segment<3>(3 * v) = g.leftCols<3>() * y + g.col(3);
-  }
-  return out;
+  return out_of_frames(at_to, into_frames(at_from, x));
 }
 
 double Simulation::clearance(double from, double to, double h) {
@@ -233,32 +247,15 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
       E = Eq;
     }
   }
+  Eigen::VectorXd x_n_carried;  // x_n carried to t by the carrier's frames (quasi-static runs with a carrier)
   if (!dynamic() && setup_.carrier) {
     // The same extrapolations in the carrier's frames (steps of equal length assumed, as above): the
     // states at t_n, t_n − Δ, t_n − 2Δ (Δ = t − t_n) taken into the frames of their times, extrapolated
     // there, and carried to t.
-    using Frame = Eigen::Matrix<double, 3, 4>;
     const double delta = t - time_;
     std::vector<Frame> at_t, at_n;
     setup_.carrier(t, at_t);
     setup_.carrier(time_, at_n);
-    const Eigen::Index nv = x_.size() / 3;
-    auto local = [nv](const std::vector<Frame>& frames, const Eigen::VectorXd& x) {
-      Eigen::VectorXd y(x.size());
-      for (Eigen::Index v = 0; v < nv; ++v) {
-        const Frame& f = frames[static_cast<std::size_t>(v)];
-        y.segment<3>(3 * v) = f.leftCols<3>().partialPivLu().solve(x.segment<3>(3 * v) - f.col(3));
-      }
-      return y;
-    };
-    auto carried = [nv, &at_t](const Eigen::VectorXd& y) {
-      Eigen::VectorXd x(y.size());
-      for (Eigen::Index v = 0; v < nv; ++v) {
-        const Frame& f = at_t[static_cast<std::size_t>(v)];
-        x.segment<3>(3 * v) = f.leftCols<3>() * y.segment<3>(3 * v) + f.col(3);
-      }
-      return x;
-    };
     auto consider = [&](Eigen::VectorXd candidate) {
       place_kinematic(candidate, t);
       const double Ec = problem_.energy(candidate);
@@ -267,17 +264,18 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
         E = Ec;
       }
     };
-    const Eigen::VectorXd y0 = local(at_n, x_);
-    consider(carried(y0));
+    const Eigen::VectorXd y0 = into_frames(at_n, x_n);
+    x_n_carried = out_of_frames(at_t, y0);
+    consider(x_n_carried);
     if (steps_ >= 1) {
       std::vector<Frame> at_1;
       setup_.carrier(time_ - delta, at_1);
-      const Eigen::VectorXd y1 = local(at_1, previous_);
-      consider(carried(2.0 * y0 - y1));
+      const Eigen::VectorXd y1 = into_frames(at_1, previous_);
+      consider(out_of_frames(at_t, 2.0 * y0 - y1));
       if (setup_.extrapolation >= 2 && steps_ >= 2 && previous2_.size() == x_.size()) {
         std::vector<Frame> at_2;
         setup_.carrier(time_ - 2.0 * delta, at_2);
-        consider(carried(3.0 * (y0 - y1) + local(at_2, previous2_)));
+        consider(out_of_frames(at_t, 3.0 * (y0 - y1) + into_frames(at_2, previous2_)));
       }
     }
   }
@@ -286,7 +284,7 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
     // collision detection, so that the guess never jumps through a contact (a term without a bound, as
     // every one but contact, says 1: the guess is then unchanged).
     // With carried_check() the base is x_n carried to t, which step() checked instead.
-    Eigen::VectorXd base = carried_check() ? carry(x_n, time_, t) : x_n;
+    Eigen::VectorXd base = carried_check() ? x_n_carried : x_n;
     for (Eigen::Index d = 0; d < base.size(); ++d)
       if (!dofs_.is_free(d)) base[d] = guess[d];  // the kinematic DOFs as placed (providers asked once a step)
     const Eigen::VectorXd dx = dofs_.gather_free(guess) - dofs_.gather_free(base);
