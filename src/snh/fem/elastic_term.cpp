@@ -280,33 +280,31 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
         });
       errors.rethrow();
     });
-    double total = 0.0;
-    for (double e : per) total += e;  // fixed order: deterministic
-    return total;
-  }
-  for_each_group([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
-    using R = typename std::decay_t<decltype(rest)>::value_type;
-    constexpr int N = R::nodes;
-    ParallelErrors errors;
+  } else {
+    for_each_group([&](const auto& m, const auto& rest, const int* list, Eigen::Index count) {
+      using R = typename std::decay_t<decltype(rest)>::value_type;
+      constexpr int N = R::nodes;
+      ParallelErrors errors;
 #pragma omp parallel for schedule(static) if (count * R::points >= threshold)
-    for (Eigen::Index i = 0; i < count; ++i) {
-      errors.run(i, [&] {
-        const int c = list[i];
-        Eigen::Matrix<double, 3, N> gc;
-        std::array<double, packed_size<N>> K;
-        per[static_cast<std::size_t>(c)] = element_terms(m, rest[static_cast<std::size_t>(c)], gather_nodes<N>(mesh_, c, x),
-                                                         gradient ? &gc : nullptr, values ? K.data() : nullptr, projection);
-        if (gradient)
-          for (int a = 0; a < N; ++a) gradient->segment<3>(3 * mesh_.cells(a, c)) += gc.col(a);
-        if (values) {
-          const int* map = scatter->data() + static_cast<std::size_t>(c) * packed_size<N>;
-          for (int e = 0; e < packed_size<N>; ++e)
-            if (map[e] >= 0) values[map[e]] += K[static_cast<std::size_t>(e)];
-        }
-      });
-    }
-    errors.rethrow();
-  });
+      for (Eigen::Index i = 0; i < count; ++i) {
+        errors.run(i, [&] {
+          const int c = list[i];
+          Eigen::Matrix<double, 3, N> gc;
+          std::array<double, packed_size<N>> K;
+          per[static_cast<std::size_t>(c)] = element_terms(m, rest[static_cast<std::size_t>(c)], gather_nodes<N>(mesh_, c, x),
+                                                           gradient ? &gc : nullptr, values ? K.data() : nullptr, projection);
+          if (gradient)
+            for (int a = 0; a < N; ++a) gradient->segment<3>(3 * mesh_.cells(a, c)) += gc.col(a);
+          if (values) {
+            const int* map = scatter->data() + static_cast<std::size_t>(c) * packed_size<N>;
+            for (int e = 0; e < packed_size<N>; ++e)
+              if (map[e] >= 0) values[map[e]] += K[static_cast<std::size_t>(e)];
+          }
+        });
+      }
+      errors.rethrow();
+    });
+  }
   double total = 0.0;
   for (double e : per) total += e;  // fixed order: deterministic
   return total;
