@@ -56,7 +56,11 @@ double Problem::sum_terms(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, H
       hessian->matrix = layout_.pattern();
       hessian->layout = layout_.id();
     }
-    std::fill(hessian->matrix.valuePtr(), hessian->matrix.valuePtr() + hessian->matrix.nonZeros(), 0.0);
+    // Zeroed in parallel above a million entries (Figure 1's 6.4 million: 5 ms on one thread, per Hessian).
+    double* v = hessian->matrix.valuePtr();
+    const Eigen::Index n = hessian->matrix.nonZeros(), chunk = Eigen::Index{1} << 16;
+#pragma omp parallel for schedule(static) if (n >= (Eigen::Index{1} << 20))
+    for (Eigen::Index begin = 0; begin < n; begin += chunk) std::fill(v + begin, v + std::min(n, begin + chunk), 0.0);
     values.emplace(layout_, hessian->matrix.valuePtr());
   }
   double total = 0.0;
