@@ -98,7 +98,9 @@ struct Level {
                                                  ///< that reach it and their fine nodes
   // The smoother's colouring and block rows (sweep_rows()): no two coupled nodes share a colour; each node's
   // off-diagonal blocks, both triangles, sorted by (colour, column node), the first `before` of them of
-  // lower colours, each a slot of A (to copy its values from) and the column node.
+  // lower colours, each a slot of A (to copy its values from) and the column node. A lexicographic level
+  // (one that runs on one thread) sorts them by column node alone: the first `before` are those of lower nodes.
+  bool lexicographic = false;
   std::vector<int> colour;              ///< per node
   std::vector<int> colour_start, by_colour;  ///< the nodes of each colour, ascending
   std::vector<int> row_start, row_slot, row_node, before;
@@ -240,9 +242,9 @@ struct MultigridPreconditioner::Impl {
   void product(const Eigen::VectorXd& p, Eigen::VectorXd& Ap);
   Eigen::VectorXd product_in, product_out;
   /// A level of fewer nodes runs on one thread (a parallel region costs more than it saves) and smooths by
-  /// lexicographic Gauss–Seidel (1.4× faster than the coloured sweep on one core: x read in node order, the
-  /// lower triangle only); larger ones by the multi-colour sweep in parallel. Chosen by size, never by the
-  /// thread count, so results stay the same for any thread count.
+  /// lexicographic Gauss–Seidel (x read in node order); larger ones by the multi-colour sweep in parallel.
+  /// Chosen by size when the structure is made (Level::lexicographic), never by the thread count, so results
+  /// stay the same for any thread count.
   int parallel_nodes = 16384;
   [[nodiscard]] bool parallel(const Level& L) const { return L.nodes >= parallel_nodes; }
   /// The sweeps: also at least parallel_nodes / 8 nodes per colour on average (a barrier after each colour).
@@ -256,8 +258,10 @@ namespace {
 /// The smoother's colours and block rows of L (see Level), from its pattern. Lattice levels: the parity of the
 /// node's lattice coordinates (8 colours), used where it is valid — no block couples two nodes of one parity,
 /// as on 27-point stencils, which trilinear Galerkin products keep — else, and for aggregation levels, greedy
-/// colouring in node order (each node the smallest colour none of its lower neighbours has).
-void sweep_rows(Level& L) {
+/// colouring in node order (each node the smallest colour none of its lower neighbours has). A lexicographic
+/// level's rows are sorted by node instead.
+void sweep_rows(Level& L, bool lexicographic) {
+  L.lexicographic = lexicographic;
   const int n = L.nodes;
   L.row_start.assign(n + 1, 0);
   for (int i = 0; i < n; ++i)
@@ -309,13 +313,13 @@ void sweep_rows(Level& L) {
   for (int i = 0; i < n; ++i) {
     entries.clear();
     for (int e = L.row_start[i]; e < L.row_start[i + 1]; ++e)
-      entries.emplace_back(static_cast<std::int64_t>(L.colour[L.row_node[e]]) * n + L.row_node[e], L.row_slot[e]);
+      entries.emplace_back(static_cast<std::int64_t>(lexicographic ? 0 : L.colour[L.row_node[e]]) * n + L.row_node[e], L.row_slot[e]);
     std::sort(entries.begin(), entries.end());
     for (std::size_t q = 0; q < entries.size(); ++q) {
       const int e = L.row_start[i] + static_cast<int>(q), k = static_cast<int>(entries[q].first % n);
       L.row_node[e] = k;
       L.row_slot[e] = entries[q].second;
-      if (L.colour[k] < L.colour[i]) ++L.before[i];
+      if (lexicographic ? k < i : L.colour[k] < L.colour[i]) ++L.before[i];
     }
   }
 }
@@ -661,7 +665,7 @@ void MultigridPreconditioner::Impl::structure(const SparseLower& A) {
     l.x.resize(3 * l.nodes);
     l.b.resize(3 * l.nodes);
     l.r.resize(3 * l.nodes);
-    sweep_rows(l);
+    sweep_rows(l, !parallel(l));
     product_chunks(l);
   }
   for (std::size_t l = 0; l + 1 < levels.size(); ++l) transpose_transfer(levels[l], levels[l + 1].nodes);
@@ -763,10 +767,10 @@ void MultigridPreconditioner::Impl::galerkin(Level& F, Level& C) {
 /// the inverses of the diagonal blocks' free parts (Cholesky: false where a block is not positive definite,
 /// which proves that A is not).
 bool MultigridPreconditioner::Impl::prepare_smoother(Level& L) {
-  L.row_val.resize(parallel(L) ? 9 * L.row_slot.size() + 3 : 0);  // the coloured sweep's rows only
-  if (parallel(L)) std::fill(L.row_val.end() - 3, L.row_val.end(), 0.0f);
+  L.row_val.resize(9 * L.row_slot.size() + 3);
+  std::fill(L.row_val.end() - 3, L.row_val.end(), 0.0f);
 #pragma omp parallel for schedule(static) if (parallel(L))
-  for (int i = 0; i < (parallel(L) ? L.nodes : 0); ++i)
+  for (int i = 0; i < L.nodes; ++i)
     for (int e = L.row_start[i]; e < L.row_start[i + 1]; ++e) {
       const ConstBlock3 a(&L.A.val[9 * static_cast<std::size_t>(L.row_slot[e])]);
       Eigen::Map<Eigen::Matrix<float, 3, 3, Eigen::ColMajor>> to(&L.row_val[9 * static_cast<std::size_t>(e)]);
@@ -849,36 +853,6 @@ inline void solve_diagonal(const Level& L, int i, const double* s, double* x) {
   x[2] = d[6] * s[0] + d[7] * s[1] + d[8] * s[2];
 }
 
-/// A forward lexicographic nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0 (the blocks above the
-/// diagonal meet only zeros): the smoother of levels below the parallel line.
-void forward_sweep_in_order(Level& L) {
-  L.x.setZero();
-  const double* val = L.A.val.data();
-  double* x = L.x.data();
-  for (int i = 0; i < L.nodes; ++i) {
-    double s[3] = {L.b[3 * i], L.b[3 * i + 1], L.b[3 * i + 2]};
-    for (int k = L.A.start[i]; k + 1 < L.A.start[i + 1]; ++k) subtract(val + 9 * static_cast<std::size_t>(k), x + 3 * L.A.col[k], s);
-    solve_diagonal(L, i, s, x + 3 * i);
-  }
-}
-
-/// The backward lexicographic sweep on L.x: row i's blocks left of the diagonal meet the old x, the
-/// (transposed) blocks right of it the new values, gathered in L.r as each row is done.
-void backward_sweep_in_order(Level& L) {
-  L.r.setZero();
-  const double* val = L.A.val.data();
-  double* x = L.x.data();
-  double* later = L.r.data();
-  for (int i = L.nodes - 1; i >= 0; --i) {
-    const int end = L.A.start[i + 1] - 1;  // the diagonal block
-    double s[3] = {L.b[3 * i] + later[3 * i], L.b[3 * i + 1] + later[3 * i + 1], L.b[3 * i + 2] + later[3 * i + 2]};
-    for (int k = L.A.start[i]; k < end; ++k) subtract(val + 9 * static_cast<std::size_t>(k), x + 3 * L.A.col[k], s);
-    solve_diagonal(L, i, s, x + 3 * i);
-    for (int k = L.A.start[i]; k < end; ++k)
-      subtract_transposed(val + 9 * static_cast<std::size_t>(k), x + 3 * i, later + 3 * L.A.col[k]);
-  }
-}
-
 /// Four doubles (GCC's and Clang's vector extensions; AVX on x86): a 3-vector in lanes 0–2, lane 3 unused.
 using Lanes = double __attribute__((vector_size(32)));
 using FloatLanes = float __attribute__((vector_size(16)));
@@ -927,6 +901,30 @@ void relax_colour(Level& L, int c, bool whole) {
   }
 }
 
+/// A forward lexicographic nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0 (the blocks of higher
+/// nodes meet only zeros): the smoother of a lexicographic level.
+void forward_sweep_in_order(Level& L) {
+  L.x.setZero();
+  double* x = L.x.data();
+  for (int i = 0; i < L.nodes; ++i) {
+    Lanes s = lanes3(L.b.data() + 3 * i);
+    subtract_row(L, L.row_start[i], L.row_start[i] + L.before[i], x, s);
+    const double t[3] = {s[0], s[1], s[2]};
+    solve_diagonal(L, i, t, x + 3 * i);
+  }
+}
+
+/// The backward lexicographic sweep on L.x, nodes in descending order, whole rows.
+void backward_sweep_in_order(Level& L) {
+  double* x = L.x.data();
+  for (int i = L.nodes - 1; i >= 0; --i) {
+    Lanes s = lanes3(L.b.data() + 3 * i);
+    subtract_row(L, L.row_start[i], L.row_start[i + 1], x, s);
+    const double t[3] = {s[0], s[1], s[2]};
+    solve_diagonal(L, i, t, x + 3 * i);
+  }
+}
+
 /// A forward multi-colour nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0, colour by colour.
 void forward_sweep(Level& L, bool parallel) {
   L.x.setZero();
@@ -943,10 +941,11 @@ void backward_sweep(Level& L, bool parallel) {
   for (int c = colours - 1; c >= 0; --c) relax_colour(L, c, true);
 }
 
-/// L.r = L.b − Ã L.x right after forward_sweep(), row by row in parallel, Ã the smoother's matrix (single-precision
-/// off-diagonal blocks: the sweeps' residuals are Ã's, so this one must be too for the V-cycle to stay symmetric).
-/// The sweep made row i's equation hold with the lower colours' final x and the higher ones' zeros, so only the
-/// blocks of higher colours are left: r_i = −Σ A_ik x_k over them (equal in exact arithmetic, half the blocks).
+/// L.r = L.b − Ã L.x right after forward_sweep() (or forward_sweep_in_order()), row by row in parallel, Ã the
+/// smoother's matrix (single-precision off-diagonal blocks: the sweeps' residuals are Ã's, so this one must be
+/// too for the V-cycle to stay symmetric). The sweep made row i's equation hold with the lower colours' (nodes')
+/// final x and the higher ones' zeros, so only the blocks of higher colours (nodes) are left: r_i = −Σ A_ik x_k
+/// over them (equal in exact arithmetic, half the blocks).
 void forward_residual(Level& L, bool parallel) {
   const double* x = L.x.data();
 #pragma omp parallel for schedule(static) if (parallel)
@@ -1069,13 +1068,9 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
     return;
   }
   Level& C = levels[l + 1];
-  if (parallel(L)) {
-    forward_sweep(L, parallel_sweep(L));
-    forward_residual(L, true);
-  } else {
-    forward_sweep_in_order(L);
-    subtract_product(L, L.x.data(), L.b.data(), L.r.data(), false);
-  }
+  if (L.lexicographic) forward_sweep_in_order(L);
+  else forward_sweep(L, parallel_sweep(L));
+  forward_residual(L, parallel(L));
   // Restriction Pᵀ r on the coarse free DOFs (by coarse rows), prolongation P e on the fine ones.
 #pragma omp parallel for schedule(static) if (parallel(C))
   for (int I = 0; I < C.nodes; ++I) {
@@ -1093,8 +1088,8 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
     for (int a = 0; a < 3; ++a)
       if (L.free[3 * i + a]) L.x[3 * i + a] -= e[a];
   }
-  if (parallel(L)) backward_sweep(L, parallel_sweep(L));
-  else backward_sweep_in_order(L);
+  if (L.lexicographic) backward_sweep_in_order(L);
+  else backward_sweep(L, parallel_sweep(L));
 }
 
 MultigridPreconditioner::MultigridPreconditioner(const VolumeMesh& mesh, const std::vector<int>& free_index, Coarsening how)
