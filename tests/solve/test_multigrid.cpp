@@ -233,6 +233,34 @@ TEST(AlgebraicMultigrid, ColouredSmootherIsValidAndTheSameForOneAndTwoThreads) {
   check_threads(box_tets(12), Coarsening::aggregation);
 }
 
+// Every coarse level's matrix is Pᵀ A P of the level above it on the coarse level's free DOFs (and zero on
+// the others: those with a zero diagonal, as many as the level has DOFs that are not free), by the serial and
+// the parallel product alike.
+void check_galerkin(const VolumeMesh& mesh, Coarsening how) {
+  System s(mesh, pins(mesh), 7);
+  for (int parallel_nodes : {1, 1 << 30}) {
+    MultigridPreconditioner M(mesh, s.problem.dofs().free_index(), how);
+    M.set_parallel_nodes(parallel_nodes);
+    ASSERT_TRUE(M.compute(s.H.matrix));
+    ASSERT_GE(M.levels(), 2);
+    for (int l = 0; l + 1 < M.levels(); ++l) {
+      const Eigen::SparseMatrix<double> P = M.prolongation(l), A = M.level_matrix(l), C = M.level_matrix(l + 1);
+      Eigen::SparseMatrix<double> expected = Eigen::SparseMatrix<double>(P.transpose()) * A * P;
+      const Eigen::VectorXd diagonal = C.diagonal();
+      const Eigen::Index fixed = (diagonal.array() == 0.0).count();
+      EXPECT_EQ(fixed, C.rows() - M.unknowns(l + 1)) << "level " << l + 1;
+      expected.prune([&](Eigen::Index r, Eigen::Index c, double) { return diagonal[r] != 0.0 && diagonal[c] != 0.0; });
+      EXPECT_GT(C.norm(), 0.0);
+      EXPECT_LE((C - expected).norm(), 1e-13 * expected.norm()) << "level " << l + 1 << ", parallel from " << parallel_nodes;
+      EXPECT_EQ((C - Eigen::SparseMatrix<double>(C.transpose())).norm(), 0.0) << "level " << l + 1;
+    }
+  }
+}
+
+TEST(Multigrid, CoarseMatricesAreTheGalerkinProducts) { check_galerkin(partial_lattice(), Coarsening::lattice); }
+
+TEST(AlgebraicMultigrid, CoarseMatricesAreTheGalerkinProducts) { check_galerkin(box_tets(6), Coarsening::aggregation); }
+
 // amg keeps its coarse levels from an earlier Newton matrix while they serve: the V-cycle with old coarse
 // levels and a new finest level is still symmetric positive definite, and CG with it converges.
 TEST(AlgebraicMultigrid, OldCoarseLevelsKeepTheVCycleSymmetricPositive) {

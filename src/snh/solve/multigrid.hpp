@@ -81,6 +81,10 @@ class MultigridPreconditioner final : public Preconditioner {
   /// couples (after compute(); for tests: no pair shares a colour).
   [[nodiscard]] const std::vector<int>& colours(int level) const;
   [[nodiscard]] std::vector<std::pair<int, int>> couplings(int level) const;
+  /// Level l's matrix, both triangles, on all its 3 × nodes DOFs, and the prolongation from level l + 1 to
+  /// level l (after compute(); for tests).
+  [[nodiscard]] Eigen::SparseMatrix<double> level_matrix(int level) const;
+  [[nodiscard]] Eigen::SparseMatrix<double> prolongation(int level) const;
   /// Levels of fewer nodes than this run on one thread with a lexicographic Gauss–Seidel smoother, larger
   /// ones in parallel with the multi-colour smoother (default 16 384; tests set 1 to run every level so).
   void set_parallel_nodes(int nodes);
