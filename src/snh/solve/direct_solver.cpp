@@ -47,12 +47,16 @@ class Cholmod final : public Eigen::CholmodSupernodalLLT<SparseLower, Eigen::Low
 constexpr std::size_t kBlasBuffer = std::size_t{128} << 20;
 
 /// Before the first numeric factorization of an analysis: whether the address space has room for the
-/// supernodal factor (xsize values), its largest update workspace (maxcsize) and OpenBLAS's buffer. Only
-/// reserved, never touched, and released at once; false where a factorization would run out of memory, or
-/// hang inside OpenBLAS.
-bool room_for_first_factorization(const cholmod_factor* L) {
+/// supernodal factor (xsize values), its largest update workspace (maxcsize), the copy of A that CHOLMOD
+/// factors (the upper triangle: a lower one is transposed first), 16 MiB for the rest of its workspace and
+/// the allocator, and OpenBLAS's buffer. Only reserved, never touched, and released at once; false where a
+/// factorization would run out of memory, or hang inside OpenBLAS. (Without the copy and the 16 MiB, hex
+/// res 20's run hung under ulimit -v between 556 and 580 MB: the factor had been allocated, the buffer failed.)
+bool room_for_first_factorization(const cholmod_factor* L, const SparseLower& A) {
   if (!L || !L->is_super || L->x) return true;  // analysed only: the first factorization still allocates
-  const double bytes = 8.0 * (static_cast<double>(L->xsize) + static_cast<double>(L->maxcsize)) + kBlasBuffer;
+  const double copy = 12.0 * static_cast<double>(A.nonZeros()) + 8.0 * static_cast<double>(A.cols() + 1);
+  const double bytes = 8.0 * (static_cast<double>(L->xsize) + static_cast<double>(L->maxcsize)) + copy +
+                       static_cast<double>(std::size_t{16} << 20) + kBlasBuffer;
   if (bytes > 0.9 * static_cast<double>(SIZE_MAX)) return false;
   void* p = ::mmap(nullptr, static_cast<std::size_t>(bytes), PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
   if (p == MAP_FAILED) return false;
@@ -108,7 +112,7 @@ class DirectSolver final : public LinearSolver {
     ++factorizations_;
     guarded("factorization", [&] {
       if constexpr (std::is_same_v<Factor, Cholmod>)
-        if (!room_for_first_factorization(factor_.factor())) throw std::bad_alloc();
+        if (!room_for_first_factorization(factor_.factor(), A)) throw std::bad_alloc();
       factor_.factorize(A);
     });
     return factor_.info() == Eigen::Success && positive_pivots();
