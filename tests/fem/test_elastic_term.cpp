@@ -231,5 +231,45 @@ TEST(Assembly, WeightScalesScaleEachCellsEnergy) {
   }
 }
 
+// Congruent cells (a lattice's, equal but for the rounding of their coordinates) share one rest record; the
+// energy, gradient and Hessian are those of a record per cell to rounding; distorted or rescaled cells keep
+// their own records.
+TEST(ElasticTermRest, CongruentCellsShareARecordAndGiveTheSameResults) {
+  for (const CellType type : {CellType::hex8, CellType::tet4}) {
+    const int res = 4;
+    const VolumeMesh m = distorted(type, res, 0.0, 1);
+    const AnyMaterial mat = make_material("stable_neo_hookean", {1.0, 10.0});
+    Assembled shared(m, mat, boundary_fixed(res)), own(m, mat, boundary_fixed(res));
+    own.elastic.share_rest(false);
+    EXPECT_EQ(own.elastic.rest_records(), m.cell_count());
+    EXPECT_LE(shared.elastic.rest_records(), type == CellType::hex8 ? 2 : 12) << to_string(type);
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-0.1, 0.1);
+    Eigen::VectorXd x = flatten(m.vertices);
+    for (Eigen::Index i = 0; i < x.size(); ++i) x[i] += u(rng);
+    Eigen::VectorXd g_shared, g_own;
+    SparseLower H_shared, H_own;
+    const double E_shared = shared.evaluate(x, g_shared, &H_shared), E_own = own.evaluate(x, g_own, &H_own);
+    EXPECT_NEAR(E_shared, E_own, 1e-12 * std::abs(E_own));
+    EXPECT_LE((g_shared - g_own).norm(), 1e-12 * g_own.norm());
+    EXPECT_LE(SparseLower(H_shared - H_own).norm(), 1e-12 * H_own.norm());
+    EXPECT_LE((shared.elastic.rest_volumes() - own.elastic.rest_volumes()).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_EQ(rest_volumes(shared.elastic.rest()).size(), m.cell_count());
+    // Sharing again after a record per cell gives the same records.
+    own.elastic.share_rest(true);
+    EXPECT_EQ(own.elastic.rest_records(), shared.elastic.rest_records());
+  }
+  // Distorted cells: none alike. One cell's weight scaled: it alone leaves the shared record.
+  const VolumeMesh bent = distorted(CellType::hex8, 3, 0.2, 4);
+  EXPECT_EQ(ElasticTerm(bent, make_material("stable_neo_hookean", {1.0, 10.0})).rest_records(), bent.cell_count());
+  const VolumeMesh box = distorted(CellType::hex8, 3, 0.0, 4);
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(box.cell_count());
+  scale[5] = 1.0 + 1e-9;
+  const ElasticTerm plain(box, make_material("stable_neo_hookean", {1.0, 10.0}));
+  const ElasticTerm one_scaled(box, {make_material("stable_neo_hookean", {1.0, 10.0})}, {}, scale);
+  EXPECT_EQ(one_scaled.rest_records(), plain.rest_records() + 1);
+  EXPECT_DOUBLE_EQ(one_scaled.rest_volumes()[5], plain.rest_volumes()[5] * scale[5]);
+}
+
 }  // namespace
 }  // namespace snh

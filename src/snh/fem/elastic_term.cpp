@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <cmath>
+#include <cstdint>
 #include <stdexcept>
+#include <unordered_map>
 
 #include <fmt/format.h>
 
@@ -124,6 +127,34 @@ RestState scaled(RestState rest, const Eigen::VectorXd& scale) {
   return rest;
 }
 
+/// The key under which cells share a rest record: its shape gradients and its weights, each set in units of
+/// 2^-40 of its largest magnitude's power of two (with those powers). Records of one key differ by less than
+/// that unit in every value: a lattice's congruent cells, equal but for the rounding of their vertices'
+/// coordinates (a relative 1e-14 in G, against the unit's 9e-13).
+template <int N, int Q>
+std::vector<std::int64_t> sharing_key(const ElementRest<N, Q>& r) {
+  std::vector<std::int64_t> key;
+  key.reserve(3 * N * Q + Q + 2);
+  const auto add = [&key](const double* v, int n) {
+    double largest = 0.0;
+    for (int i = 0; i < n; ++i) largest = std::max(largest, std::abs(v[i]));
+    const int power = largest > 0.0 ? std::ilogb(largest) : 0;
+    key.push_back(power);
+    for (int i = 0; i < n; ++i) key.push_back(std::llround(std::ldexp(v[i], 40 - power)));
+  };
+  for (int q = 0; q < Q; ++q) add(r.G[q].data(), 3 * N);
+  add(r.weight.data(), Q);
+  return key;
+}
+
+struct KeyHash {
+  std::size_t operator()(const std::vector<std::int64_t>& key) const {
+    std::uint64_t h = 1469598103934665603ULL;
+    for (std::int64_t v : key) h = (h ^ static_cast<std::uint64_t>(v)) * 1099511628211ULL;
+    return static_cast<std::size_t>(h);
+  }
+};
+
 }  // namespace
 
 ElasticTerm::ElasticTerm(VolumeMesh mesh, AnyMaterial material)
@@ -136,6 +167,7 @@ ElasticTerm::ElasticTerm(VolumeMesh mesh, std::vector<AnyMaterial> materials, st
       material_of_(std::move(material_of_cell)),
       rest_(scaled(compute_rest_state(mesh_), weight_scale)) {
   if (materials_.empty()) throw std::invalid_argument("no material given");
+  share_rest(true);
   if (!material_of_.empty()) {
     if (static_cast<Eigen::Index>(material_of_.size()) != mesh_.cell_count())
       throw std::invalid_argument(fmt::format("materials per cell: expected {}, got {}", mesh_.cell_count(), material_of_.size()));
@@ -181,6 +213,50 @@ ElasticTerm::ElasticTerm(VolumeMesh mesh, std::vector<AnyMaterial> materials, st
   });
   group_start_ = std::move(groups.start);
   group_cells_ = std::move(groups.items);
+}
+
+void ElasticTerm::share_rest(bool on) {
+  std::visit(
+      [&](auto& records) {
+        using R = typename std::decay_t<decltype(records)>::value_type;
+        std::vector<R> cells;
+        if (rest_of_cell_.empty()) cells = std::move(records);
+        else
+          for (int k : rest_of_cell_) cells.push_back(records[static_cast<std::size_t>(k)]);
+        records.clear();
+        rest_of_cell_.resize(cells.size());
+        std::unordered_map<std::vector<std::int64_t>, int, KeyHash> first;
+        for (std::size_t c = 0; c < cells.size(); ++c) {
+          const int next = static_cast<int>(records.size());
+          const int k = on ? first.try_emplace(sharing_key(cells[c]), next).first->second : next;
+          if (k == next) records.push_back(cells[c]);
+          rest_of_cell_[c] = k;
+        }
+        records.shrink_to_fit();
+      },
+      rest_);
+}
+
+int ElasticTerm::rest_records() const {
+  return std::visit([](const auto& records) { return static_cast<int>(records.size()); }, rest_);
+}
+
+RestState ElasticTerm::rest() const {
+  return std::visit(
+      [&](const auto& records) -> RestState {
+        typename std::decay_t<decltype(records)> cells;
+        cells.reserve(rest_of_cell_.size());
+        for (int k : rest_of_cell_) cells.push_back(records[static_cast<std::size_t>(k)]);
+        return cells;
+      },
+      rest_);
+}
+
+Eigen::VectorXd ElasticTerm::rest_volumes() const {
+  const Eigen::VectorXd of_record = snh::rest_volumes(rest_);
+  Eigen::VectorXd volume(static_cast<Eigen::Index>(rest_of_cell_.size()));
+  for (std::size_t c = 0; c < rest_of_cell_.size(); ++c) volume[static_cast<Eigen::Index>(c)] = of_record[rest_of_cell_[c]];
+  return volume;
 }
 
 template <class Body>
@@ -275,7 +351,7 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
 #pragma omp parallel for schedule(static) if ((end - begin) * R::points >= threshold)
       for (Eigen::Index c = begin; c < end; ++c)
         errors.run(c, [&] {
-          per[static_cast<std::size_t>(c)] = element_terms(m, rest[static_cast<std::size_t>(c)], gather_nodes<R::nodes>(mesh_, c, x),
+          per[static_cast<std::size_t>(c)] = element_terms(m, rest[record(c)], gather_nodes<R::nodes>(mesh_, c, x),
                                                            no_gradient, nullptr, projection);
         });
       errors.rethrow();
@@ -291,7 +367,7 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
           const int c = list[i];
           Eigen::Matrix<double, 3, N> gc;
           std::array<double, packed_size<N>> K;
-          per[static_cast<std::size_t>(c)] = element_terms(m, rest[static_cast<std::size_t>(c)], gather_nodes<N>(mesh_, c, x),
+          per[static_cast<std::size_t>(c)] = element_terms(m, rest[record(c)], gather_nodes<N>(mesh_, c, x),
                                                            gradient ? &gc : nullptr, values ? K.data() : nullptr, projection);
           if (gradient)
             for (int a = 0; a < N; ++a) gradient->segment<3>(3 * mesh_.cells(a, c)) += gc.col(a);
@@ -322,12 +398,13 @@ ElasticTerm::Deformation ElasticTerm::deformation(const Eigen::VectorXd& x) cons
       const auto X = gather_nodes<R::nodes>(mesh_, c, x);
       double lo = std::numeric_limits<double>::infinity(), psi = 0.0, weight = 0.0, vol = 0.0;
       for (int q = 0; q < R::points; ++q) {
-        const Mat3 F = X * rest[static_cast<std::size_t>(c)].G[q];
+        const auto& r = rest[record(c)];
+        const Mat3 F = X * r.G[q];
         const double J = F.determinant();
         lo = std::min(lo, J);
-        vol += rest[static_cast<std::size_t>(c)].weight[q] * J;
-        psi += rest[static_cast<std::size_t>(c)].weight[q] * m.psi(F);
-        weight += rest[static_cast<std::size_t>(c)].weight[q];
+        vol += r.weight[q] * J;
+        psi += r.weight[q] * m.psi(F);
+        weight += r.weight[q];
       }
       out.min_J[c] = lo;
       out.energy_density[c] = psi / weight;

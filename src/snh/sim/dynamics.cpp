@@ -9,7 +9,7 @@ namespace snh {
 Eigen::VectorXd lumped_mass(const ElasticTerm& elastic, double density) {
   if (!(density > 0.0) || !std::isfinite(density)) throw std::invalid_argument("density must be a finite number > 0");
   const VolumeMesh& mesh = elastic.mesh();
-  const Eigen::VectorXd volume = rest_volumes(elastic.rest());
+  const Eigen::VectorXd volume = elastic.rest_volumes();
   Eigen::VectorXd mass = Eigen::VectorXd::Zero(3 * mesh.vertex_count());
   const int n = nodes_per_cell(mesh.type);
   for (Eigen::Index c = 0; c < mesh.cell_count(); ++c)

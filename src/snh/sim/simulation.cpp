@@ -69,7 +69,7 @@ Simulation::Simulation(SimulationSetup setup)
   else x_ = std::move(setup_.initial);
   v_ = Eigen::VectorXd::Zero(n);
   previous_ = x_;
-  rest_volume_ = rest_volumes(elastic_.rest()).sum();
+  rest_volume_ = elastic_.rest_volumes().sum();
 }
 
 void Simulation::place_kinematic(Eigen::VectorXd& state, double t) const {
