@@ -216,14 +216,10 @@ ElasticTerm::ElasticTerm(VolumeMesh mesh, std::vector<AnyMaterial> materials, st
 }
 
 void ElasticTerm::share_rest(bool on) {
+  const RestState per_cell = rest_of_cell_.empty() ? std::move(rest_) : rest();  // the constructor's: one per cell
   std::visit(
-      [&](auto& records) {
-        using R = typename std::decay_t<decltype(records)>::value_type;
-        std::vector<R> cells;
-        if (rest_of_cell_.empty()) cells = std::move(records);
-        else
-          for (int k : rest_of_cell_) cells.push_back(records[static_cast<std::size_t>(k)]);
-        records.clear();
+      [&](const auto& cells) {
+        std::decay_t<decltype(cells)> records;
         rest_of_cell_.resize(cells.size());
         std::unordered_map<std::vector<std::int64_t>, int, KeyHash> first;
         for (std::size_t c = 0; c < cells.size(); ++c) {
@@ -233,8 +229,9 @@ void ElasticTerm::share_rest(bool on) {
           rest_of_cell_[c] = k;
         }
         records.shrink_to_fit();
+        rest_ = std::move(records);
       },
-      rest_);
+      per_cell);
 }
 
 int ElasticTerm::rest_records() const {
@@ -397,8 +394,8 @@ ElasticTerm::Deformation ElasticTerm::deformation(const Eigen::VectorXd& x) cons
     for (Eigen::Index c = begin; c < end; ++c) {
       const auto X = gather_nodes<R::nodes>(mesh_, c, x);
       double lo = std::numeric_limits<double>::infinity(), psi = 0.0, weight = 0.0, vol = 0.0;
+      const auto& r = rest[record(c)];
       for (int q = 0; q < R::points; ++q) {
-        const auto& r = rest[record(c)];
         const Mat3 F = X * r.G[q];
         const double J = F.determinant();
         lo = std::min(lo, J);

@@ -776,19 +776,23 @@ void galerkin_rows(const Level& F, Level& C, bool in_parallel) {
         seen[k] = 0;
       }
       reached.clear();
-      // Row I of C: every stored block is written (zero where nothing reached it).
+      // Row I of C: every stored block is written (zero where nothing reached it), its DOFs that are not free
+      // masked out.
       for (int s = C.A.start[I]; s < C.A.start[I + 1]; ++s) {
         const int K = C.A.col[s];
         Block3 c(&C.A.val[9 * static_cast<std::size_t>(s)]);
-        if (!seen_coarse[K]) {
+        if (seen_coarse[K]) {
+          const ConstBlock3 y(&Y[9 * static_cast<std::size_t>(K)]);
+          if (K < I) c = y;
+          else c = 0.5 * (y + y.transpose());
+          std::fill_n(&Y[9 * static_cast<std::size_t>(K)], 9, 0.0);
+          seen_coarse[K] = 0;
+        } else {
           c.setZero();
-          continue;
         }
-        const ConstBlock3 y(&Y[9 * static_cast<std::size_t>(K)]);
-        if (K < I) c = y;
-        else c = 0.5 * (y + y.transpose());
-        std::fill_n(&Y[9 * static_cast<std::size_t>(K)], 9, 0.0);
-        seen_coarse[K] = 0;
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b)
+            if (!C.free[3 * I + a] || !C.free[3 * K + b]) c(a, b) = 0.0;
       }
       for (int K : reached_coarse)
         if (seen_coarse[K]) {
@@ -797,12 +801,6 @@ void galerkin_rows(const Level& F, Level& C, bool in_parallel) {
           seen_coarse[K] = 0;
         }
       reached_coarse.clear();
-      for (int s = C.A.start[I]; s < C.A.start[I + 1]; ++s) {
-        const int J = C.A.col[s];
-        for (int a = 0; a < 3; ++a)
-          for (int b = 0; b < 3; ++b)
-            if (!C.free[3 * I + a] || !C.free[3 * J + b]) C.A.val[9 * static_cast<std::size_t>(s) + 3 * a + b] = 0.0;
-      }
     }
   }
   if (outside > 0) throw std::logic_error("multigrid: Galerkin product reached blocks outside the coarse pattern");
@@ -939,44 +937,33 @@ inline void subtract_row(const Level& L, int from, int to, const double* x, Lane
   for (int e = from; e < to; ++e) subtract_columns(val + 9 * static_cast<std::size_t>(e), x + 3 * L.row_node[e], s);
 }
 
-/// x_i = D_i⁻¹ (b_i − Σ A_ik x_k) for the nodes i of colour c, all blocks of the row (whole = true) or those
-/// of lower colours (the others meet x = 0). Nodes of one colour are not coupled: they update in parallel,
+/// x_i = D_i⁻¹ (b_i − Σ A_ik x_k) over all blocks of row i (whole = true) or its first `before` (the others
+/// meet x = 0).
+inline void relax_node(Level& L, int i, bool whole) {
+  Lanes s = lanes3(L.b.data() + 3 * i);
+  subtract_row(L, L.row_start[i], whole ? L.row_start[i + 1] : L.row_start[i] + L.before[i], L.x.data(), s);
+  const double t[3] = {s[0], s[1], s[2]};
+  solve_diagonal(L, i, t, L.x.data() + 3 * i);
+}
+
+/// relax_node() for the nodes of colour c. Nodes of one colour are not coupled: they update in parallel,
 /// each row's sum in its fixed order, so the result does not depend on the thread count.
 void relax_colour(Level& L, int c, bool whole) {
-  double* x = L.x.data();
   const int first = L.colour_start[c], last = L.colour_start[c + 1];
 #pragma omp for schedule(static)
-  for (int q = first; q < last; ++q) {
-    const int i = L.by_colour[q];
-    Lanes s = lanes3(L.b.data() + 3 * i);
-    subtract_row(L, L.row_start[i], whole ? L.row_start[i + 1] : L.row_start[i] + L.before[i], x, s);
-    const double t[3] = {s[0], s[1], s[2]};
-    solve_diagonal(L, i, t, x + 3 * i);
-  }
+  for (int q = first; q < last; ++q) relax_node(L, L.by_colour[q], whole);
 }
 
 /// A forward lexicographic nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0 (the blocks of higher
 /// nodes meet only zeros): the smoother of a lexicographic level.
 void forward_sweep_in_order(Level& L) {
   L.x.setZero();
-  double* x = L.x.data();
-  for (int i = 0; i < L.nodes; ++i) {
-    Lanes s = lanes3(L.b.data() + 3 * i);
-    subtract_row(L, L.row_start[i], L.row_start[i] + L.before[i], x, s);
-    const double t[3] = {s[0], s[1], s[2]};
-    solve_diagonal(L, i, t, x + 3 * i);
-  }
+  for (int i = 0; i < L.nodes; ++i) relax_node(L, i, false);
 }
 
 /// The backward lexicographic sweep on L.x, nodes in descending order, whole rows.
 void backward_sweep_in_order(Level& L) {
-  double* x = L.x.data();
-  for (int i = L.nodes - 1; i >= 0; --i) {
-    Lanes s = lanes3(L.b.data() + 3 * i);
-    subtract_row(L, L.row_start[i], L.row_start[i + 1], x, s);
-    const double t[3] = {s[0], s[1], s[2]};
-    solve_diagonal(L, i, t, x + 3 * i);
-  }
+  for (int i = L.nodes - 1; i >= 0; --i) relax_node(L, i, true);
 }
 
 /// A forward multi-colour nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0, colour by colour.
@@ -1021,13 +1008,13 @@ inline Lanes lanes4(const double* p) {
 #endif
 }
 
-/// y = b − A x (b may be null: y = −A x) from A's lower block triangle, by L's chunks in parallel: each
+/// y = −A x from A's lower block triangle, by L's chunks in parallel: each
 /// chunk's rows in order, then each row's sum and the chunks' spills into it in chunk order (a fixed order:
 /// the result does not depend on the thread count). Four lanes at a time: a block's rows r_k (4 doubles from
 /// each, the fourth the next row's first: it meets x's zero lane, or goes to the spill's unused one) give
 /// row i's sums lane by lane, t_k += r_k ∘ x_j, added across the lanes at the row's end, and the spill
 /// −= Σ_k r_k x_ik.
-void subtract_product(Level& L, const double* x, const double* b, double* y, bool parallel) {
+void subtract_product(Level& L, const double* x, double* y, bool parallel) {
   const double* val = L.A.val.data();
   const int chunks = static_cast<int>(L.chunk_low.size());
 #pragma omp parallel if (parallel)
@@ -1051,7 +1038,7 @@ void subtract_product(Level& L, const double* x, const double* b, double* y, boo
         const double* d = val + 9 * static_cast<std::size_t>(end);
         t0 += lanes4(d) * xi, t1 += lanes4(d + 3) * xi, t2 += lanes4(d + 6) * xi;
         const Lanes* t[3] = {&t0, &t1, &t2};
-        for (int a = 0; a < 3; ++a) y[3 * i + a] = (b ? b[3 * i + a] : 0.0) - (((*t[a])[0] + (*t[a])[1]) + (*t[a])[2]);
+        for (int a = 0; a < 3; ++a) y[3 * i + a] = 0.0 - (((*t[a])[0] + (*t[a])[1]) + (*t[a])[2]);
       }
     }
 #pragma omp for schedule(static)
@@ -1082,7 +1069,7 @@ void MultigridPreconditioner::Impl::smooth_prolongator(std::size_t l) {
     const double norm = v.norm();
     if (!(norm > 0.0)) break;
     v /= norm;
-    subtract_product(F, v.data(), nullptr, w.data(), parallel(F));  // −A v
+    subtract_product(F, v.data(), w.data(), parallel(F));  // −A v
     for (int i = 0; i < F.nodes; ++i) solve_diagonal(F, i, w.data() + 3 * i, v.data() + 3 * i);
     rho = v.norm();
   }
@@ -1171,7 +1158,7 @@ void MultigridPreconditioner::Impl::product(const Eigen::VectorXd& p, Eigen::Vec
   product_in.setZero(3 * L0.nodes);
   for (std::size_t k = 0; k < row_dof.size(); ++k) product_in[row_dof[k]] = p[static_cast<Eigen::Index>(k)];
   product_out.resize(3 * L0.nodes);
-  subtract_product(L0, product_in.data(), nullptr, product_out.data(), parallel(L0));
+  subtract_product(L0, product_in.data(), product_out.data(), parallel(L0));
   Ap.resize(p.size());
   for (std::size_t k = 0; k < row_dof.size(); ++k) Ap[static_cast<Eigen::Index>(k)] = -product_out[row_dof[k]];
 }
