@@ -5,6 +5,8 @@
 
 #include <omp.h>
 
+#include <cmath>
+#include <cstring>
 #include <random>
 
 #include "snh/fem/elastic_term.hpp"
@@ -142,6 +144,76 @@ TEST(Assembly, BitIdenticalForOneAndTwoThreads) {
     EXPECT_EQ(std::memcmp(g1.data(), g2.data(), sizeof(double) * g1.size()), 0);
     ASSERT_EQ(H1.nonZeros(), H2.nonZeros());
     EXPECT_EQ(std::memcmp(H1.valuePtr(), H2.valuePtr(), sizeof(double) * H1.nonZeros()), 0);
+  }
+}
+
+TEST(Assembly, ChunksOfCellsGiveTheSameResultsForOneAndTwoThreads) {
+  // Big enough for chunks (4 of 1024 cells at least): lattice-ordered cells make slabs, a few colours.
+  for (const auto& [type, res] : {std::pair{CellType::hex8, 16}, std::pair{CellType::tet4, 10}}) {
+    const VolumeMesh m = distorted(type, res, 0.2, 7);
+    Assembled chunked(m, make_material("stable_neo_hookean", {1.0, 10.0}), boundary_fixed(res));
+    Assembled cells(m, make_material("stable_neo_hookean", {1.0, 10.0}), boundary_fixed(res));
+    EXPECT_EQ(chunked.elastic.chunk_cells(), 1024) << to_string(type);
+    EXPECT_LE(chunked.elastic.colour_count(), ElasticTerm::kMaxChunkColours);
+    cells.elastic.set_chunk_cells(0);
+    EXPECT_EQ(cells.elastic.chunk_cells(), 1);
+    EXPECT_GT(cells.elastic.colour_count(), chunked.elastic.colour_count());
+    chunked.elastic.set_parallel_threshold(0);
+    Eigen::VectorXd x = flatten(m.vertices) * 1.2;
+    x[7] += 0.05;
+    Eigen::VectorXd g1, g2, g_cells;
+    SparseLower H1, H2, H_cells;
+    omp_set_num_threads(1);
+    const double E1 = chunked.evaluate(x, g1, &H1);
+    omp_set_num_threads(2);
+    const double E2 = chunked.evaluate(x, g2, &H2);
+    EXPECT_EQ(E1, E2);
+    EXPECT_EQ(std::memcmp(g1.data(), g2.data(), sizeof(double) * g1.size()), 0);
+    ASSERT_EQ(H1.nonZeros(), H2.nonZeros());
+    EXPECT_EQ(std::memcmp(H1.valuePtr(), H2.valuePtr(), sizeof(double) * H1.nonZeros()), 0);
+    // The same sums in another order as the colouring of single cells.
+    const double E_cells = cells.evaluate(x, g_cells, &H_cells);
+    EXPECT_NEAR(E1, E_cells, 1e-13 * std::abs(E_cells));
+    EXPECT_LE((g1 - g_cells).norm(), 1e-13 * g_cells.norm());
+    EXPECT_LE(SparseLower(H1 - H_cells).norm(), 1e-13 * H_cells.norm());
+  }
+  // Too few cells for four chunks: single cells.
+  const VolumeMesh small = distorted(CellType::hex8, 6, 0.2, 8);
+  EXPECT_EQ(ElasticTerm(small, make_material("stable_neo_hookean", {1.0, 10.0})).chunk_cells(), 1);
+}
+
+TEST(Assembly, HexStiffnessIsTheSumOverPointsOfBTransposedHB) {
+  // The true Hessian of one distorted hex (the all-points kernel, add_hex_stiffness) against Σ_q w_q B_qᵀ H_q B_q
+  // built densely, B_q the 9×24 map from the nodes' positions to vec F_q.
+  for (const char* name : {"stable_neo_hookean", "stable_neo_hookean_log", "neo_hookean"}) {
+    const VolumeMesh m = distorted(CellType::hex8, 1, 0.2, 9);
+    const AnyMaterial mat = make_material(name, {1.0, 10.0});
+    Assembled sys(m, mat, std::vector<std::uint8_t>(3 * m.vertex_count(), 0));
+    Eigen::VectorXd x = flatten(m.vertices) * 1.1;
+    for (Eigen::Index i = 0; i < x.size(); ++i) x[i] += 0.03 * std::sin(3.0 * static_cast<double>(i));
+    Eigen::VectorXd g;
+    SparseLower H;
+    sys.evaluate(x, g, &H, PsdProjection::none);
+    const Eigen::MatrixXd got = Eigen::MatrixXd(H).selfadjointView<Eigen::Lower>();
+    const HexRest r = std::get<std::vector<HexRest>>(sys.elastic.rest())[0];
+    Eigen::Matrix<double, 3, 8> X;
+    for (int a = 0; a < 8; ++a) X.col(a) = x.segment<3>(3 * m.cells(a, 0));
+    Eigen::MatrixXd want = Eigen::MatrixXd::Zero(24, 24);
+    for (int q = 0; q < 8; ++q) {
+      const Mat3 F = X * r.G[q];
+      Eigen::Matrix<double, 9, 24> B = Eigen::Matrix<double, 9, 24>::Zero();
+      for (int a = 0; a < 8; ++a)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) B(3 * j + i, 3 * a + i) = r.G[q](a, j);  // vec F column-major
+      const Mat9 Hq = std::visit([&](const auto& mm) { return mm.hessian(F); }, mat);
+      want += r.weight[q] * B.transpose() * Hq * B;
+    }
+    // The mesh's vertex order is the cell's (one cell): DOF 3a+i is vertex cells(a, 0), coordinate i.
+    Eigen::MatrixXd want_by_vertex(24, 24);
+    for (int a = 0; a < 8; ++a)
+      for (int b = 0; b < 8; ++b)
+        want_by_vertex.block<3, 3>(3 * m.cells(a, 0), 3 * m.cells(b, 0)) = want.block<3, 3>(3 * a, 3 * b);
+    EXPECT_LE((got - want_by_vertex).norm(), 1e-12 * want.norm()) << name;
   }
 }
 

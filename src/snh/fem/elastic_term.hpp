@@ -2,9 +2,10 @@
 // The elastic energy of a mesh as a Term (DESIGN.md fem/): Σ_e Σ_q w_q ψ(F_q), its gradient, and its
 // (per-element PSD-projected) Hessian, assembled in parallel through a scatter map precomputed for each
 // Hessian layout (an element's stiffness is computed and scattered once per pair of DOFs: it is symmetric).
-// Elements are coloured so that no two elements of a colour share a vertex: the colours run in sequence
-// and each colour in parallel, each element adding its terms straight into the results, so every sum is
-// taken in the same order for any thread count (bit-identical results). Each cell may have its own material (the runtime choice is one std::visit
+// Elements are coloured, in chunks of consecutive cells where that needs few colours (a lattice's slabs) or
+// one by one, so that no two units of a colour share a vertex: the colours run in sequence and each colour's
+// units in parallel, each unit's cells in order, each element adding its terms straight into the results, so
+// every sum is taken in the same order for any thread count (bit-identical results). Each cell may have its own material (the runtime choice is one std::visit
 // per material, outside the element loop) and its own weight scale (the fraction of an embedding lattice's
 // cell that the solid fills).
 #include <vector>
@@ -65,6 +66,14 @@ class ElasticTerm final : public Term {
   [[nodiscard]] int colour_count() const {
     return static_cast<int>((group_start_.size() - 1) / materials_.size());
   }
+  /// The units that are coloured: chunks of this many consecutive cells, each run by one thread in cell order
+  /// (where they need at most kMaxChunkColours colours: a lattice's cells in grid order make slabs), or
+  /// single cells (1). set_chunk_cells(−1) picks max(1024, cells / 64), as the constructor does; 0 or 1
+  /// colours single cells. Either way each sum is taken in an order that does not depend on the thread count.
+  void set_chunk_cells(Eigen::Index chunk);
+  [[nodiscard]] Eigen::Index chunk_cells() const { return chunk_cells_; }
+  static constexpr int kMaxChunkColours = 4;
+  static constexpr int kCellsPerPiece = 32;  ///< single-cell colouring: cells per unit of parallel work
 
   /// Loops over fewer quadrature points than this (a group of cells) run on one thread: for small meshes waking threads (and, when other processes compete for
   /// the cores, waiting at barriers) costs more than the work. Default 2048 (an eighth of it for loops that
@@ -84,8 +93,9 @@ class ElasticTerm final : public Term {
   /// Energy, and when asked the gradient (added to *gradient) and the Hessian (added through scatter).
   double assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const std::vector<int>* scatter, double* values,
                   PsdProjection projection) const;
-  /// Calls body(material, rest, cells, count) for each group of cells of one colour and one material, in
-  /// group order.
+  /// Calls body(material, rest, pieces, piece_count, count) for each group of cells of one colour and one
+  /// material, in group order: its count cells are group_cells_[pieces[p] .. pieces[p + 1]) for p <
+  /// piece_count, pieces that share no vertex with each other.
   template <class Body>
   void for_each_group(Body&& body) const;
   /// Calls body(material, rest, begin, end) for each run of consecutive cells [begin, end) of one material, in
@@ -103,6 +113,9 @@ class ElasticTerm final : public Term {
   std::vector<int> scatter_;        ///< for the bound layout
   std::vector<int> group_cells_;  ///< cells grouped by colour, then material
   std::vector<int> group_start_;  ///< group k M + m (colour k, material m) owns group_cells_[group_start_[g] .. [g+1])
+  std::vector<int> piece_start_;  ///< the groups' pieces, each from piece_start_[p] to [p + 1] in group_cells_
+  std::vector<int> group_pieces_;  ///< group g's pieces are p = group_pieces_[g] .. [g + 1]
+  Eigen::Index chunk_cells_ = 1;
   Eigen::Index parallel_threshold_ = 2048;
 };
 
