@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -219,6 +220,27 @@ TEST(Vtu, AnArrayOfTheWrongSizeIsRefused) {
   EXPECT_EQ(error_of([&] { w.write(dir / "d.vtu", m.vertices, {}, {}, {{"pinned", Eigen::VectorXd::Zero(1)}}); }),
             (dir / "d.vtu").string() + ": the .vtu array pinned has 1 values, expected 8");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 0) << "nothing written";
+  fs::remove_all(dir);
+}
+
+TEST(Obj, VerticesAreWrittenAsPrintfsTenSignificantDigits) {
+  // write_obj formats by std::to_chars: the characters must be printf's "%.10g" (the format the frames had).
+  const std::vector<double> values = {0.0, -0.0, 1.0, -1.5, 0.1, 1.0 / 3.0, 123456789.123, 1234567890123.0, 1e-5,
+                                      -2.5e-7, 1e-300, 5e-324, 1.7976931348623157e308, -9.999999999e-1, 0.00012345678901};
+  Eigen::Matrix3Xd P(3, static_cast<Eigen::Index>(values.size()));
+  for (std::size_t k = 0; k < values.size(); ++k) P.col(static_cast<Eigen::Index>(k)) << values[k], -values[k], values[k] * 7.0;
+  Eigen::Matrix3Xi T(3, 1);
+  T << 0, 1, 2;
+  const fs::path dir = temp_dir("obj");
+  write_obj(dir / "p.obj", P, T);
+  std::string want;
+  for (Eigen::Index v = 0; v < P.cols(); ++v) {
+    char line[128];
+    std::snprintf(line, sizeof line, "v %.10g %.10g %.10g\n", P(0, v), P(1, v), P(2, v));
+    want += line;
+  }
+  want += "f 1 2 3\n";
+  EXPECT_EQ(slurp(dir / "p.obj"), want);
   fs::remove_all(dir);
 }
 
