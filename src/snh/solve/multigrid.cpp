@@ -96,7 +96,6 @@ struct Level {
   std::vector<int> diagonal;            ///< per node, the slot of its diagonal block
   std::vector<double> inverse;          ///< 9 per node: the inverse of the free part of the diagonal block
   Transfer down;                        ///< P to the next level: the parents of each node
-  std::vector<double> up_weight;        ///< … and their weights (down.weight in this order; lattice levels)
   std::vector<int> up_start, up_entry, up_fine;  ///< Pᵀ: per node of the next level, the entries of `down`
                                                  ///< that reach it and their fine nodes
   // The smoother's colouring and block rows (sweep_rows()): no two coupled nodes share a colour; each node's
@@ -372,9 +371,6 @@ void transpose_transfer(Level& F, int coarse_nodes) {
       F.up_fine[next[F.down.node[p]]] = i;
       F.up_entry[next[F.down.node[p]]++] = p;
     }
-  F.up_weight.clear();
-  for (int p : F.up_entry)
-    if (!F.down.weight.empty()) F.up_weight.push_back(F.down.weight[static_cast<std::size_t>(p)]);
 }
 
 }  // namespace
@@ -1165,12 +1161,12 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
 #pragma omp parallel for schedule(static) if (parallel(C))
   for (int I = 0; I < C.nodes; ++I) {
     double e[3] = {0.0, 0.0, 0.0};
-    if (L.up_weight.empty()) {
+    if (L.down.weight.empty()) {
       for (int q = L.up_start[I]; q < L.up_start[I + 1]; ++q)
         subtract_transposed(&L.down.block[9 * static_cast<std::size_t>(L.up_entry[q])], L.r.data() + 3 * L.up_fine[q], e);
     } else {
       for (int q = L.up_start[I]; q < L.up_start[I + 1]; ++q) {
-        const double w = L.up_weight[static_cast<std::size_t>(q)], *r = L.r.data() + 3 * L.up_fine[q];
+        const double w = L.down.weight[static_cast<std::size_t>(L.up_entry[q])], *r = L.r.data() + 3 * L.up_fine[q];
         for (int a = 0; a < 3; ++a) e[a] -= w * r[a];
       }
     }
