@@ -1,4 +1,4 @@
-// libFuzzer harness for reading checkpoint.bin (sim/checkpoint, what `--resume` reads). Each input is read
+// libFuzzer harness for reading checkpoint.bin (run/checkpoint, what `--resume` reads). Each input is read
 // twice: as it is (almost always refused by its checksum) and with its correct FNV-1a digest appended, so
 // that the fields behind the checksum (the fingerprint, step, time and vector lengths) are fuzzed too; the
 // resume check then compares it with a run. A damaged file may be refused only with std::runtime_error
@@ -16,7 +16,7 @@
 #include <string_view>
 
 #include "snh/io/checksum.hpp"
-#include "snh/sim/checkpoint.hpp"
+#include "snh/run/checkpoint.hpp"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// libFuzzer harness for the strict reading of a scene file's JSON (sim/scene/read_json): the input is
+// libFuzzer harness for the strict reading of a scene file's JSON (setup/scene/read_json): the input is
 // the file's text; it may be rejected only with SceneError (one line). Anything else (a crash, another
 // exception, a hang, runaway memory, a line break in the message) is a bug.
 #include <cstddef>
@@ -6,7 +6,9 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "snh/sim/scene.hpp"
+#include <nlohmann/json.hpp>
+
+#include "snh/setup/scene.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);

@@ -21,9 +21,9 @@
 #include "common.hpp"
 #include "snh/fem/hessian_layout.hpp"
 #include "snh/io/mesh_check.hpp"
-#include "snh/sim/interrupt.hpp"
-#include "snh/sim/run_directory.hpp"
-#include "snh/sim/scene.hpp"
+#include "snh/run/interrupt.hpp"
+#include "snh/run/run_directory.hpp"
+#include "snh/setup/scene.hpp"
 #include "snh/sim/simulation.hpp"
 #ifdef SNH_PYTHON_REPORT
 #include "snh/report/report.hpp"

@@ -14,9 +14,9 @@
 #include "../common/omp_env.hpp"
 #include "../common/run_report.hpp"
 #include "snh/io/atomic_file.hpp"
-#include "snh/sim/interrupt.hpp"
-#include "snh/sim/run_directory.hpp"
-#include "snh/sim/stretch.hpp"
+#include "snh/run/interrupt.hpp"
+#include "snh/run/run_directory.hpp"
+#include "snh/setup/stretch.hpp"
 #include "snh/solve/memory_estimate.hpp"
 
 namespace {

@@ -11,7 +11,7 @@
 #include "../common/out_option.hpp"
 #include "parameter_options.hpp"
 #include "run_command.hpp"
-#include "snh/sim/scene.hpp"
+#include "snh/setup/scene.hpp"
 
 namespace snh::cli {
 

@@ -10,8 +10,8 @@
 #include "../common/run_report.hpp"
 #include "parameter_options.hpp"
 #include "snh/material/registry.hpp"
-#include "snh/sim/lab.hpp"
-#include "snh/sim/run_directory.hpp"
+#include "snh/setup/lab.hpp"
+#include "snh/run/run_directory.hpp"
 
 namespace snh::cli {
 

@@ -8,7 +8,7 @@
 #include "snh/io/atomic_file.hpp"
 #include "snh/report/render.hpp"
 #include "snh/report/report.hpp"
-#include "snh/sim/interrupt.hpp"
+#include "snh/run/interrupt.hpp"
 
 namespace snh::cli {
 namespace {

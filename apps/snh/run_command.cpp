@@ -9,8 +9,8 @@
 #include "../common/command_line.hpp"
 #include "../common/out_option.hpp"
 #include "../common/run_report.hpp"
-#include "snh/sim/interrupt.hpp"
-#include "snh/sim/scene.hpp"
+#include "snh/run/interrupt.hpp"
+#include "snh/setup/scene.hpp"
 
 namespace snh::cli {
 

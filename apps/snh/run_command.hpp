@@ -2,7 +2,7 @@
 // `snh run SCENE.json`: runs a scene file (dynamics or quasi-static, pins, initial deformation).
 #include <CLI/CLI.hpp>
 
-#include "snh/sim/scene.hpp"
+#include "snh/setup/scene.hpp"
 
 namespace snh::cli {
 

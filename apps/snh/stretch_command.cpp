@@ -13,8 +13,8 @@
 #include "parameter_options.hpp"
 #include "../common/run_report.hpp"
 #include "snh/material/registry.hpp"
-#include "snh/sim/interrupt.hpp"
-#include "snh/sim/stretch.hpp"
+#include "snh/run/interrupt.hpp"
+#include "snh/setup/stretch.hpp"
 #include "snh/solve/linear_solver.hpp"
 
 namespace snh::cli {

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Every file of a layer includes only headers of its own layer and of the layers below it (DESIGN.md):
-#   math <- material <- fem <- solve <- sim <- report, mesh beside material (knows math), io, rig, embed and
-#   contact beside fem (know mesh and math), fem above contact (its contact terms). One line per include that breaks an arrow, and a non-zero exit code.
+# Every file of a layer includes only headers of its own layer and of the layers below it (docs/design.md):
+#   math <- material <- fem <- solve <- sim <- run <- setup, report on run, mesh beside material (knows math),
+#   io, rig, embed and contact beside fem (know mesh and math), fem above contact (its contact terms); sim is
+#   the stepping core (no files), run a run's files, setup the scene files, flesh, stretch and lab. One line per include that breaks an arrow, and a non-zero exit code.
 # Usage: test_layers.sh SRC_SNH_DIR
 set -u
 SRC="$1"
@@ -15,8 +16,10 @@ declare -A allowed=(
   [contact]="math mesh contact"
   [fem]="math material mesh contact fem"
   [solve]="math material mesh contact fem solve"
-  [sim]="math material mesh io rig embed contact fem solve sim"
-  [report]="math material mesh io rig embed contact fem solve sim report"
+  [sim]="math material mesh contact fem solve sim"
+  [run]="math material mesh io contact fem solve sim run"
+  [setup]="math material mesh io rig embed contact fem solve sim run setup"
+  [report]="math material mesh io contact fem solve sim run report"
 )
 bad=0 files=0
 for layer in "${!allowed[@]}"; do

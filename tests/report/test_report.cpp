@@ -29,10 +29,10 @@
 #include "snh/mesh/box.hpp"
 #include "snh/report/render.hpp"
 #include "snh/report/report.hpp"
-#include "snh/sim/interrupt.hpp"
-#include "snh/sim/lab.hpp"
-#include "snh/sim/scene.hpp"
-#include "snh/sim/stretch.hpp"
+#include "snh/run/interrupt.hpp"
+#include "snh/setup/lab.hpp"
+#include "snh/setup/scene.hpp"
+#include "snh/setup/stretch.hpp"
 
 namespace snh {
 namespace {

@@ -11,7 +11,7 @@
 #include "snh/mesh/box.hpp"
 #include "fem/problem_fd.hpp"
 #include "snh/sim/dynamics.hpp"
-#include "snh/sim/scene.hpp"
+#include "snh/setup/scene.hpp"
 #include "snh/solve/newton.hpp"
 
 namespace snh {

@@ -17,11 +17,11 @@
 #include <nlohmann/json.hpp>
 
 #include "snh/mesh/box.hpp"
-#include "snh/sim/interrupt.hpp"
-#include "snh/sim/scene.hpp"
+#include "snh/run/interrupt.hpp"
+#include "snh/setup/scene.hpp"
 #include "snh/sim/simulation.hpp"
-#include "snh/sim/stats.hpp"
-#include "snh/sim/stretch.hpp"
+#include "snh/run/stats.hpp"
+#include "snh/setup/stretch.hpp"
 
 namespace snh {
 namespace {

@@ -15,12 +15,12 @@
 
 #include <nlohmann/json.hpp>
 
-#include "sim/limb_model.hpp"
+#include "setup/limb_model.hpp"
 #include "snh/fem/elastic_term.hpp"
 #include "snh/fem/problem.hpp"
 #include "snh/mesh/box.hpp"
-#include "snh/sim/scene.hpp"
-#include "snh/sim/stretch.hpp"
+#include "snh/setup/scene.hpp"
+#include "snh/setup/stretch.hpp"
 #include "snh/solve/multigrid.hpp"
 #include "snh/solve/newton.hpp"
 

@@ -17,7 +17,7 @@
 
 #include <fmt/format.h>
 
-#include "snh/sim/interrupt.hpp"
+#include "snh/run/interrupt.hpp"
 
 extern char** environ;
 

@@ -18,7 +18,7 @@
 #include "snh/io/base64.hpp"
 #include "snh/report/browser.hpp"
 #include "snh/report/report.hpp"
-#include "snh/sim/interrupt.hpp"
+#include "snh/run/interrupt.hpp"
 
 namespace snh {
 namespace {

@@ -18,7 +18,7 @@
 #include "snh/io/surface_read.hpp"
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/surface.hpp"
-#include "snh/sim/stats.hpp"
+#include "snh/run/stats.hpp"
 
 namespace snh {
 namespace {

@@ -7,9 +7,20 @@
 #include <Eigen/LU>
 #include <fmt/format.h>
 
-#include "snh/sim/output.hpp"
-
 namespace snh {
+namespace {
+
+/// "; worst element E (min det F = J)": the cell with the smallest det F over its quadrature points, for
+/// a failure diagnostic ("" for no cells).
+std::string worst_element(const Eigen::VectorXd& min_J) {
+  if (min_J.size() == 0) return "";
+  Eigen::Index worst = 0;
+  for (Eigen::Index c = 1; c < min_J.size(); ++c)  // NaN-aware: a NaN is the worst
+    if (std::isnan(min_J[c]) || (!std::isnan(min_J[worst]) && min_J[c] < min_J[worst])) worst = c;
+  return fmt::format("; worst element {} (min det F = {:.4g})", worst, min_J[worst]);
+}
+
+}  // namespace
 
 std::vector<std::uint8_t> kinematic_dof_flags(const std::vector<KinematicSet>& sets, Eigen::Index vertices) {
   std::vector<std::uint8_t> flags(3 * vertices, 0);

@@ -1,0 +1,79 @@
+#pragma once
+// The one loop that runs a Simulation frame by frame and keeps its output directory trustworthy
+// (DESIGN.md run/): it locks the directory, clears a previous run's files (or, for --resume, checks the
+// checkpoint, the kept frames and the history), writes stats.json with status "running" before any work,
+// then every frame (NNN.obj, NNN.vtu) and its stats record; the progress (frames.pvd, the stats so far and
+// the last converged frame's checkpoint) after the first completed frame, then at most every
+// progress_interval seconds and at the end, with the final stats' status "finished", "stopped" (a frame
+// failed) or "interrupted" (a signal), or "running" when an exception ends the run. A run killed without
+// warning leaves status "running": unfinished, its last progress_interval of frames not in the stats. What
+// differs between the stretch test and a scene (the records' table, the log lines, the record's own
+// fields, run-level results) comes in through the RunPlan.
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "snh/run/run_directory.hpp"
+#include "snh/sim/simulation.hpp"
+#include "snh/run/stats.hpp"
+
+namespace snh {
+
+struct RunResult {
+  std::vector<StepRecord> records;  ///< with the initial state's first where the table has one
+  bool all_converged = true;
+  std::string failure;              ///< why the run stopped early (empty when it ran to the end)
+  int interrupted_by = 0;           ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
+  double total_seconds = 0.0, peak_memory_mib = 0.0;
+};
+
+struct RunPlan {
+  std::filesystem::path out;
+  /// The lock on `out` when the caller holds it beyond the run (to write the report before another run
+  /// may start there); null: the run takes it and releases it when it returns.
+  std::shared_ptr<RunDirectoryLock> lock;
+  const RecordTable* table = nullptr;
+  int frames = 1;                 ///< frames (steps) after the initial state
+  double frame_duration = 1.0;    ///< frame i ends at time i · frame_duration
+  int substeps = 1;               ///< solves per frame, at (i − 1) · frame_duration + k · substep
+  double substep = 1.0;
+  bool write_vtu = true;
+  /// Seconds between two writes of the progress (frames.pvd, stats.json, stats.csv, checkpoint.bin) while
+  /// the run goes on: a run killed outright loses at most that much; 0: after every frame.
+  double progress_interval = 1.0;
+  bool resume = false;            ///< continue from DIR/checkpoint.bin
+  std::string fingerprint;        ///< the settings that decide the result (a resume must match)
+  nlohmann::json settings;        ///< stats.json's fields that describe the run
+  bool live_progress = false;     ///< the log is a terminal: a line updated at every Newton iteration
+  /// Called before the first frame, after the directory is locked and checked: the run's header lines.
+  std::function<void(std::ostream&)> header;
+  /// Fills the table's own fields of a record (energies) from the state reached; `report` is null for
+  /// the initial state.
+  std::function<void(StepRecord&, const StepReport* report)> fill;
+  /// Writes a frame's own files besides NNN.obj and NNN.vtu (a flesh run's render surfaces), from the state
+  /// reached; a WriteError is reported as the frame's.
+  std::function<void(int index, double time, const Eigen::VectorXd& x)> write_frame;
+  /// The log line of a completed frame (without newline).
+  std::function<std::string(const StepRecord&)> line;
+  /// The live progress text at a Newton iteration.
+  std::function<std::string(int frame, int substep, int iteration, double residual)> live;
+  /// A failed frame's failure text from its report (default: the report's own).
+  std::function<std::string(const StepReport&)> failure;
+  /// Run-level results added to the final stats.json (the stretch test's middle width).
+  std::function<void(nlohmann::json& stats)> finish;
+  /// The last line (without newline).
+  std::function<std::string(const RunResult&)> summary;
+};
+
+/// Runs the plan: see the header. Throws MemoryEstimateError before any work when the run's memory estimate
+/// (memory_estimate.hpp) exceeds this process' limits, OutOfMemoryError (one line: the estimate, what is
+/// kept, what needs less; stats.json says "stopped") when a frame runs out of memory. Throws WriteError (naming the frame and what is kept) when a file
+/// cannot be written, std::invalid_argument when a resume is not possible (before any work).
+[[nodiscard]] RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log);
+
+}  // namespace snh

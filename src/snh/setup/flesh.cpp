@@ -1,0 +1,331 @@
+#include "snh/setup/flesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/SVD>
+#include <fmt/format.h>
+
+#include "snh/embed/lattice.hpp"
+#include "snh/embed/winding_number.hpp"
+#include "snh/fem/attachment_term.hpp"
+#include "snh/fem/collider_term.hpp"
+#include "snh/fem/contact_term.hpp"
+#include "snh/io/surface_read.hpp"
+#include "snh/mesh/surface.hpp"
+#include "snh/rig/skinning.hpp"
+
+namespace snh {
+namespace {
+
+/// The joint of this name, or RigError naming the model and a few of its joints.
+int joint_named(const RiggedModel& model, const std::string& name, const std::string& where) {
+  const int j = model.skeleton.find(name);
+  if (j >= 0) return j;
+  std::string known;
+  for (int k = 0; k < model.skeleton.size() && k < 6; ++k) known += (k ? ", " : "") + model.skeleton.joints[k].name;
+  if (model.skeleton.size() > 6) known += ", ...";
+  throw RigError(fmt::format("{}: the model {} has no joint \"{}\" (its joints: {})", where, model.source.string(), name, known));
+}
+
+Clip choose_clip(const FleshSpec& spec, const RiggedModel& model, const std::string& where) {
+  if (!spec.animation.empty() && !spec.keyframes.empty())
+    throw std::invalid_argument(fmt::format("{}: give an animation clip or keyframes, not both", where));
+  if (!spec.animation.empty()) return find_clip(model, spec.animation);
+  if (!spec.keyframes.empty()) {
+    std::vector<JointKeys> keys;
+    for (const KeyframeSpec& k : spec.keyframes)
+      for (const std::string& name : k.joints)
+        keys.push_back({.joint = joint_named(model, name, where), .times = k.times, .rotations = k.rotations});
+    for (std::size_t a = 0; a < keys.size(); ++a)
+      for (std::size_t b = a + 1; b < keys.size(); ++b)
+        if (keys[a].joint == keys[b].joint)
+          throw std::invalid_argument(fmt::format("{}: joint \"{}\" is keyframed twice", where,
+                                                  model.skeleton.joints[keys[a].joint].name));
+    return clip_from_keys("keyframes", model.skeleton, keys);
+  }
+  if (!model.clips.empty()) return model.clips.front();
+  throw RigError(fmt::format("{}: the model {} has no animation clip: give keyframes (a scene's flesh.keyframes)", where,
+                             model.source.string()));
+}
+
+/// Vertices carried rigidly by their bones' joints: their rest positions in the joints' rest frames, and
+/// the joints' current frames of them.
+class BoneCarried {
+ public:
+  BoneCarried(std::shared_ptr<const Flesh> flesh, const Binding& binding) : flesh_(std::move(flesh)) {
+    joint_.resize(binding.vertex.size());
+    local_.resize(3, static_cast<Eigen::Index>(binding.vertex.size()));
+    for (std::size_t i = 0; i < binding.vertex.size(); ++i) {
+      const int j = flesh_->bones[binding.bone[i]].joint;
+      joint_[i] = j;
+      local_.col(static_cast<Eigen::Index>(i)) = flesh_->rest_world[j].inverse() * flesh_->volume.vertices.col(binding.vertex[i]);
+    }
+  }
+  void at(double t, Eigen::Matrix3Xd& out) const {
+    const std::vector<Eigen::Affine3d> world = joint_world(*flesh_, t);
+    out.resize(3, local_.cols());
+    for (Eigen::Index i = 0; i < local_.cols(); ++i) out.col(i) = world[joint_[i]] * local_.col(i);
+  }
+
+ private:
+  std::shared_ptr<const Flesh> flesh_;
+  std::vector<int> joint_;
+  Eigen::Matrix3Xd local_;
+};
+
+/// The hard-bound vertices' targets.
+class BoneMotion final : public KinematicProvider {
+ public:
+  explicit BoneMotion(const std::shared_ptr<const Flesh>& flesh) : carried_(flesh, flesh->binding) {}
+  void targets(double t, Eigen::Matrix3Xd& out) const override { carried_.at(t, out); }
+
+ private:
+  BoneCarried carried_;
+};
+
+}  // namespace
+
+Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
+  Flesh f;
+  f.model = read_gltf(spec.model);
+  const RiggedModel& m = f.model;
+  const EdgeCounts edges = edge_counts(m.surface_triangles);
+  if (edges.open > 0 || edges.non_manifold > 0)
+    throw RigError(fmt::format("{}: the surface (welded by position) is not closed: {} open and {} non-manifold edges of {}; "
+                               "a volume needs a closed surface",
+                               m.source.string(), edges.open, edges.non_manifold, edges.edges));
+  if (spec.resolution < 1) throw std::invalid_argument(fmt::format("{}: resolution {} must be at least 1", where, spec.resolution));
+  f.clip = choose_clip(spec, m, where);
+  f.rest_world = m.skeleton.world(m.skeleton.rest_pose());
+  f.surface_volume = enclosed_volume(m.surface_vertices, m.surface_triangles);
+  if (!(f.surface_volume > 0.0))
+    throw RigError(fmt::format("{}: the surface encloses no volume ({:g}): are its triangles turned inside out?",
+                               m.source.string(), f.surface_volume));
+
+  if (spec.volume == FleshVolume::lattice) {
+    const Lattice lattice = lattice_for_surface(m.surface_vertices, m.surface_triangles, spec.resolution);
+    f.volume = lattice.mesh;
+    f.cell_size = lattice.spacing;
+    f.volume_of_cells = static_cast<double>(f.volume.cell_count()) * std::pow(lattice.spacing, 3);
+    f.embedding = embed_in_lattice(lattice, m.vertices);
+  } else {
+    const Eigen::Vector3d extent = m.surface_vertices.rowwise().maxCoeff() - m.surface_vertices.rowwise().minCoeff();
+    f.cell_size = extent.maxCoeff() / spec.resolution;
+    // No tet larger than a sixth of a cube of the lattice's size (the five or six tets a cube splits into).
+    MeshFile tets = tetrahedralize(SurfaceMesh{m.surface_vertices, m.surface_triangles}, spec.model,
+                                   std::pow(f.cell_size, 3) / 6.0);
+    f.volume = std::move(tets.mesh);
+    f.volume_of_cells = mesh_volume(f.volume);
+    f.embedding = embed_in_tets(f.volume, m.vertices);
+  }
+
+  f.bones = bones_of(m.skeleton, f.rest_world);
+  const std::vector<double> radii = default_radii(f.bones, m.surface_vertices);
+  std::vector<bool> radius_given(f.bones.size(), false);
+  for (std::size_t b = 0; b < f.bones.size(); ++b) f.bones[b].radius = radii[b];
+  for (const BoneRadius& r : spec.radii) {
+    const int j = joint_named(m, r.joint, where);
+    if (!(r.radius > 0.0) || !std::isfinite(r.radius))
+      throw std::invalid_argument(fmt::format("{}: bone radius of \"{}\" must be a positive number, got {:g}", where, r.joint, r.radius));
+    for (std::size_t b = 0; b < f.bones.size(); ++b)
+      if (f.bones[b].joint == j) f.bones[b].radius = r.radius, radius_given[b] = true;
+  }
+  f.binding = bind_to_bones(f.bones, f.volume.vertices);
+  f.bound_per_bone = f.binding.count_per_bone(static_cast<int>(f.bones.size()));
+  for (std::size_t b = 0; b < f.bones.size(); ++b)
+    if (radius_given[b] && f.bound_per_bone[b] == 0)
+      throw std::invalid_argument(fmt::format("{}: bone {} binds no volume vertex with the radius {:g} given for it (cells are "
+                                              "{:.3g} wide: raise the radius or the resolution)",
+                                              where, f.bones[b].name, f.bones[b].radius, f.cell_size));
+  if (f.binding.vertex.empty())
+    throw std::invalid_argument(fmt::format("{}: no volume vertex lies inside a bone's capsule (cells are {:.3g} wide): raise the "
+                                            "resolution or set bone radii",
+                                            where, f.cell_size));
+  if (spec.soft_shell > 0.0) f.soft = soft_bind_to_bones(f.bones, f.volume.vertices, spec.soft_shell, f.binding);
+  if (spec.joint_cells != JointCells::hard) {
+    JointSplit split = split_at_joints(f.binding, f.bones, f.volume.cells, f.volume.vertex_count());
+    f.binding = std::move(split.kept);
+    f.released = std::move(split.released);
+    if (spec.joint_cells == JointCells::soft) f.soft = merge_soft(f.soft, f.released, 1.0);
+    f.bound_per_bone = f.binding.count_per_bone(static_cast<int>(f.bones.size()));
+    if (f.binding.vertex.empty() && f.soft.vertex.empty())
+      throw std::invalid_argument(fmt::format("{}: every bound vertex lies in a cell spanning a joint, and joint cells are free: "
+                                              "nothing holds the flesh (raise the resolution, or bind joint cells soft or hard)",
+                                              where));
+  }
+  return f;
+}
+
+KinematicSet bone_kinematics(std::shared_ptr<const Flesh> flesh) {
+  KinematicSet set;
+  set.name = "bones";
+  set.vertices = flesh->binding.vertex;
+  set.provider = std::make_shared<BoneMotion>(flesh);
+  return set;
+}
+
+std::shared_ptr<Term> soft_binding_term(std::shared_ptr<const Flesh> flesh, double soft_stiffness, double youngs) {
+  const SoftBinding& soft = flesh->soft;
+  if (soft.vertex.empty()) return nullptr;
+  const double k = soft_stiffness * youngs * flesh->cell_size;
+  const Eigen::VectorXd stiffness = k * Eigen::Map<const Eigen::VectorXd>(soft.weight.data(), static_cast<Eigen::Index>(soft.weight.size()));
+  auto carried = std::make_shared<BoneCarried>(flesh, soft);
+  return std::make_shared<AttachmentTerm>(soft.vertex, stiffness,
+                                          [carried](double t, Eigen::Matrix3Xd& out) { carried->at(t, out); });
+}
+
+std::function<void(double, std::vector<Eigen::Matrix<double, 3, 4>>&)> flesh_carrier(std::shared_ptr<const Flesh> flesh) {
+  // Each volume vertex takes the joints and weights of its nearest model vertex (at rest).
+  const Eigen::Matrix3Xd& X = flesh->volume.vertices;
+  const Eigen::Matrix3Xd& S = flesh->model.vertices;
+  const Eigen::Index n = X.cols();
+  auto joints = std::make_shared<Eigen::Matrix4Xi>(4, n);
+  auto weights = std::make_shared<Eigen::Matrix4Xd>(4, n);
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index v = 0; v < n; ++v) {
+    Eigen::Index nearest = 0;
+    (S.colwise() - X.col(v)).colwise().squaredNorm().minCoeff(&nearest);
+    joints->col(v) = flesh->model.joint_index.col(nearest);
+    weights->col(v) = flesh->model.joint_weight.col(nearest);
+  }
+  return [flesh, joints, weights](double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames) {
+    const std::vector<Eigen::Affine3d> world = joint_world(*flesh, t);
+    std::vector<Eigen::Matrix<double, 3, 4>> motion(world.size());
+    for (std::size_t j = 0; j < world.size(); ++j) motion[j] = (world[j] * flesh->rest_world[j].inverse()).matrix().topRows<3>();
+    const Eigen::Index n = joints->cols();
+    frames.assign(static_cast<std::size_t>(n), Eigen::Matrix<double, 3, 4>::Zero());
+    for (Eigen::Index v = 0; v < n; ++v)
+      for (int k = 0; k < 4; ++k)
+        if (const double w = (*weights)(k, v); w != 0.0) frames[static_cast<std::size_t>(v)] += w * motion[static_cast<std::size_t>((*joints)(k, v))];
+  };
+}
+
+std::vector<std::vector<int>> bone_collider_points(const Flesh& flesh, double dhat) {
+  const RiggedModel& m = flesh.model;
+  const EmbeddedSurface skin = contact_surface(flesh);
+  const Eigen::Matrix3Xd rest = skin.points.apply(flesh.volume.vertices);
+  const auto n = static_cast<Eigen::Index>(rest.cols());
+  // Each welded point's skin weights: those of its first model vertex (as contact_surface embeds it).
+  std::vector<int> model_vertex(static_cast<std::size_t>(n), -1);
+  for (std::size_t v = 0; v < m.weld.size(); ++v)
+    if (int& first = model_vertex[static_cast<std::size_t>(m.weld[v])]; first < 0) first = static_cast<int>(v);
+  const auto skinned_to = [&](Eigen::Index i, int joint) {
+    const auto v = static_cast<Eigen::Index>(model_vertex[static_cast<std::size_t>(i)]);
+    for (int k = 0; k < 4; ++k)
+      if (joint >= 0 && m.joint_index(k, v) == joint && m.joint_weight(k, v) > 0.0) return true;
+    return false;
+  };
+  // The bone each volume vertex hangs on: hard-bound, or released at a joint (then soft or free); −1: none.
+  std::vector<int> bone_of(static_cast<std::size_t>(flesh.volume.vertex_count()), -1);
+  std::vector<char> hard(bone_of.size(), 0);
+  for (const Binding* b : {&flesh.released, &flesh.binding})
+    for (std::size_t i = 0; i < b->vertex.size(); ++i) bone_of[static_cast<std::size_t>(b->vertex[i])] = b->bone[i];
+  for (const int v : flesh.binding.vertex) hard[static_cast<std::size_t>(v)] = 1;
+  const Eigen::MatrixXi& cell = skin.points.vertex;
+  const double margin = 2.0 * dhat;
+  std::vector<std::vector<int>> out(flesh.bones.size());
+  for (std::size_t b = 0; b < flesh.bones.size(); ++b) {
+    const Bone& bone = flesh.bones[b];
+    if (!(bone.radius > 0.0)) continue;
+    const int parent = m.skeleton.joints[static_cast<std::size_t>(bone.joint)].parent;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      // Flesh that bends around the capsule's ends: skinned to its joint, the joint's parent or its child.
+      if (skinned_to(i, bone.joint) || skinned_to(i, parent) || skinned_to(i, bone.child)) continue;
+      // Flesh that hangs on the bone (a vertex of its cell bound to it), or that nothing can move (its cell
+      // all bound: bones carry it, the barrier could not hold it off).
+      bool on_bone = false, all_hard = true;
+      for (Eigen::Index k = 0; k < cell.rows(); ++k) {
+        on_bone = on_bone || bone_of[static_cast<std::size_t>(cell(k, i))] == static_cast<int>(b);
+        all_hard = all_hard && hard[static_cast<std::size_t>(cell(k, i))];
+      }
+      if (on_bone || all_hard) continue;
+      // Out of range at rest, with room: the rest state stays the first frame's solution.
+      if (segment_distance(bone.a, bone.b, rest.col(i)) - bone.radius > margin) out[b].push_back(static_cast<int>(i));
+    }
+  }
+  return out;
+}
+
+std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Flesh> flesh, double dhat, double stiffness) {
+  const EmbeddedSurface skin = contact_surface(*flesh);
+  const std::vector<std::vector<int>> colliding = bone_collider_points(*flesh, dhat);
+  std::vector<std::shared_ptr<Term>> terms;
+  for (std::size_t b = 0; b < flesh->bones.size(); ++b) {
+    const Bone& bone = flesh->bones[b];
+    const std::vector<int>& points = colliding[b];
+    if (points.empty()) continue;
+    ColliderShape shape;
+    shape.kind = bone.a == bone.b ? ColliderShape::Kind::sphere : ColliderShape::Kind::capsule;
+    shape.a = bone.a;
+    shape.b = bone.b;
+    shape.radius = bone.radius;
+    const Eigen::Affine3d rest_inverse = flesh->rest_world[static_cast<std::size_t>(bone.joint)].inverse();
+    // The joint's motion from rest is rigid up to the rounding of the file's single-precision transforms:
+    // taken as the nearest rotation (polar decomposition) and the mean scale, as the shape needs.
+    ColliderPose pose = [flesh, joint = bone.joint, rest_inverse](double t) {
+      Eigen::Affine3d a = joint_world(*flesh, t)[static_cast<std::size_t>(joint)] * rest_inverse;
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(a.linear(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
+      a.linear() = svd.singularValues().mean() * r;
+      return a;
+    };
+    terms.push_back(std::make_shared<ShapeColliderTerm>(skin.points.vertex(Eigen::all, points), skin.points.weight(Eigen::all, points),
+                                                        shape, std::move(pose), dhat, stiffness));
+  }
+  return terms;
+}
+
+std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t) {
+  return flesh.model.skeleton.world(sample(flesh.clip, flesh.model.skeleton, t));
+}
+
+Eigen::Matrix3Xd flesh_surface(const Flesh& flesh, const Eigen::VectorXd& x) { return flesh.embedding.apply(x); }
+
+Eigen::Matrix3Xd skinned_surface(const Flesh& flesh, double t) { return skin_vertices(flesh.model, joint_world(flesh, t)); }
+
+EmbeddedSurface contact_surface(const Flesh& flesh) {
+  const RiggedModel& m = flesh.model;
+  EmbeddedSurface s;
+  s.triangles = m.surface_triangles;
+  const auto welded = static_cast<Eigen::Index>(m.surface_vertices.cols());
+  Embedding& p = s.points;
+  p.cell.resize(static_cast<std::size_t>(welded));
+  p.vertex.resize(flesh.embedding.vertex.rows(), welded);
+  p.weight.resize(flesh.embedding.weight.rows(), welded);
+  std::vector<bool> seen(static_cast<std::size_t>(welded), false);
+  for (std::size_t v = 0; v < m.weld.size(); ++v) {
+    const int w = m.weld[v];
+    if (seen[static_cast<std::size_t>(w)]) continue;
+    seen[static_cast<std::size_t>(w)] = true;
+    p.cell[static_cast<std::size_t>(w)] = flesh.embedding.cell[v];
+    p.vertex.col(w) = flesh.embedding.vertex.col(static_cast<Eigen::Index>(v));
+    p.weight.col(w) = flesh.embedding.weight.col(static_cast<Eigen::Index>(v));
+  }
+  return s;
+}
+
+double flesh_contact_dhat(const Flesh& flesh) {
+  const Eigen::Matrix3Xd& X = flesh.model.surface_vertices;
+  const Eigen::Matrix3Xi& F = flesh.model.surface_triangles;
+  double sum = 0.0;
+  for (Eigen::Index t = 0; t < F.cols(); ++t)
+    for (int k = 0; k < 3; ++k) sum += (X.col(F(k, t)) - X.col(F((k + 1) % 3, t))).norm();
+  const double quarter = F.cols() > 0 ? 0.25 * sum / (3.0 * static_cast<double>(F.cols())) : 0.1 * flesh.cell_size;
+  // At most half the surface's smallest distance at rest (pairs that share no vertex), so that nothing is in
+  // contact at the start: fingers lying close together at rest are not pushed apart by the barrier.
+  const EmbeddedSurface surface = contact_surface(flesh);
+  const VolumeMesh& volume = flesh.volume;
+  const ContactTerm probe(surface.triangles, surface.points.vertex, surface.points.weight, volume.vertices, quarter, 1.0);
+  const double closest = probe.min_distance(Eigen::Map<const Eigen::VectorXd>(volume.vertices.data(), volume.vertices.size()));
+  return closest > 0.0 ? std::min(quarter, 0.5 * closest) : quarter;
+}
+
+double flesh_contact_stiffness(const Flesh& flesh, double youngs, double dhat) { return youngs * flesh.cell_size / (dhat * dhat); }
+
+double surface_volume(const Flesh& flesh, const Eigen::Matrix3Xd& positions) {
+  return enclosed_volume(positions, flesh.model.triangles);
+}
+
+}  // namespace snh

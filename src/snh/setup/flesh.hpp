@@ -1,0 +1,156 @@
+#pragma once
+// Skeleton-driven flesh (DESIGN.md setup/; the paper's Figure 1 workflow): a rigged model's closed render
+// surface is filled with a volume (a hexahedral lattice or TetGen's tets), the volume vertices inside the
+// bones' capsules follow their bones exactly (a kinematic set whose targets come from the animation), the
+// rest of the flesh is solved, and the render surface, embedded in the volume, follows it. Linear blend
+// skinning of the same surface with the model's own weights is the comparison.
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "snh/embed/embedding.hpp"
+#include "snh/fem/term.hpp"
+#include "snh/mesh/volume_mesh.hpp"
+#include "snh/rig/animation.hpp"
+#include "snh/rig/bones.hpp"
+#include "snh/rig/gltf.hpp"
+#include "snh/sim/kinematics.hpp"
+
+namespace snh {
+
+enum class FleshVolume { lattice, tets };
+
+/// What becomes of bound vertices in cells that span a joint (a cell holding vertices of two joints' bones):
+/// `hard` (the default) keeps them bound (HOBAK's binding: the cell is then forced by two rigid motions, and
+/// a sharply bent joint can stall Newton next to it); `free` releases them to the solve; `soft` releases
+/// them from the hard binding and binds them softly (weight 1) to their bones.
+enum class JointCells { soft, free, hard };
+[[nodiscard]] inline const char* to_string(JointCells j) {
+  return j == JointCells::soft ? "soft" : j == JointCells::free ? "free" : "hard";
+}
+
+/// Keyframed rotations shared by one or more joints: at each time a rotation relative to the joint's rest
+/// rotation, about the joint's own axes (animation.hpp JointKeys), slerped between keys.
+struct KeyframeSpec {
+  std::vector<std::string> joints;
+  std::vector<double> times;                  ///< strictly increasing
+  std::vector<Eigen::Quaterniond> rotations;  ///< one per time
+};
+
+/// A capsule radius set by the user for every bone of a joint.
+struct BoneRadius {
+  std::string joint;
+  double radius = 0.0;
+};
+
+/// "flesh" in a scene file, or `snh flesh`'s options.
+struct FleshSpec {
+  std::filesystem::path model;               ///< .glb or .gltf (a scene's relative path resolved against it)
+  std::string animation;                     ///< the model's clip, by name or index; empty: `keyframes`, else clip 0
+  std::vector<KeyframeSpec> keyframes;
+  FleshVolume volume = FleshVolume::lattice;
+  int resolution = 16;                       ///< lattice cubes (tets: cube-sized tets) along the longest side
+  std::vector<BoneRadius> radii;
+  /// Soft binding: the volume vertices within `soft_shell` (model units; 0: none) outside a capsule are
+  /// pulled toward where their bone carries them by springs of stiffness soft_stiffness × E × h × weight
+  /// (E Young's modulus, h the cell size: 1 is about as stiff as one cell of flesh; weight fading from 1 at
+  /// the capsule to 0 at the shell's edge).
+  double soft_shell = 0.0;
+  double soft_stiffness = 1.0;
+  JointCells joint_cells = JointCells::hard;
+  // Defaults of a flesh run (the paper's: nu = 0.488) where the scene or command gives none:
+  static constexpr double youngs = 1e5, poisson = 0.488;  ///< Pa; with quasi-static bones only nu matters
+  static constexpr double density = 1000.0;               ///< kg/m³ (dynamics)
+  static constexpr double fps = 24.0;                     ///< frames per second of animation
+};
+
+/// The flesh of a rigged model, ready to simulate.
+struct Flesh {
+  RiggedModel model;
+  Clip clip;                                 ///< the animation that drives the bones
+  std::vector<Eigen::Affine3d> rest_world;   ///< joints at rest
+  VolumeMesh volume;
+  double cell_size = 0.0;                    ///< the lattice's cube edge (tets: the edge of the cube whose volume bounds a tet)
+  double volume_of_cells = 0.0;              ///< the volume mesh's rest volume
+  double surface_volume = 0.0;               ///< enclosed by the render surface at rest
+  Embedding embedding;                       ///< the model's vertices (its order) in the volume
+  std::vector<Bone> bones;                   ///< with their capsule radii
+  Binding binding;                           ///< volume vertices that follow bones
+  std::vector<int> bound_per_bone;
+  Binding released;                          ///< vertices in a capsule released at the joints (joint_cells)
+  SoftBinding soft;                          ///< volume vertices pulled toward bones: the shell's, and the
+                                             ///< released ones when joint_cells is soft
+};
+
+/// Reads the model and builds its flesh. Throws RigError (bad model, a surface that is not closed: the open
+/// and non-manifold edge counts; a joint of the spec that the model lacks), MeshError (tetgen failed) or
+/// std::invalid_argument (a bone whose user-set radius binds nothing, nothing bound at all), one line each
+/// naming `where` (the scene file or the command).
+[[nodiscard]] Flesh build_flesh(const FleshSpec& spec, const std::string& where);
+
+/// The bones' kinematic set: the bound vertices, moved rigidly with their bones' joints by the clip.
+[[nodiscard]] KinematicSet bone_kinematics(std::shared_ptr<const Flesh> flesh);
+
+/// The soft binding's springs (null without softly bound vertices): stiffness soft_stiffness × youngs ×
+/// cell size × weight per vertex, toward the vertex's rest position carried rigidly by its bone's joint.
+[[nodiscard]] std::shared_ptr<Term> soft_binding_term(std::shared_ptr<const Flesh> flesh, double soft_stiffness,
+                                                      double youngs);
+
+/// A frame per volume vertex that carries the flesh along with the bones (SimulationSetup::carrier): the
+/// joints' motions from rest, world(t)·rest⁻¹, blended with the skin weights of the model vertex nearest
+/// to the volume vertex at rest (linear blend skinning of the volume, used only to predict).
+[[nodiscard]] std::function<void(double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames)> flesh_carrier(
+    std::shared_ptr<const Flesh> flesh);
+
+/// The render surface as contact sees it: the model's welded, closed surface (surface_triangles over its
+/// welded vertices), each welded vertex embedded in the volume as its first model vertex is (points: k by
+/// #welded cells' vertices and weights, k = 8 in a lattice, 4 in tets; points.apply(x) places them).
+struct EmbeddedSurface {
+  Eigen::Matrix3Xi triangles;
+  Embedding points;
+};
+[[nodiscard]] EmbeddedSurface contact_surface(const Flesh& flesh);
+
+/// Contact's defaults for flesh. d̂: a quarter of the render surface's mean edge length at rest (contact
+/// acts at the scale of the surface's own detail, well inside a cell), but at most half the surface's
+/// smallest distance at rest (so that no pair is in range at the start: the rest pose stays the
+/// solution of the first frame). κ = E h / d̂² (E Young's modulus, h
+/// the cell size): the barrier's curvature near d̂/2 is then of the order of one cell's stiffness E h (its
+/// Hessian in distance is κ d̂² times an O(1) factor), so a quasi-static solve sees neither a negligible
+/// barrier (pairs squeezed to tiny distances, ill-conditioned) nor one that dominates the flesh. IPC's
+/// automatic κ needs masses and a time step, which quasi-static flesh has not.
+[[nodiscard]] double flesh_contact_dhat(const Flesh& flesh);
+[[nodiscard]] double flesh_contact_stiffness(const Flesh& flesh, double youngs, double dhat);
+
+/// The bones' capsules as moving colliders (one ShapeColliderTerm per bone: a capsule, or a sphere for a
+/// point bone, carried by its joint) against the skin that is not bound to them: the render surface's points
+/// (contact_surface, embedded in the volume) that are
+///   - not skinned to the bone's joint, nor to that joint's parent or the bone's child joint (the flesh that
+///     folds around the capsule's ends as those joints bend: the capsules of a bent joint overlap it);
+///   - not hanging on the bone (no vertex of the point's cell bound to it, hard or released) and not carried
+///     by bones alone (a cell all hard-bound: the barrier could not hold such a point off);
+///   - farther than 2 d̂ outside the capsule at rest (nothing in range at the start: the rest state stays the
+///     solution of the first frame; where a capsule pokes out of the skin, the skin next to it is left out).
+/// A finger's skin pressed onto another finger's (or the palm's) bone stops at its capsule. Bones whose
+/// capsule has no such point get no term.
+[[nodiscard]] std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Flesh> flesh, double dhat,
+                                                                     double stiffness);
+/// The points each bone's capsule acts on (welded ids of contact_surface's points), per bone in flesh.bones'
+/// order (empty for a bone without a radius or without such points).
+[[nodiscard]] std::vector<std::vector<int>> bone_collider_points(const Flesh& flesh, double dhat);
+
+/// The joints' world transforms at time t of the clip.
+[[nodiscard]] std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t);
+/// The render surface (model order, 3 by #v) embedded in the volume at positions x (3 #V).
+[[nodiscard]] Eigen::Matrix3Xd flesh_surface(const Flesh& flesh, const Eigen::VectorXd& x);
+/// The render surface posed by linear blend skinning at time t (model order, 3 by #v).
+[[nodiscard]] Eigen::Matrix3Xd skinned_surface(const Flesh& flesh, double t);
+/// The volume enclosed by the render surface at these positions (model order).
+[[nodiscard]] double surface_volume(const Flesh& flesh, const Eigen::Matrix3Xd& positions);
+
+}  // namespace snh

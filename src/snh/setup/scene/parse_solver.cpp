@@ -1,0 +1,38 @@
+#include "snh/setup/scene/sections.hpp"
+#include "snh/solve/linear_solver.hpp"
+
+namespace snh::scene {
+
+SolverSpec parse_solver(Keys& top) {
+  SolverSpec s;
+  if (const json* solver = top.get("solver")) {
+    Keys k(*solver, "solver", top.file());
+    s.linear = k.choice("linear", s.linear, linear_solver_names());
+    s.refactorize = k.boolean("refactorize", s.refactorize);
+    // Given, an absolute tolerance on |g| replaces the fraction of E l².
+    if (k.has("tolerance")) s.newton.tolerance = k.positive("tolerance", s.newton.tolerance);
+    s.newton.step_tolerance = k.non_negative("step_tolerance", s.newton.step_tolerance);
+    s.newton.relative_step_tolerance = k.non_negative("relative_step_tolerance", s.newton.relative_step_tolerance);
+    s.newton.max_iterations = static_cast<int>(k.integer("max_iterations", s.newton.max_iterations, 1, 100000));
+    s.newton.try_true_hessian = !k.boolean("projected_only", !s.newton.try_true_hessian);
+    k.finish();
+  }
+  return s;
+}
+
+OutputSpec parse_output(Keys& top, const std::filesystem::path& source) {
+  OutputSpec s;
+  if (const json* output = top.get("output")) {
+    Keys k(*output, "output", top.file());
+    if (const json* dir = k.get("dir")) {
+      if (!dir->is_string() || dir->get<std::string>().empty()) k.fail("expected a directory name", "dir");
+      s.dir = dir->get<std::string>();
+    }
+    s.vtu = k.boolean("vtu", s.vtu);
+    k.finish();
+  }
+  if (s.dir.empty()) s.dir = std::filesystem::path("output") / source.stem();
+  return s;
+}
+
+}  // namespace snh::scene

@@ -1,0 +1,28 @@
+#include "snh/setup/scene/sections.hpp"
+
+namespace snh::scene {
+
+TimeSpec parse_time(Keys& top) {
+  TimeSpec s;
+  s.integrator = top.choice("integrator", "backward_euler", {"backward_euler", "quasi_static"}) == "quasi_static"
+                     ? Integrator::quasi_static
+                     : Integrator::backward_euler;
+  s.dt = top.positive("dt", s.dt);
+  s.end_time = top.positive("end_time", s.end_time);
+  s.frames = static_cast<int>(top.integer("frames", s.frames, 1, 100000));
+  return s;
+}
+
+ForceSpec parse_forces(Keys& top) {
+  ForceSpec s;
+  s.gravity = top.vec3("gravity").value_or(s.gravity);
+  if (const json* damping = top.get("damping")) {
+    Keys d(*damping, "damping", top.file());
+    s.mass_damping = d.non_negative("mass", s.mass_damping);
+    s.stiffness_damping = d.non_negative("stiffness", s.stiffness_damping);
+    d.finish();
+  }
+  return s;
+}
+
+}  // namespace snh::scene

@@ -1,0 +1,209 @@
+// The output directory of a run: the lock, clearing a previous run, the frames a resume keeps, and
+// checkpoints that refuse damage (a changed byte, a non-finite state, an older format).
+#include <gtest/gtest.h>
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <algorithm>
+#include <functional>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "snh/io/atomic_file.hpp"
+#include "snh/run/checkpoint.hpp"
+#include "snh/run/run_directory.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("snh_test_rundir_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(RunDirectory, ALockedDirectoryRefusesASecondRunUntilReleased) {
+  const fs::path d = fresh_dir("lock");
+  {
+    const RunDirectoryLock first(d / "out");  // created by the lock
+    EXPECT_TRUE(fs::is_directory(d / "out"));
+    const std::string e = error_of([&] { RunDirectoryLock second(d / "out"); });
+    EXPECT_EQ(e, fmt::format("another snh run is writing to {} (process {}): wait for it to finish or choose another output "
+                             "directory",
+                             (d / "out").string(), ::getpid()));
+  }
+  EXPECT_EQ(error_of([&] { RunDirectoryLock again(d / "out"); }), "") << "released with the first lock";
+  std::ofstream(d / "file") << "x";
+  EXPECT_NE(error_of([&] { RunDirectoryLock not_a_dir(d / "file"); }).find("exists and is not a directory"), std::string::npos);
+  fs::remove_all(d);
+}
+
+TEST(RunDirectory, ADirectoryTheLockMadeAndNothingWroteIsRemovedWithIt) {
+  const fs::path d = fresh_dir("unused");
+  { const RunDirectoryLock lock(d / "new"); }  // a run refused before its first file
+  EXPECT_FALSE(fs::exists(d / "new"));
+  {
+    const RunDirectoryLock lock(d / "used");
+    std::ofstream(d / "used" / "000.obj") << "v 0 0 0\n";
+  }
+  EXPECT_TRUE(fs::exists(d / "used" / "000.obj")) << "a directory with a file of the run stays";
+  fs::create_directories(d / "given");
+  { const RunDirectoryLock lock(d / "given"); }
+  EXPECT_TRUE(fs::is_directory(d / "given")) << "a directory that was there stays";
+  fs::remove_all(d);
+}
+
+TEST(RunDirectory, ClearingRemovesOnlyWhatARunOfOursWrites) {
+  const fs::path d = fresh_dir("clear");
+  for (const char* f : {"000.obj", "012.vtu", "1234.obj", "stats.json", "stats.csv", "index.html",
+                        "stats.json.tmp.77", ".snh-write-test.5"})
+    std::ofstream(d / f) << "x";
+  fs::create_directories(d / "report" / "frames");
+  std::ofstream(d / "report" / "frames" / "000.js") << "x";
+  for (const char* f : {"notes.txt", "12.obj", "mesh.vtu", "my_stats.json", "index.htm"}) std::ofstream(d / f) << "keep";
+  fs::create_directories(d / "000.obj.d");
+  // No sign of a run of ours yet: the files are someone else's; the directory is refused, nothing is removed
+  // and no lock file is left.
+  EXPECT_NE(error_of([&] { RunDirectoryLock lock(d); }).find("is not empty and holds no snh run (it has .snh-write-test.5)"),
+            std::string::npos);
+  EXPECT_TRUE(fs::exists(d / "index.html"));
+  EXPECT_FALSE(fs::exists(d / ".snh-lock"));
+  std::ofstream(d / "checkpoint.bin") << "x";
+  std::ofstream(d / "frames.pvd") << "x";
+  // A checkpoint (or frames.pvd) shows a run of ours.
+  const RunDirectoryLock lock(d);
+  EXPECT_FALSE(lock.found_earlier());
+  EXPECT_EQ(clear_previous_run(d, lock), 11);
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(d)) left.push_back(e.path().filename().string());
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, (std::vector<std::string>{".snh-lock", "000.obj.d", "12.obj", "index.htm", "mesh.vtu", "my_stats.json",
+                                            "notes.txt"}));
+  fs::remove_all(d);
+}
+
+TEST(RunDirectory, ForceWritesIntoADirectoryOfSomeoneElse) {
+  const fs::path d = fresh_dir("force");
+  std::ofstream(d / "notes.txt") << "keep";
+  std::ofstream(d / "index.html") << "theirs";
+  const RunDirectoryLock lock(d, true);
+  EXPECT_TRUE(lock.forced());
+  EXPECT_EQ(clear_previous_run(d, lock), 1);
+  EXPECT_TRUE(fs::exists(d / "notes.txt"));
+  fs::remove_all(d);
+}
+
+TEST(RunDirectory, AStatsFileOfOursIsReadOnlyIfRegular) {
+  const fs::path d = fresh_dir("fifo");
+  ASSERT_EQ(::mkfifo((d / "stats.json").c_str(), 0644), 0);  // opening it to read would block
+  EXPECT_FALSE(holds_a_run_of_ours(d));
+  EXPECT_NE(error_of([&] { RunDirectoryLock lock(d); }).find("holds no snh run (it has stats.json)"), std::string::npos);
+  fs::remove_all(d);
+}
+
+TEST(RunDirectory, AStatsFileOfSnhShowsARunOfOurs) {
+  const fs::path d = fresh_dir("ours");
+  std::ofstream(d / "stats.json") << "{\"snh_version\": \"0.1.0\", \"steps\": []}";  // a run from before the lock file
+  std::ofstream(d / "001.obj") << "x";
+  const RunDirectoryLock lock(d);
+  EXPECT_EQ(clear_previous_run(d, lock), 2);
+  fs::remove_all(d);
+}
+
+TEST(RunDirectory, AResumeNeedsTheFramesItKeeps) {
+  const fs::path d = fresh_dir("frames");
+  for (int i = 0; i <= 3; ++i)
+    for (const char* ext : {"obj", "vtu"}) std::ofstream(d / fmt::format("{:03d}.{}", i, ext)) << "x";
+  EXPECT_EQ(error_of([&] { check_kept_frames(d, 3, true); }), "");
+  fs::remove(d / "002.vtu");
+  EXPECT_EQ(error_of([&] { check_kept_frames(d, 3, false); }), "") << "no .vtu frames asked for";
+  EXPECT_EQ(error_of([&] { check_kept_frames(d, 3, true); }),
+            fmt::format("cannot resume: {} is missing (the run being resumed wrote frames 000 to 003); start the run again "
+                        "without --resume",
+                        (d / "002.vtu").string()));
+  fs::remove_all(d);
+}
+
+TEST(Checkpoint, RoundTripsAndRefusesDamage) {
+  const fs::path d = fresh_dir("checkpoint");
+  const Checkpoint c{.fingerprint = "stretch: test", .step = 7, .time = 0.35, .x = Eigen::VectorXd::LinSpaced(30, -1, 2),
+                     .aux = Eigen::VectorXd::Constant(30, 0.5)};
+  write_checkpoint(d, c);
+  const std::optional<Checkpoint> back = read_checkpoint(d);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->fingerprint, c.fingerprint);
+  EXPECT_EQ(back->step, 7);
+  EXPECT_EQ(back->time, 0.35);
+  EXPECT_EQ(back->x, c.x);
+  EXPECT_EQ(back->aux, c.aux);
+  EXPECT_EQ(checkpoint_for_resume(d, c.fingerprint, 30).step, 7);
+  EXPECT_NE(error_of([&] { (void)checkpoint_for_resume(d, "other", 30); }).find("used other settings (stretch: test; now other)"),
+            std::string::npos);
+
+  // Every single changed byte is found (the checksum covers the whole file).
+  std::string bytes;
+  {
+    std::ifstream in(d / "checkpoint.bin", std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  int refused = 0;
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    std::string flipped = bytes;
+    flipped[i] = static_cast<char>(flipped[i] ^ 0x10);
+    std::ofstream(d / "checkpoint.bin", std::ios::binary) << flipped;
+    if (!error_of([&] { (void)read_checkpoint(d); }).empty()) ++refused;
+  }
+  EXPECT_EQ(refused, static_cast<int>(bytes.size()));
+  std::ofstream(d / "checkpoint.bin", std::ios::binary) << bytes.substr(0, bytes.size() - 3);
+  EXPECT_NE(error_of([&] { (void)read_checkpoint(d); }).find("damaged checkpoint"), std::string::npos);
+  std::ofstream(d / "checkpoint.bin", std::ios::binary) << "SNHCKPT1" << bytes.substr(8);
+  EXPECT_NE(error_of([&] { (void)read_checkpoint(d); }).find("written by an older snh without a checksum"), std::string::npos);
+
+  // A state that is not finite is refused even with a valid checksum.
+  Checkpoint nan = c;
+  nan.x[4] = std::numeric_limits<double>::quiet_NaN();
+  write_checkpoint(d, nan);
+  EXPECT_EQ(error_of([&] { (void)read_checkpoint(d); }),
+            (d / "checkpoint.bin").string() + ": damaged checkpoint (its state is not finite)");
+  // Nor a time that is not finite or negative (a resumed run would carry it into every frame).
+  for (const double t : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -1.0}) {
+    Checkpoint bad_time = c;
+    bad_time.time = t;
+    write_checkpoint(d, bad_time);
+    EXPECT_EQ(error_of([&] { (void)read_checkpoint(d); }), (d / "checkpoint.bin").string() + ": damaged checkpoint (bad time)") << t;
+  }
+  // Empty vectors round trip (reading them copied 0 bytes to a null pointer: undefined, found by fuzz_checkpoint
+  // under UBSan).
+  Checkpoint empty = c;
+  empty.x.resize(0);
+  empty.aux.resize(0);
+  write_checkpoint(d, empty);
+  ASSERT_TRUE(read_checkpoint(d));
+  EXPECT_EQ(read_checkpoint(d)->x.size(), 0);
+  // A fingerprint with control bytes is echoed on one line, escaped (fuzz_checkpoint aborts on a line break).
+  Checkpoint odd = c;
+  odd.fingerprint = "two\nlines\x01";
+  write_checkpoint(d, odd);
+  EXPECT_NE(error_of([&] { (void)checkpoint_for_resume(d, "other", 30); }).find("used other settings (two\\x0alines\\x01; now other)"),
+            std::string::npos);
+  fs::remove_all(d);
+}
+
+}  // namespace
+}  // namespace snh
