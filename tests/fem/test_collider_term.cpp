@@ -23,9 +23,13 @@
 #include "contact/surface_checks.hpp"
 #include "sim/face_pins.hpp"
 #include "fem/problem_fd.hpp"
+#include "fem/weighted_points.hpp"
 
 namespace snh {
 namespace {
+
+using testing::identity_through_weights;
+
 
 using Kind = ColliderShape::Kind;
 
@@ -104,17 +108,17 @@ TEST(ShapeColliderTerm, MatchesFiniteDifferencesNearCapsEdgesAndCorners) {
   const double dhat = 0.1, d = 0.04;
   const Eigen::Affine3d pose = tilted_pose(0.7);
   for (const ColliderShape& shape : {sphere(), capsule(), box()}) {
-    ShapeColliderTerm term({0, 1, 2, 3, 4, 5}, shape, tilted_pose, dhat, 10.0);
+    ShapeColliderTerm term(EmbeddedPoints::plain({0, 1, 2, 3, 4, 5}, "test"), shape, tilted_pose, dhat, 10.0);
     term.at_time(0.7);
     const std::vector<std::pair<Vec3, Vec3>> at = surface_probes(shape);
     // The capsule's caps and the box's edges and corners: the directions above point outward there.
     const Eigen::Matrix3Xd X = near(at, d, pose);
     for (Eigen::Index i = 0; i < X.cols(); ++i)
-      EXPECT_NEAR(term.distance(flatten(X), static_cast<int>(i)), 1.3 * d, 1e-12) << "vertex " << i;
+      EXPECT_NEAR(term.point_distance(flatten(X), static_cast<int>(i)), 1.3 * d, 1e-12) << "vertex " << i;
     expect_fd(term, X, shape.kind == Kind::sphere ? "sphere" : shape.kind == Kind::capsule ? "capsule" : "box");
   }
   // A moving plane: the signed distance, its derivatives, and +∞ behind it.
-  ShapeColliderTerm plane({0, 1}, {Kind::plane, Vec3(0, 0, 0), Vec3(0, 2, 0), 0.0}, tilted_pose, dhat, 10.0);
+  ShapeColliderTerm plane(EmbeddedPoints::plain({0, 1}, "test"), {Kind::plane, Vec3(0, 0, 0), Vec3(0, 2, 0), 0.0}, tilted_pose, dhat, 10.0);
   plane.at_time(0.7);
   const Eigen::Matrix3Xd P = near({{Vec3(0.2, 0, 0.1), Vec3(0, 1, 0)}, {Vec3(-0.3, 0, 0.4), Vec3(0, 1, 0)}}, d, pose);
   expect_fd(plane, P, "plane");
@@ -126,27 +130,27 @@ TEST(ShapeColliderTerm, MaxStepNeverReachesTheSurfaceOnRandomSteps) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int limited = 0;
   for (const ColliderShape& shape : {sphere(), capsule(), box()}) {
-    ShapeColliderTerm term({0}, shape, tilted_pose, 0.1, 1.0);
+    ShapeColliderTerm term(EmbeddedPoints::plain({0}, "test"), shape, tilted_pose, 0.1, 1.0);
     term.at_time(0.3);
     for (int k = 0; k < 300; ++k) {
       Eigen::VectorXd x(3), dx(3);
       do {
         for (int i = 0; i < 3; ++i) x[i] = 2.0 * u(rng);
-      } while (!(term.distance(x, 0) > 1e-3));
+      } while (!(term.point_distance(x, 0) > 1e-3));
       for (int i = 0; i < 3; ++i) dx[i] = 3.0 * u(rng);
-      const double d0 = term.distance(x, 0), alpha = term.max_step(x, dx);
+      const double d0 = term.point_distance(x, 0), alpha = term.max_step(x, dx);
       ASSERT_GT(alpha, 0.0);
       if (alpha < 1.0) ++limited;
       // Densely along the allowed part: never below a tenth of the start (up to rounding).
       for (int s = 0; s <= 400; ++s) {
         const Eigen::VectorXd y = x + (alpha * s / 400.0) * dx;
-        ASSERT_GE(term.distance(y, 0), 0.1 * d0 * (1 - 1e-9)) << "step " << k << " at " << s;
+        ASSERT_GE(term.point_distance(y, 0), 0.1 * d0 * (1 - 1e-9)) << "step " << k << " at " << s;
       }
       // And not needlessly short: the path's first point below a tenth is close after alpha.
       if (alpha < 1.0) {
         double first = 1.0;
         for (int s = 0; s <= 2000; ++s)
-          if (term.distance(x + (s / 2000.0) * dx, 0) < 0.1 * d0) {
+          if (term.point_distance(x + (s / 2000.0) * dx, 0) < 0.1 * d0) {
             first = s / 2000.0;
             break;
           }
@@ -210,7 +214,7 @@ TEST(MeshColliderTerm, MatchesFiniteDifferencesWithEachPairKind) {
     Eigen::Matrix3Xd Y = X;
     for (Eigen::Index i = 0; i < Y.size(); ++i) Y.data()[i] += u(rng);
     const ColliderPose pose = [](double t) { return Eigen::Affine3d(Eigen::Translation3d(0, 0, 0.01 * t)); };
-    MeshColliderTerm term(F, X, W, T, pose, 0.3, 5.0);
+    MeshColliderTerm term(F, EmbeddedPoints::every(X.cols()), X, W, T, pose, 0.3, 5.0);
     term.at_time(1.0);
     Problem problem(DofMap(std::vector<std::uint8_t>(12, 0)));
     problem.add(term);
@@ -241,7 +245,7 @@ TEST(MeshColliderTerm, MaxStepAndSweepNeverCrossOnRandomSteps) {
   for (int k = 0; k < 40; ++k) {
     const Vec3 jump(0.3 * u(rng), -0.6 - 0.8 * std::abs(u(rng)), 0.3 * u(rng));
     const ColliderPose pose = [jump](double t) { return Eigen::Affine3d(Eigen::Translation3d(t * jump)); };
-    MeshColliderTerm term(F, m.vertices, slab.V, slab.T, pose, 0.02, 1.0);
+    MeshColliderTerm term(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, slab.V, slab.T, pose, 0.02, 1.0);
     const Eigen::VectorXd x = flatten(m.vertices);
     // The slab's jump from t = 0 to 1.
     const double a = term.sweep(x, Eigen::VectorXd::Zero(x.size()), 0.0, 1.0);
@@ -297,7 +301,7 @@ void drop_onto(const ColliderShape& shape, const char* what) {
   setup.gravity = Vec3(0, -9.8, 0);
   setup.mass_damping = 2.0;
   const double dhat = 0.02;
-  auto term = std::make_shared<ShapeColliderTerm>(surface_of(m), shape, ColliderPose{}, dhat, 1e8);
+  auto term = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), shape, ColliderPose{}, dhat, 1e8);
   setup.terms.push_back(term);
   Simulation sim(std::move(setup));
   double lowest = INFINITY;
@@ -335,7 +339,7 @@ TEST(MeshColliderTerm, ASlabPressingACubeNeverPassesIntoIt) {
   const double speed = 0.5;  // per unit time; the run is t = 0.1 … 1
   const ColliderPose pose = [speed](double t) { return Eigen::Affine3d(Eigen::Translation3d(0, -speed * t, 0)); };
   const double dhat = 0.02;
-  auto term = std::make_shared<MeshColliderTerm>(F, m.vertices, slab.V, slab.T, pose, dhat, 1e9);
+  auto term = std::make_shared<MeshColliderTerm>(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, slab.V, slab.T, pose, dhat, 1e9);
   setup.terms.push_back(term);
   Simulation sim(std::move(setup));
   int splits = 0, iterations = 0;
@@ -372,8 +376,7 @@ TEST(ShapeColliderTerm, AMovingWallHitsACubeInSubStepsOfBackwardEuler) {
   const VolumeMesh m = box_tets(3);
   SimulationSetup setup = cube_setup(m, Integrator::backward_euler);
   const ColliderPose pose = [](double t) { return Eigen::Affine3d(Eigen::Translation3d(-10.0 * t, 0, 0)); };
-  auto wall = std::make_shared<ShapeColliderTerm>(surface_of(m), ColliderShape{Kind::box, Vec3(1.6, 0, 0), Vec3(0.5, 3, 3), 0.0}, pose,
-                                                  0.02, 1e8);
+  auto wall = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Kind::box, Vec3(1.6, 0, 0), Vec3(0.5, 3, 3), 0.0}, pose, 0.02, 1e8);
   setup.terms.push_back(wall);
   setup.newton.step_tolerance = 1e-9;  // as scenes do: forces reach m v / h' ~ 1e8 on the shortest sub-steps h'
   Simulation sim(std::move(setup));
@@ -425,8 +428,7 @@ TEST(ShapeColliderTerm, AQuasiStaticCarrierTakesTheFreeFleshAlongInTheStepsCheck
         frames.assign(static_cast<std::size_t>(n), f);
       };
     const ColliderPose pose = [v](double t) { return Eigen::Affine3d(Eigen::Translation3d(t * v)); };
-    auto sphere = std::make_shared<ShapeColliderTerm>(surface_of(m), ColliderShape{Kind::sphere, Vec3(-1.5, 0, 0), Vec3::Zero(), 0.3},
-                                                      pose, 0.05, 1e3);
+    auto sphere = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Kind::sphere, Vec3(-1.5, 0, 0), Vec3::Zero(), 0.3}, pose, 0.05, 1e3);
     setup.terms.push_back(sphere);
     Simulation sim(std::move(setup));
     int splits = 0;
@@ -450,8 +452,7 @@ TEST(ShapeColliderTerm, PinsDrivingTheSurfaceIntoAColliderStopTheRunWithOneLine)
   SimulationSetup setup = cube_setup(m, Integrator::quasi_static);
   KinematicSet bottom = bottom_pins(m, {Translate{Vec3(0, -0.5, 0), 0.0, 1.0}});
   setup.kinematic.push_back(bottom);
-  auto ground = std::make_shared<ShapeColliderTerm>(surface_of(m), ColliderShape{Kind::plane, Vec3(0, -1.1, 0), Vec3(0, 1, 0), 0.0},
-                                                    ColliderPose{}, 0.02, 1e4);
+  auto ground = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Kind::plane, Vec3(0, -1.1, 0), Vec3(0, 1, 0), 0.0}, ColliderPose{}, 0.02, 1e4);
   setup.terms.push_back(ground);
   Simulation sim(std::move(setup));
   bool failed = false;
@@ -477,13 +478,12 @@ TEST(MeshColliderTerm, CollidersOutOfRangeChangeNothingBitForBit) {
     setup.gravity = Vec3(0, -9.8, 0);
     if (colliders) {
       const ColliderPose pose = [](double t) { return Eigen::Affine3d(Eigen::Translation3d(t, 0, 0)); };
-      setup.terms.push_back(std::make_shared<ShapeColliderTerm>(surface_of(m), sphere(), [](double t) {
+      setup.terms.push_back(std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), sphere(), [](double t) {
         return Eigen::Affine3d(Eigen::Translation3d(5, t, 0));
       }, 0.02, 1e8));
-      setup.terms.push_back(std::make_shared<ShapeColliderTerm>(surface_of(m), ColliderShape{Kind::box, Vec3(-6, 0, 0), Vec3(1, 1, 1), 0},
-                                                                pose, 0.02, 1e8));
+      setup.terms.push_back(std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Kind::box, Vec3(-6, 0, 0), Vec3(1, 1, 1), 0}, pose, 0.02, 1e8));
       const Slab slab(Vec3(-2, 8, -2), Vec3(2, 9, 2));
-      setup.terms.push_back(std::make_shared<MeshColliderTerm>(F, m.vertices, slab.V, slab.T, pose, 0.02, 1e8));
+      setup.terms.push_back(std::make_shared<MeshColliderTerm>(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, slab.V, slab.T, pose, 0.02, 1e8));
     }
     Simulation sim(std::move(setup));
     SimulationState state = sim.state();
@@ -501,21 +501,21 @@ TEST(MeshColliderTerm, CollidersOutOfRangeChangeNothingBitForBit) {
 }
 
 TEST(ShapeColliderTerm, BadArgumentsThrow) {
-  EXPECT_THROW(ShapeColliderTerm({0}, {Kind::sphere, Vec3::Zero(), Vec3::Zero(), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(ShapeColliderTerm({0}, {Kind::box, Vec3::Zero(), Vec3(1, 0, 1), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(ShapeColliderTerm({0}, {Kind::plane, Vec3::Zero(), Vec3::Zero(), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(ShapeColliderTerm({0}, sphere(), {}, 0.0, 1.0), std::invalid_argument);
-  EXPECT_THROW(ShapeColliderTerm({-1}, sphere(), {}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), {Kind::sphere, Vec3::Zero(), Vec3::Zero(), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), {Kind::box, Vec3::Zero(), Vec3(1, 0, 1), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), {Kind::plane, Vec3::Zero(), Vec3::Zero(), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), sphere(), {}, 0.0, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({-1}, "test"), sphere(), {}, 0.1, 1.0), std::invalid_argument);
   const ColliderPose shear = [](double) {
     Eigen::Affine3d A = Eigen::Affine3d::Identity();
     A.linear()(0, 1) = 0.5;
     return A;
   };
-  EXPECT_THROW(ShapeColliderTerm({0}, sphere(), shear, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), sphere(), shear, 0.1, 1.0), std::invalid_argument);
   const Slab slab(Vec3(0, 0, 0), Vec3(1, 1, 1));
   Eigen::Matrix3Xi bad = slab.T;
   bad(0, 0) = 8;
-  EXPECT_THROW(MeshColliderTerm(slab.T, slab.V, slab.V, bad, {}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(MeshColliderTerm(slab.T, EmbeddedPoints::every(slab.V.cols()), slab.V, slab.V, bad, {}, 0.1, 1.0), std::invalid_argument);
 }
 
 TEST(MotionTransform, MovesPointsAsTheScriptedMotionDoes) {
@@ -602,7 +602,7 @@ TEST(ShapeColliderTerm, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights)
           shape.kind == Kind::plane ? std::vector<std::pair<Vec3, Vec3>>{{Vec3(0.2, 0, 0.1), Vec3(0, 1, 0)}, {Vec3(-0.3, 0, 0.4), Vec3(0, 1, 0)}}
                                     : surface_probes(shape);
       const EmbeddedCells e(near(at, d, pose), hexes, 21);
-      ShapeColliderTerm term(e.vertex, e.weight, shape, tilted_pose, dhat, 10.0);
+      ShapeColliderTerm term(EmbeddedPoints(e.vertex, e.weight, "test", -1), shape, tilted_pose, dhat, 10.0);
       term.at_time(0.7);
       ASSERT_EQ(term.point_count(), static_cast<Eigen::Index>(at.size()));
       for (Eigen::Index i = 0; i < term.point_count(); ++i) {  // the cells' jitter moves the points a little
@@ -613,7 +613,7 @@ TEST(ShapeColliderTerm, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights)
       // The same shape against the points given as plain vertices: the same energy, and its gradient
       // pulled back by Wᵀ.
       const Eigen::Matrix3Xd P = e.points().points(e.x);
-      ShapeColliderTerm direct(iota_ids(P.cols()), shape, tilted_pose, dhat, 10.0);
+      ShapeColliderTerm direct(EmbeddedPoints::plain(iota_ids(P.cols()), "test"), shape, tilted_pose, dhat, 10.0);
       direct.at_time(0.7);
       EXPECT_NEAR(term.energy(e.x), direct.energy(flatten(P)), 1e-12 * direct.energy(flatten(P)));
       const Eigen::VectorXd gx = pulled_back(e, assembled(direct, flatten(P), PsdProjection::none).second);
@@ -626,9 +626,8 @@ TEST(ShapeColliderTerm, IdentityWeightsGiveTheDirectTerm) {
   for (const ColliderShape& shape : {sphere(), capsule(), box()}) {
     const Eigen::Matrix3Xd X = near(surface_probes(shape), 0.03, pose);
     const auto n = X.cols();
-    ShapeColliderTerm direct(iota_ids(n), shape, tilted_pose, 0.1, 10.0);
-    ShapeColliderTerm embedded(Eigen::RowVectorXi::LinSpaced(n, 0, static_cast<int>(n) - 1), Eigen::RowVectorXd::Ones(n), shape,
-                               tilted_pose, 0.1, 10.0);
+    ShapeColliderTerm direct(EmbeddedPoints::plain(iota_ids(n), "test"), shape, tilted_pose, 0.1, 10.0);
+    ShapeColliderTerm embedded(identity_through_weights(n), shape, tilted_pose, 0.1, 10.0);
     direct.at_time(0.7);
     embedded.at_time(0.7);
     const Eigen::VectorXd x = flatten(X);
@@ -659,10 +658,9 @@ TEST(ShapeColliderTerm, EmbeddedStepsAndSweepsKeepEveryPointOutside) {
   for (const ColliderShape& shape : {capsule(), box()}) {
     const Eigen::Affine3d pose = tilted_pose(0.3);
     const EmbeddedCells e(near(surface_probes(shape), 0.05, pose), true, 5, 0.01);
-    ShapeColliderTerm term(e.vertex, e.weight, shape, tilted_pose, 0.1, 1.0);
+    ShapeColliderTerm term(EmbeddedPoints(e.vertex, e.weight, "test", -1), shape, tilted_pose, 0.1, 1.0);
     const Vec3 drift(0.2, -0.4, 0.3);
-    ShapeColliderTerm moving(e.vertex, e.weight, shape,
-                             [&](double t) { return Eigen::Translation3d(t * drift) * tilted_pose(0.3); }, 0.1, 1.0);
+    ShapeColliderTerm moving(EmbeddedPoints(e.vertex, e.weight, "test", -1), shape, [&](double t) { return Eigen::Translation3d(t * drift) * tilted_pose(0.3); }, 0.1, 1.0);
     term.at_time(0.3);
     std::mt19937_64 rng(9);
     std::normal_distribution<double> g(0.0, 0.2);
@@ -704,7 +702,7 @@ TEST(MeshColliderTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesAndItsStepsOnThe
     for (const unsigned seed : {1u, 2u}) {
       SCOPED_TRACE(hexes ? "hexes" : "tets");
       const EmbeddedCells e(X, hexes, seed, 0.005);
-      MeshColliderTerm term(F, e.vertex, e.weight, e.rest, W, T, pose, 0.3, 5.0);
+      MeshColliderTerm term(F, EmbeddedPoints(e.vertex, e.weight, "test", e.rest.cols()), e.rest, W, T, pose, 0.3, 5.0);
       term.at_time(1.0);
       const Eigen::VectorXd x = e.x;
       Problem problem(DofMap(std::vector<std::uint8_t>(static_cast<std::size_t>(x.size()), 0)));
@@ -719,7 +717,7 @@ TEST(MeshColliderTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesAndItsStepsOnThe
 
       const EmbeddedPoints points = e.points();
       const Eigen::Matrix3Xd P = points.points(x);
-      MeshColliderTerm direct(F, points.points(flatten(e.rest)), W, T, pose, 0.3, 5.0);
+      MeshColliderTerm direct(F, EmbeddedPoints::every(points.points(flatten(e.rest)).cols()), points.points(flatten(e.rest)), W, T, pose, 0.3, 5.0);
       direct.at_time(1.0);
       EXPECT_NEAR(term.energy(x), direct.energy(flatten(P)), 1e-12 * direct.energy(flatten(P)));
       EXPECT_NEAR(term.min_distance(x), direct.min_distance(flatten(P)), 1e-15);
@@ -740,8 +738,8 @@ TEST(MeshColliderTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesAndItsStepsOnThe
       for (int k = 0; k < 20; ++k) {
         const Vec3 jump(0.3 * u(rng), -0.6 - 0.8 * std::abs(u(rng)), 0.3 * u(rng));
         const ColliderPose jumping = [jump](double t) { return Eigen::Affine3d(Eigen::Translation3d(t * jump)); };
-        MeshColliderTerm embedded(G, c.vertex, c.weight, c.rest, slab.V, slab.T, jumping, 0.02, 1.0);
-        MeshColliderTerm plain(G, cube.points(flatten(c.rest)), slab.V, slab.T, jumping, 0.02, 1.0);
+        MeshColliderTerm embedded(G, EmbeddedPoints(c.vertex, c.weight, "test", c.rest.cols()), c.rest, slab.V, slab.T, jumping, 0.02, 1.0);
+        MeshColliderTerm plain(G, EmbeddedPoints::every(cube.points(flatten(c.rest)).cols()), cube.points(flatten(c.rest)), slab.V, slab.T, jumping, 0.02, 1.0);
         Eigen::VectorXd dx(y.size());
         for (Eigen::Index i = 0; i < dx.size(); ++i) dx[i] = 0.05 * u(rng) + (i % 3 == 1 ? 1.0 + 0.5 * std::abs(u(rng)) : 0.0);
         const Eigen::VectorXd dq = flatten(cube.points(dx));
@@ -770,9 +768,8 @@ TEST(MeshColliderTerm, IdentityWeightsGiveTheDirectTerm) {
   const Eigen::Matrix3Xi F = boundary_triangles(m);
   const Slab slab(Vec3(-2, 1.05, -2), Vec3(2, 1.25, 2));
   const auto n = m.vertex_count();
-  MeshColliderTerm direct(F, m.vertices, slab.V, slab.T, ColliderPose{}, 0.1, 3.0);
-  MeshColliderTerm embedded(F, Eigen::RowVectorXi::LinSpaced(n, 0, static_cast<int>(n) - 1), Eigen::RowVectorXd::Ones(n), m.vertices,
-                            slab.V, slab.T, ColliderPose{}, 0.1, 3.0);
+  MeshColliderTerm direct(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, slab.V, slab.T, ColliderPose{}, 0.1, 3.0);
+  MeshColliderTerm embedded(F, identity_through_weights(n), m.vertices, slab.V, slab.T, ColliderPose{}, 0.1, 3.0);
   const Eigen::VectorXd x = flatten(m.vertices);
   EXPECT_EQ(direct.energy(x), embedded.energy(x));
   EXPECT_GT(direct.energy(x), 0.0);
@@ -792,23 +789,23 @@ TEST(MeshColliderTerm, IdentityWeightsGiveTheDirectTerm) {
 TEST(ShapeColliderTerm, BadEmbeddingsThrow) {
   const Eigen::MatrixXi ids = Eigen::RowVectorXi::LinSpaced(4, 0, 3);
   const Eigen::MatrixXd ones = Eigen::RowVectorXd::Ones(4);
-  EXPECT_NO_THROW(ShapeColliderTerm(ids, ones, sphere(), ColliderPose{}, 0.1, 1.0));
-  EXPECT_THROW(ShapeColliderTerm(ids, Eigen::MatrixXd::Ones(2, 4), sphere(), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_NO_THROW(ShapeColliderTerm(EmbeddedPoints(ids, ones, "test", -1), sphere(), ColliderPose{}, 0.1, 1.0));
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints(ids, Eigen::MatrixXd::Ones(2, 4), "test", -1), sphere(), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
   Eigen::MatrixXd nan = ones;
   nan(0, 2) = NAN;
-  EXPECT_THROW(ShapeColliderTerm(ids, nan, sphere(), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints(ids, nan, "test", -1), sphere(), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
   Eigen::MatrixXi negative = ids;
   negative(0, 1) = -1;
-  EXPECT_THROW(ShapeColliderTerm(negative, ones, sphere(), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints(negative, ones, "test", -1), sphere(), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
   const Slab slab(Vec3(-2, 1.05, -2), Vec3(2, 1.25, 2));
   Eigen::Matrix3Xi F(3, 1);
   F << 0, 1, 2;
   Eigen::MatrixXi far = ids;
   far(0, 3) = 4;  // beyond the volume's 4 vertices
   const Eigen::Matrix3Xd rest = Eigen::Matrix3Xd::Random(3, 4);
-  EXPECT_NO_THROW(MeshColliderTerm(F, ids, ones, rest, slab.V, slab.T, ColliderPose{}, 0.1, 1.0));
-  EXPECT_THROW(MeshColliderTerm(F, far, ones, rest, slab.V, slab.T, ColliderPose{}, 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(MeshColliderTerm(F, ids, nan, rest, slab.V, slab.T, ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_NO_THROW(MeshColliderTerm(F, EmbeddedPoints(ids, ones, "test", rest.cols()), rest, slab.V, slab.T, ColliderPose{}, 0.1, 1.0));
+  EXPECT_THROW(MeshColliderTerm(F, EmbeddedPoints(far, ones, "test", rest.cols()), rest, slab.V, slab.T, ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(MeshColliderTerm(F, EmbeddedPoints(ids, nan, "test", rest.cols()), rest, slab.V, slab.T, ColliderPose{}, 0.1, 1.0), std::invalid_argument);
 }
 
 }  // namespace

@@ -13,6 +13,8 @@
 #include "snh/contact/barrier.hpp"
 #include "snh/contact/edge_edge_distance.hpp"
 #include "snh/contact/point_triangle_distance.hpp"
+#include "snh/fem/attachment_term.hpp"
+#include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
 #include "snh/fem/problem.hpp"
 #include "snh/material/registry.hpp"
@@ -24,13 +26,19 @@
 #include "snh/solve/newton.hpp"
 #include "contact/surface_checks.hpp"
 #include "fem/problem_fd.hpp"
+#include "fem/weighted_points.hpp"
 
 namespace snh {
 namespace {
 
+using testing::identity_through_weights;
+
 using Kind = ContactPair::Kind;
 
 Eigen::VectorXd flatten(const Eigen::Matrix3Xd& X) { return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()); }
+/// A plane through p with normal n (any length: the term normalises it) as a collider shape.
+ColliderShape plane(const Vec3& p, const Vec3& n) { return {ColliderShape::Kind::plane, p, n, 0.0}; }
+
 Eigen::Matrix3Xd unflatten(const Eigen::VectorXd& x) { return Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3); }
 
 /// Tet A = (0,0,0), (1,0,0), (0,1,0), (0,0,−1) (its top face on z = 0) and tet B = vertices 4..7.
@@ -56,7 +64,7 @@ bool has_kind(const std::vector<ContactPair>& pairs, Kind kind) {
 }
 
 void expect_matches_finite_differences(const TwoTets& tets, double dhat, double kappa) {
-  ContactTerm term(tets.F, tets.V, dhat, kappa);
+  ContactTerm term(tets.F, EmbeddedPoints::every(tets.V.cols()), tets.V, dhat, kappa);
   Problem problem(DofMap(std::vector<std::uint8_t>(24, 0)));
   problem.add(term);
   const Eigen::VectorXd x = flatten(tets.V);
@@ -88,7 +96,7 @@ TEST(ContactTerm, VertexTriangleAndEdgeEdgePairsMatchFiniteDifferences) {
       0.04, 0.04, 1.0, 1.0;
   for (unsigned seed : {1u, 2u, 3u}) {
     const TwoTets tets(jitter(B, seed));
-    const ContactTerm term(tets.F, tets.V, 0.1, 10.0);
+    const ContactTerm term(tets.F, EmbeddedPoints::every(tets.V.cols()), tets.V, 0.1, 10.0);
     const auto pairs = term.pairs(flatten(tets.V));
     EXPECT_TRUE(has_kind(pairs, Kind::point_triangle));
     EXPECT_TRUE(has_kind(pairs, Kind::edge_edge));
@@ -105,7 +113,7 @@ TEST(ContactTerm, MollifiedEdgeEdgeAndPointEdgePairsMatchFiniteDifferences) {
       0.05, 0.05, 1.0, 1.0;
   for (unsigned seed : {4u, 5u}) {
     const TwoTets tets(jitter(B, seed));
-    const ContactTerm term(tets.F, tets.V, 0.1, 10.0);
+    const ContactTerm term(tets.F, EmbeddedPoints::every(tets.V.cols()), tets.V, 0.1, 10.0);
     const Eigen::VectorXd x = flatten(tets.V);
     bool mollified = false;
     for (const ContactPair& p : term.pairs(x))
@@ -138,7 +146,7 @@ struct Roof {
 TEST(ContactTerm, AVertexOverASharedEdgeIsOnePairWeightedByItsCandidates) {
   const Roof roof(0.1, 0.0, 0.05);
   const double dhat = 0.1, kappa = 3.0;
-  const ContactTerm term(roof.F, roof.V, dhat, kappa);
+  const ContactTerm term(roof.F, EmbeddedPoints::every(roof.V.cols()), roof.V, dhat, kappa);
   const Eigen::VectorXd x = flatten(roof.V);
   const auto pairs = term.pairs(x);
   // Four candidates reduce to the point–edge pair (4, ridge): vertex 4 against both roof triangles, and
@@ -167,7 +175,7 @@ TEST(ContactTerm, AVertexOverASharedVertexIsOnePairWeightedByItsCandidates) {
   Eigen::Matrix3Xi F(3, k + 1);
   for (int i = 0; i < k; ++i) F.col(i) << 0, 1 + i, 1 + (i + 1) % k;
   F.col(k) << k + 1, k + 2, k + 3;
-  const ContactTerm term(F, V, 0.1, 1.0);
+  const ContactTerm term(F, EmbeddedPoints::every(V.cols()), V, 0.1, 1.0);
   const auto pairs = term.pairs(flatten(V));
   ASSERT_EQ(pairs.size(), 1u);
   EXPECT_EQ(pairs[0].kind, Kind::point_point);
@@ -190,7 +198,7 @@ TEST(ContactTerm, EnergyIsContinuousAcrossAClosestFeatureChange) {
   for (int i = 0; i < n; ++i) {
     const double y = -0.03 + 0.06 * i / (n - 1);
     const Roof roof(0.1, y, 0.05);
-    const ContactTerm term(roof.F, roof.V, dhat, 1.0);
+    const ContactTerm term(roof.F, EmbeddedPoints::every(roof.V.cols()), roof.V, dhat, 1.0);
     const Eigen::VectorXd x = flatten(roof.V);
     const auto pairs = term.pairs(x);
     (has_kind(pairs, Kind::point_triangle) ? seen_triangle : seen_edge_only) = true;
@@ -228,7 +236,7 @@ TEST(ContactTerm, MaxStepKeepsEveryPairApartOnRandomSteps) {
   int unsafe_full_steps = 0;
   for (int trial = 0; trial < 30; ++trial) {
     const TwoCubes cubes(1.0, Vec3(1.1 + 0.1 * trial / 30.0, 0.2 * noise(rng), 0.2 * noise(rng)));
-    const ContactTerm term(cubes.F, cubes.mesh.vertices, 0.05, 1.0);
+    const ContactTerm term(cubes.F, EmbeddedPoints::every(cubes.mesh.vertices.cols()), cubes.mesh.vertices, 0.05, 1.0);
     const Eigen::VectorXd x = flatten(cubes.mesh.vertices);
     const Eigen::Index n = cubes.mesh.vertex_count() / 2;
     Eigen::Matrix3Xd D(3, 2 * n);
@@ -254,7 +262,7 @@ TEST(ContactTerm, KeptCandidatesGiveWhatAFreshTermGivesAlongAWalk) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double dhat = 0.05;
   const TwoCubes cubes(1.0, Vec3(1.2, 0.1, -0.05));
-  const ContactTerm walker(cubes.F, cubes.mesh.vertices, dhat, 1.0);
+  const ContactTerm walker(cubes.F, EmbeddedPoints::every(cubes.mesh.vertices.cols()), cubes.mesh.vertices, dhat, 1.0);
   Eigen::Matrix3Xd X = cubes.mesh.vertices;
   const Eigen::Index n = X.cols() / 2;
   int with_pairs = 0;
@@ -265,7 +273,7 @@ TEST(ContactTerm, KeptCandidatesGiveWhatAFreshTermGivesAlongAWalk) {
       X.col(v) += size * (0.5 * towards + 0.3 * Vec3(u(rng), u(rng), u(rng)));
     const Eigen::VectorXd x = flatten(X);
     if (surface_min_distance(cubes.F, X) <= 0.0) continue;  // a walk through: skip the contact-free check
-    const ContactTerm fresh(cubes.F, cubes.mesh.vertices, dhat, 1.0);
+    const ContactTerm fresh(cubes.F, EmbeddedPoints::every(cubes.mesh.vertices.cols()), cubes.mesh.vertices, dhat, 1.0);
     Eigen::VectorXd g1 = Eigen::VectorXd::Zero(x.size()), g2 = Eigen::VectorXd::Zero(x.size());
     const double e1 = walker.evaluate(x, &g1, nullptr, PsdProjection::none), e2 = fresh.evaluate(x, &g2, nullptr, PsdProjection::none);
     ASSERT_EQ(e1, e2) << "step " << k;
@@ -288,7 +296,7 @@ TEST(ContactTerm, MaxStepDoesNotLoseAPairEndingInTouchingToTheRoundingOfItsBoxes
   F << 0, 3, 1, 5, 2, 4;
   const double drop = 1.05 - std::nextafter(1.0, 2.0);
   ASSERT_GT(1.05 - drop, 1.0);  // the triangle ends above the vertex's y by rounding only
-  const ContactTerm term(F, X, 0.01, 1.0);
+  const ContactTerm term(F, EmbeddedPoints::every(X.cols()), X, 0.01, 1.0);
   const Eigen::VectorXd x = flatten(X);
   Eigen::Matrix3Xd D = Eigen::Matrix3Xd::Zero(3, 6);
   D.row(1).tail(3).setConstant(-drop);
@@ -298,17 +306,17 @@ TEST(ContactTerm, MaxStepDoesNotLoseAPairEndingInTouchingToTheRoundingOfItsBoxes
   EXPECT_GE(surface_min_distance(F, unflatten(x + alpha * dx)), 0.1 * 0.05 * (1.0 - 1e-9));
 }
 
-TEST(PlaneContactTerm, MatchesFiniteDifferencesAndMaxStepKeepsVerticesAbove) {
+TEST(PlaneCollider, MatchesFiniteDifferencesAndMaxStepKeepsVerticesAbove) {
   // Four vertices 0.01 to 0.04 above a tilted plane (d̂ = 0.05), one far above it.
   const Vec3 n = Vec3(0.2, 1.0, -0.3).normalized(), p(0.1, -0.2, 0.3);
   Eigen::Matrix3Xd V(3, 5);
   const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
   for (int i = 0; i < 5; ++i) V.col(i) = p + (0.3 * i) * t1 - (0.2 * i) * t2 + (i < 4 ? 0.01 * (i + 1) : 1.0) * n;
-  PlaneContactTerm term({0, 1, 2, 3, 4}, p, 7.0 * n, 0.05, 5.0);  // the normal's length does not matter
+  ShapeColliderTerm term(EmbeddedPoints::plain({0, 1, 2, 3, 4}, "test"), plane(p, 7.0 * n), ColliderPose{}, 0.05, 5.0);  // the normal's length does not matter
   Problem problem(DofMap(std::vector<std::uint8_t>(15, 0)));
   problem.add(term);
   const Eigen::VectorXd x = flatten(V);
-  for (int i = 0; i < 5; ++i) EXPECT_NEAR(term.distance(x, i), i < 4 ? 0.01 * (i + 1) : 1.0, 1e-14);
+  for (int i = 0; i < 5; ++i) EXPECT_NEAR(term.point_distance(x, i), i < 4 ? 0.01 * (i + 1) : 1.0, 1e-14);
   EXPECT_GT(problem.energy(x), 0.0);
   const FdErrors e = problem_fd_errors(problem, x);
   EXPECT_LE(e.gradient, 1e-6);
@@ -325,23 +333,23 @@ TEST(PlaneContactTerm, MatchesFiniteDifferencesAndMaxStepKeepsVerticesAbove) {
     const double alpha = term.max_step(x, dx);
     ASSERT_GT(alpha, 0.0);
     ASSERT_LE(alpha, 1.0);
-    for (int i = 0; i < 5; ++i) EXPECT_GE(term.distance(x + alpha * dx, i), 0.1 * term.distance(x, i) * (1 - 1e-12));
+    for (int i = 0; i < 5; ++i) EXPECT_GE(term.point_distance(x + alpha * dx, i), 0.1 * term.point_distance(x, i) * (1 - 1e-12));
   }
 }
 
 TEST(ContactTerm, BadArgumentsThrow) {
   const TwoTets tets(Eigen::Matrix<double, 3, 4>::Random() + Eigen::Matrix<double, 3, 4>::Constant(3.0));
-  EXPECT_THROW(ContactTerm(tets.F, tets.V, 0.0, 1.0), std::invalid_argument);
-  EXPECT_THROW(ContactTerm(tets.F, tets.V, 0.1, -1.0), std::invalid_argument);
-  EXPECT_THROW(ContactTerm(tets.F, tets.V, NAN, 1.0), std::invalid_argument);
+  EXPECT_THROW(ContactTerm(tets.F, EmbeddedPoints::every(tets.V.cols()), tets.V, 0.0, 1.0), std::invalid_argument);
+  EXPECT_THROW(ContactTerm(tets.F, EmbeddedPoints::every(tets.V.cols()), tets.V, 0.1, -1.0), std::invalid_argument);
+  EXPECT_THROW(ContactTerm(tets.F, EmbeddedPoints::every(tets.V.cols()), tets.V, NAN, 1.0), std::invalid_argument);
   Eigen::Matrix3Xi bad = tets.F;
   bad(0, 0) = 8;
-  EXPECT_THROW(ContactTerm(bad, tets.V, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ContactTerm(bad, EmbeddedPoints::every(tets.V.cols()), tets.V, 0.1, 1.0), std::invalid_argument);
   bad(0, 0) = bad(1, 0);
-  EXPECT_THROW(ContactTerm(bad, tets.V, 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(PlaneContactTerm({0}, Vec3::Zero(), Vec3::Zero(), 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(PlaneContactTerm({-1}, Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(PlaneContactTerm({0}, Vec3::Zero(), Vec3::UnitY(), 0.1, INFINITY), std::invalid_argument);
+  EXPECT_THROW(ContactTerm(bad, EmbeddedPoints::every(tets.V.cols()), tets.V, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), plane(Vec3::Zero(), Vec3::Zero()), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({-1}, "test"), plane(Vec3::Zero(), Vec3::UnitY()), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), plane(Vec3::Zero(), Vec3::UnitY()), ColliderPose{}, 0.1, INFINITY), std::invalid_argument);
 }
 
 TEST(ContactTerm, IpcStiffnessFollowsItsFormula) {
@@ -397,8 +405,8 @@ TEST(ContactTerm, NothingInRangeChangesNothingBitForBit) {
   std::sort(surface.begin(), surface.end());
   surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
   Dynamics plain(m, 0.01, Vec3(0, -9.8, 0)), with(m, 0.01, Vec3(0, -9.8, 0));
-  ContactTerm self(F, m.vertices, 0.01, 1e3);
-  PlaneContactTerm ground(surface, Vec3(0, -10, 0), Vec3(0, 1, 0), 0.01, 1e3);
+  ContactTerm self(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, 0.01, 1e3);
+  ShapeColliderTerm ground(EmbeddedPoints::plain(surface, "test"), plane(Vec3(0, -10, 0), Vec3(0, 1, 0)), ColliderPose{}, 0.01, 1e3);
   with.problem.add(self);
   with.problem.add(ground);
   Eigen::VectorXd x1 = flatten(m.vertices), v1 = Eigen::VectorXd::Zero(x1.size());
@@ -421,8 +429,8 @@ TEST(ContactTerm, ACubeDroppedOnTheGroundComesToRestAboveIt) {
   surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
   const double dhat = 0.02, ground_y = -1.3;
   Dynamics run(m, 0.01, Vec3(0, -9.8, 0));
-  ContactTerm self(F, m.vertices, dhat, 1e8);
-  PlaneContactTerm ground(surface, Vec3(0, ground_y, 0), Vec3(0, 1, 0), dhat, 1e8);
+  ContactTerm self(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, dhat, 1e8);
+  ShapeColliderTerm ground(EmbeddedPoints::plain(surface, "test"), plane(Vec3(0, ground_y, 0), Vec3(0, 1, 0)), ColliderPose{}, dhat, 1e8);
   run.problem.add(self);
   run.problem.add(ground);
   Eigen::VectorXd x = flatten(m.vertices), v = Eigen::VectorXd::Zero(x.size());
@@ -447,7 +455,7 @@ TEST(ContactTerm, TwoCubesThrownAtEachOtherBounceApartWithoutIntersecting) {
   const TwoCubes cubes(1.0, Vec3(1.3, 0.2, 0.1));
   const double dhat = 0.02;
   Dynamics run(cubes.mesh, 0.01, Vec3::Zero());
-  ContactTerm self(cubes.F, cubes.mesh.vertices, dhat, 1e8);
+  ContactTerm self(cubes.F, EmbeddedPoints::every(cubes.mesh.vertices.cols()), cubes.mesh.vertices, dhat, 1e8);
   run.problem.add(self);
   const Eigen::Index n = cubes.mesh.vertex_count() / 2;
   Eigen::VectorXd x = flatten(cubes.mesh.vertices), v = Eigen::VectorXd::Zero(x.size());
@@ -487,7 +495,7 @@ TEST(ContactTerm, ASimulationsGuessDoesNotJumpThroughAContact) {
   setup.dt = 0.01;
   setup.newton.tolerance = 1e-2;
   setup.linear.name = "ldlt";
-  setup.terms.push_back(std::make_shared<ContactTerm>(cubes.F, cubes.mesh.vertices, 0.02, 1e8));
+  setup.terms.push_back(std::make_shared<ContactTerm>(cubes.F, EmbeddedPoints::every(cubes.mesh.vertices.cols()), cubes.mesh.vertices, 0.02, 1e8));
   Simulation sim(std::move(setup));
   const Eigen::Index n = cubes.mesh.vertex_count() / 2;
   SimulationState state = sim.state();
@@ -566,7 +574,7 @@ TEST(ContactTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesThroughItsWeights) {
       SCOPED_TRACE(hexes ? "hexes" : "tets");
       const TwoTets tets(jitter(B, seed));
       const EmbeddedTwoTets e(tets, hexes, seed);
-      ContactTerm term(tets.F, e.vertex, e.weight, e.rest, 0.1, 10.0);
+      ContactTerm term(tets.F, EmbeddedPoints(e.vertex, e.weight, "test", e.rest.cols()), e.rest, 0.1, 10.0);
       const Eigen::Matrix3Xd P = term.positions(e.x);
       const auto pairs = term.pairs(e.x);
       EXPECT_TRUE(has_kind(pairs, Kind::point_triangle));
@@ -587,7 +595,7 @@ TEST(ContactTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesThroughItsWeights) {
         point_rest.col(i).setZero();
         for (Eigen::Index c = 0; c < e.vertex.rows(); ++c) point_rest.col(i) += e.weight(c, i) * e.rest.col(e.vertex(c, i));
       }
-      ContactTerm direct(tets.F, point_rest, 0.1, 10.0);
+      ContactTerm direct(tets.F, EmbeddedPoints::every(point_rest.cols()), point_rest, 0.1, 10.0);
       EXPECT_NEAR(term.energy(e.x), direct.energy(flatten(P)), 1e-12 * direct.energy(flatten(P)));
       EXPECT_EQ(term.pairs(e.x).size(), direct.pairs(flatten(P)).size());
       const Eigen::VectorXd gp = assembled(direct, flatten(P), PsdProjection::none).second;
@@ -608,17 +616,17 @@ TEST(ContactTerm, AnEmbeddedSurfaceMatchesFiniteDifferencesThroughItsWeights) {
     }
 }
 
-// The direct term keeps its own path (plain gathers and scatters); the embedded path with one weight 1 per
-// point agrees with it up to the last bits (a pair Hessian's blocks are added in the other orientation where
-// the volume ids are in the other order, and its symmetry holds to rounding only).
+// Plain points keep their own path (plain gathers and scatters); the same points taken through weights (one
+// of 1, one of 0) agree with it up to the last bits (a pair Hessian's blocks are added in the other orientation
+// where the volume ids are in the other order, and its symmetry holds to rounding only).
 TEST(ContactTerm, IdentityWeightsGiveTheDirectTerm) {
   Eigen::Matrix<double, 3, 4> B;
   B << 0.2, 0.8, 0.3, 0.7,     //
       -0.02, -0.01, -0.4, -0.4,  //
       0.05, 0.05, 1.0, 1.0;
   const TwoTets tets(jitter(B, 4));
-  ContactTerm direct(tets.F, tets.V, 0.1, 10.0);
-  ContactTerm embedded(tets.F, Eigen::RowVectorXi::LinSpaced(8, 0, 7), Eigen::RowVectorXd::Ones(8), tets.V, 0.1, 10.0);
+  ContactTerm direct(tets.F, EmbeddedPoints::every(tets.V.cols()), tets.V, 0.1, 10.0);
+  ContactTerm embedded(tets.F, identity_through_weights(8), tets.V, 0.1, 10.0);
   const Eigen::VectorXd x = flatten(tets.V);
   EXPECT_EQ(direct.energy(x), embedded.energy(x));
   for (const PsdProjection p : {PsdProjection::none, PsdProjection::clamp}) {
@@ -634,22 +642,22 @@ TEST(ContactTerm, BadEmbeddingsThrow) {
   const TwoTets tets(Eigen::Matrix<double, 3, 4>::Identity() * 0.5);
   const Eigen::MatrixXi ids = Eigen::RowVectorXi::LinSpaced(8, 0, 7);
   const Eigen::MatrixXd ones = Eigen::RowVectorXd::Ones(8);
-  EXPECT_NO_THROW(ContactTerm(tets.F, ids, ones, tets.V, 0.1, 1.0));
-  EXPECT_THROW(ContactTerm(tets.F, ids, Eigen::MatrixXd::Ones(2, 8), tets.V, 0.1, 1.0), std::invalid_argument);  // shapes
+  EXPECT_NO_THROW(ContactTerm(tets.F, EmbeddedPoints(ids, ones, "test", tets.V.cols()), tets.V, 0.1, 1.0));
+  EXPECT_THROW(ContactTerm(tets.F, EmbeddedPoints(ids, Eigen::MatrixXd::Ones(2, 8), "test", tets.V.cols()), tets.V, 0.1, 1.0), std::invalid_argument);  // shapes
   Eigen::MatrixXi far = ids;
   far(0, 3) = 8;  // beyond the volume's 8 vertices
-  EXPECT_THROW(ContactTerm(tets.F, far, ones, tets.V, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ContactTerm(tets.F, EmbeddedPoints(far, ones, "test", tets.V.cols()), tets.V, 0.1, 1.0), std::invalid_argument);
   Eigen::MatrixXd nan = ones;
   nan(0, 2) = NAN;
-  EXPECT_THROW(ContactTerm(tets.F, ids, nan, tets.V, 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(PlaneContactTerm(ids, nan, Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(PlaneContactTerm(ids, Eigen::MatrixXd::Ones(1, 7), Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ContactTerm(tets.F, EmbeddedPoints(ids, nan, "test", tets.V.cols()), tets.V, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints(ids, nan, "test", -1), plane(Vec3::Zero(), Vec3::UnitY()), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints(ids, Eigen::MatrixXd::Ones(1, 7), "test", -1), plane(Vec3::Zero(), Vec3::UnitY()), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
   Eigen::MatrixXi negative = ids;
   negative(0, 1) = -1;
-  EXPECT_THROW(PlaneContactTerm(negative, ones, Vec3::Zero(), Vec3::UnitY(), 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints(negative, ones, "test", -1), plane(Vec3::Zero(), Vec3::UnitY()), ColliderPose{}, 0.1, 1.0), std::invalid_argument);
 }
 
-TEST(PlaneContactTerm, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights) {
+TEST(PlaneCollider, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights) {
   // A cube's 8 vertices (deformed at random) and 5 points in it by trilinear weights, 0.01 to 0.04 above a
   // tilted plane (d̂ = 0.05) or far above it.
   const Vec3 n = Vec3(0.2, 1.0, -0.3).normalized(), p(0.1, -0.2, 0.3);
@@ -666,9 +674,9 @@ TEST(PlaneContactTerm, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights) 
       weight(c, i) = ((c & 1) ? u[0] : 1 - u[0]) * (((c >> 1) & 1) ? u[1] : 1 - u[1]) * (((c >> 2) & 1) ? u[2] : 1 - u[2]);
     }
   }
-  PlaneContactTerm term(vertex, weight, p, n, 0.05, 5.0);
+  ShapeColliderTerm term(EmbeddedPoints(vertex, weight, "test", -1), plane(p, n), ColliderPose{}, 0.05, 5.0);
   const Eigen::VectorXd x = flatten(cube);
-  for (int i = 0; i < 5; ++i) EXPECT_NEAR(term.distance(x, i), i < 4 ? 0.01 * (i + 1) : 1.0, 1e-14);
+  for (int i = 0; i < 5; ++i) EXPECT_NEAR(term.point_distance(x, i), i < 4 ? 0.01 * (i + 1) : 1.0, 1e-14);
   EXPECT_EQ(term.active_pairs(x), 4);
   EXPECT_NEAR(term.min_distance(x), 0.01, 1e-14);
   std::mt19937_64 rng(5);
@@ -689,8 +697,58 @@ TEST(PlaneContactTerm, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights) 
     for (Eigen::Index i = 0; i < dx.size(); ++i) dx[i] = g(rng);
     const double alpha = term.max_step(y, dx);
     ASSERT_GT(alpha, 0.0);
-    for (int i = 0; i < 5; ++i) EXPECT_GE(term.distance(y + alpha * dx, i), 0.1 * term.distance(y, i) * (1 - 1e-9));
+    for (int i = 0; i < 5; ++i) EXPECT_GE(term.point_distance(y + alpha * dx, i), 0.1 * term.point_distance(y, i) * (1 - 1e-9));
   }
+}
+
+// Every contact term reports its statistics through the Term interface: its active pairs and their smallest
+// distance at the state asked, and what it counted since it last reported (then counted anew); other terms
+// report nothing.
+TEST(ContactStatistics, EveryContactTermReportsThroughTheTermInterface) {
+  // Two unit cubes 0.03 apart along x, the ground 0.02 below them, a sphere 0.04 from the right cube's far
+  // top front corner (along the corner's diagonal).
+  const TwoCubes cubes(1.0, Vec3(1.03, 0.0, 0.0));
+  const Eigen::Matrix3Xd& X = cubes.mesh.vertices;
+  const double bottom = X.row(1).minCoeff();
+  const Vec3 corner = X.rowwise().maxCoeff(), centre = corner + 0.54 * Vec3::Ones().normalized();
+  const EmbeddedPoints every = EmbeddedPoints::every(X.cols());
+  ContactTerm self(cubes.F, every, X, 0.05, 1.0);
+  ShapeColliderTerm ground(every, plane(Vec3(0, bottom - 0.02, 0), Vec3::UnitY()), ColliderPose{}, 0.05, 1.0);
+  ShapeColliderTerm ball(every, {ColliderShape::Kind::sphere, centre, Vec3::Zero(), 0.5}, ColliderPose{}, 0.05, 1.0);
+  const Eigen::VectorXd x = flatten(X);
+  for (Term* t : std::initializer_list<Term*>{&self, &ground, &ball}) EXPECT_TRUE(t->reports_contact());
+  ContactStatistics s;
+  self.report_contact(x, s);
+  EXPECT_EQ(s.pairs, self.active_pairs(x));
+  EXPECT_GT(s.pairs, 0);
+  EXPECT_NEAR(s.min_distance, 0.03, 1e-12);
+  const int self_pairs = s.pairs;
+  ground.report_contact(x, s);
+  EXPECT_EQ(s.pairs - self_pairs, 8);  // the bottom corners of both cubes, 0.02 above the ground
+  EXPECT_NEAR(s.min_distance, 0.02, 1e-12);
+  // The counters: a step bound asked twice, reported once, then nothing more.
+  Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+  for (Eigen::Index v = 0; v < X.cols(); ++v) dx[3 * v + 1] = -0.1;
+  (void)ground.max_step(x, dx);
+  (void)ground.max_step(x, dx);
+  ContactStatistics again;
+  ground.report_contact(x, again);
+  EXPECT_EQ(again.ccd_calls, 2);
+  EXPECT_EQ(again.ccd_tests, 2 * X.cols());
+  ContactStatistics after;
+  ground.report_contact(x, after);
+  EXPECT_EQ(after.ccd_calls, 0);
+  ContactStatistics ball_only;
+  ball.report_contact(x, ball_only);
+  EXPECT_EQ(ball_only.pairs, 1);  // that corner alone
+  EXPECT_NEAR(ball_only.min_distance, 0.04, 1e-12);
+  // A term that is not a contact term adds nothing.
+  AttachmentTerm spring({0}, Eigen::VectorXd::Ones(1), [&](double, Eigen::Matrix3Xd& out) { out = X.leftCols(1); });
+  EXPECT_FALSE(spring.reports_contact());
+  ContactStatistics none;
+  spring.report_contact(x, none);
+  EXPECT_EQ(none.pairs, 0);
+  EXPECT_TRUE(std::isnan(none.min_distance));
 }
 
 }  // namespace

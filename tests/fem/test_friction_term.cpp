@@ -66,7 +66,7 @@ TEST(FrictionTerm, MatchesFiniteDifferencesWhileStickingAndSliding) {
   const Eigen::Matrix3Xd P = near_sphere(n, rng);
   const double dhat = 0.1, velocity = 1.0, t0 = 0.2, t1 = 0.3;  // ε = 0.1
   // Plain vertices.
-  FrictionTerm term(std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7}, kSphere, turning_pose, dhat, 1e3, 0.6, velocity);
+  FrictionTerm term(EmbeddedPoints::plain({0, 1, 2, 3, 4, 5, 6, 7}, "test"), kSphere, turning_pose, dhat, 1e3, 0.6, velocity);
   term.begin_step(flatten(P), t0, t1);
   ASSERT_EQ(term.lagged_points(), n);
   ASSERT_GT(term.normal_force(), 0.0);
@@ -89,7 +89,7 @@ TEST(FrictionTerm, MatchesFiniteDifferencesWhileStickingAndSliding) {
   double bound = 0.0;
   for (int i = 1; i < n; i += 2) bound += grad.segment<3>(3 * i).norm();
   double sliding_force = 0.0;  // the sliding points' μλ, from a term of them alone
-  FrictionTerm sliding(std::vector<int>{1, 3, 5, 7}, kSphere, turning_pose, dhat, 1e3, 0.6, velocity);
+  FrictionTerm sliding(EmbeddedPoints::plain({1, 3, 5, 7}, "test"), kSphere, turning_pose, dhat, 1e3, 0.6, velocity);
   sliding.begin_step(flatten(P), t0, t1);
   sliding_force = 0.6 * sliding.normal_force();
   EXPECT_NEAR(bound, sliding_force, 1e-9 * sliding_force);
@@ -111,7 +111,7 @@ TEST(FrictionTerm, MatchesFiniteDifferencesWhileStickingAndSliding) {
     weight.col(i) /= weight.col(i).sum();
   }
   vertex(1, 0) = vertex(0, 0);
-  FrictionTerm embedded(vertex, weight, kSphere, turning_pose, dhat, 1e3, 0.6, velocity);
+  FrictionTerm embedded(EmbeddedPoints(vertex, weight, "test", -1), kSphere, turning_pose, dhat, 1e3, 0.6, velocity);
   embedded.begin_step(flatten(V), t0, t1);
   ASSERT_EQ(embedded.lagged_points(), n);
   Eigen::Matrix3Xd Y(3, k * n);
@@ -126,18 +126,18 @@ TEST(FrictionTerm, NothingWithoutContactOrTimeAndBadArgumentsThrow) {
   const ColliderShape plane{Kind::plane, Vec3::Zero(), Vec3::UnitY(), 0.0};
   Eigen::Matrix3Xd X(3, 2);
   X << 0, 1, 0.5, 0.05, 0, 0;  // 0.5 above (out of range), 0.05 above (in range of d̂ = 0.1)
-  FrictionTerm term(std::vector<int>{0, 1}, plane, {}, 0.1, 1.0, 0.5, 1.0);
+  FrictionTerm term(EmbeddedPoints::plain({0, 1}, "test"), plane, {}, 0.1, 1.0, 0.5, 1.0);
   term.begin_step(flatten(X), 0.0, 0.1);
   EXPECT_EQ(term.lagged_points(), 1);
   term.begin_step(flatten(X), 0.1, 0.1);  // no time passes: no slip threshold, no friction
   EXPECT_EQ(term.lagged_points(), 0);
   EXPECT_EQ(term.energy(flatten(X) + Eigen::VectorXd::Ones(6)), 0.0);
-  EXPECT_THROW(FrictionTerm({0}, plane, {}, 0.1, 1.0, -0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(FrictionTerm({0}, plane, {}, 0.1, 1.0, NAN, 1.0), std::invalid_argument);
-  EXPECT_THROW(FrictionTerm({0}, plane, {}, 0.1, 1.0, 0.5, 0.0), std::invalid_argument);
-  EXPECT_THROW(FrictionTerm({0}, plane, {}, 0.0, 1.0, 0.5, 1.0), std::invalid_argument);
-  EXPECT_THROW(FrictionTerm({-1}, plane, {}, 0.1, 1.0, 0.5, 1.0), std::invalid_argument);
-  EXPECT_THROW(FrictionTerm(Eigen::MatrixXi::Zero(2, 1), Eigen::MatrixXd::Ones(1, 1), plane, {}, 0.1, 1.0, 0.5, 1.0),
+  EXPECT_THROW(FrictionTerm(EmbeddedPoints::plain({0}, "test"), plane, {}, 0.1, 1.0, -0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(FrictionTerm(EmbeddedPoints::plain({0}, "test"), plane, {}, 0.1, 1.0, NAN, 1.0), std::invalid_argument);
+  EXPECT_THROW(FrictionTerm(EmbeddedPoints::plain({0}, "test"), plane, {}, 0.1, 1.0, 0.5, 0.0), std::invalid_argument);
+  EXPECT_THROW(FrictionTerm(EmbeddedPoints::plain({0}, "test"), plane, {}, 0.0, 1.0, 0.5, 1.0), std::invalid_argument);
+  EXPECT_THROW(FrictionTerm(EmbeddedPoints::plain({-1}, "test"), plane, {}, 0.1, 1.0, 0.5, 1.0), std::invalid_argument);
+  EXPECT_THROW(FrictionTerm(EmbeddedPoints(Eigen::MatrixXi::Zero(2, 1), Eigen::MatrixXd::Ones(1, 1), "test", -1), plane, {}, 0.1, 1.0, 0.5, 1.0),
                std::invalid_argument);
 }
 
@@ -177,10 +177,9 @@ Slide slide(double mu, bool with_term) {
   surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
   const double dhat = 0.02, kappa = 1e8;
   const Vec3 point(0, -1.01, 0), normal = Vec3::UnitY();
-  setup.terms.push_back(std::make_shared<PlaneContactTerm>(surface, point, normal, dhat, kappa));
+  setup.terms.push_back(std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface, "test"), ColliderShape{Kind::plane, point, normal, 0.0}, ColliderPose{}, dhat, kappa));
   if (with_term)
-    setup.terms.push_back(std::make_shared<FrictionTerm>(surface, ColliderShape{Kind::plane, point, normal, 0.0}, ColliderPose{}, dhat,
-                                                         kappa, mu, 1e-3));
+    setup.terms.push_back(std::make_shared<FrictionTerm>(EmbeddedPoints::plain(surface, "test"), ColliderShape{Kind::plane, point, normal, 0.0}, ColliderPose{}, dhat, kappa, mu, 1e-3));
   Simulation sim(std::move(setup));
   Slide out;
   const auto centroid_x = [&] { return sim.x()(Eigen::seqN(0, m.vertex_count(), 3)).mean(); };
@@ -256,10 +255,9 @@ TEST(SelfFrictionTerm, MatchesFiniteDifferencesWhileStickingAndSliding) {
   const Eigen::VectorXd xt = flatten(m.vertices);
   for (const double slide : {0.01, 0.3}) {  // ε = 0.1: sticking, sliding
     // On the volume's vertices.
-    auto contact = std::make_shared<ContactTerm>(F, m.vertices, dhat, kappa);
+    auto contact = std::make_shared<ContactTerm>(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, dhat, kappa);
     ASSERT_GT(contact->active_pairs(xt), 4);
-    SelfFrictionTerm term(contact, Eigen::RowVectorXi::LinSpaced(n, 0, static_cast<int>(n) - 1), Eigen::MatrixXd::Ones(1, n), dhat,
-                          kappa, 0.5, 1.0);
+    SelfFrictionTerm term(contact, EmbeddedPoints::every(n), dhat, kappa, 0.5, 1.0);
     term.begin_step(xt, 0.0, 0.1);
     ASSERT_GT(term.lagged_points(), 4);
     // Each pair's closest points: their gap (the anchor) is as long as a pair's distance and along its
@@ -287,21 +285,20 @@ TEST(SelfFrictionTerm, MatchesFiniteDifferencesWhileStickingAndSliding) {
       vertex(1, v) = static_cast<int>((v / half) * half + (v + 1) % half);
       weight.col(v) << 0.995, 0.005;
     }
-    auto embedded_contact = std::make_shared<ContactTerm>(F, vertex, weight, m.vertices, dhat, kappa);
-    SelfFrictionTerm embedded(embedded_contact, vertex, weight, dhat, kappa, 0.5, 1.0);
+    auto embedded_contact = std::make_shared<ContactTerm>(F, EmbeddedPoints(vertex, weight, "test", m.vertices.cols()), m.vertices, dhat, kappa);
+    SelfFrictionTerm embedded(embedded_contact, EmbeddedPoints(vertex, weight, "test", -1), dhat, kappa, 0.5, 1.0);
     embedded.begin_step(xt, 0.0, 0.1);
     ASSERT_GT(embedded.lagged_points(), 4);
     expect_fd_and_psd(embedded, flatten(X), slide < 0.1 ? "embedded, sticking" : "embedded, sliding");
   }
   // At the start the slips are zero: no force.
-  auto contact = std::make_shared<ContactTerm>(F, m.vertices, dhat, kappa);
-  SelfFrictionTerm term(contact, Eigen::RowVectorXi::LinSpaced(n, 0, static_cast<int>(n) - 1), Eigen::MatrixXd::Ones(1, n), dhat, kappa,
-                        0.5, 1.0);
+  auto contact = std::make_shared<ContactTerm>(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, dhat, kappa);
+  SelfFrictionTerm term(contact, EmbeddedPoints::every(n), dhat, kappa, 0.5, 1.0);
   term.begin_step(xt, 0.0, 0.1);
   Eigen::VectorXd grad = Eigen::VectorXd::Zero(xt.size());
   term.evaluate(xt, &grad, nullptr, PsdProjection::none);
   EXPECT_LE(grad.norm(), 1e-12 * term.normal_force());
-  EXPECT_THROW(SelfFrictionTerm(nullptr, Eigen::MatrixXi::Zero(1, 1), Eigen::MatrixXd::Ones(1, 1), dhat, kappa, 0.5, 1.0),
+  EXPECT_THROW(SelfFrictionTerm(nullptr, EmbeddedPoints(Eigen::MatrixXi::Zero(1, 1), Eigen::MatrixXd::Ones(1, 1), "test", -1), dhat, kappa, 0.5, 1.0),
                std::invalid_argument);
 }
 
@@ -330,12 +327,11 @@ std::pair<double, double> stacked(double mu, bool with_term) {
     setup.mass_damping = damping;
     setup.kinematic.push_back(bottom);
     setup.initial = start;
-    auto contact = std::make_shared<ContactTerm>(boundary_triangles(m), m.vertices, dhat, kappa);
+    auto contact = std::make_shared<ContactTerm>(boundary_triangles(m), EmbeddedPoints::every(m.vertices.cols()), m.vertices, dhat, kappa);
     setup.terms.push_back(contact);
     std::shared_ptr<SelfFrictionTerm> term;
     if (friction) {
-      term = std::make_shared<SelfFrictionTerm>(contact, Eigen::RowVectorXi::LinSpaced(all, 0, static_cast<int>(all) - 1),
-                                                Eigen::MatrixXd::Ones(1, all), dhat, kappa, mu, 1e-3);
+      term = std::make_shared<SelfFrictionTerm>(contact, EmbeddedPoints::every(all), dhat, kappa, mu, 1e-3);
       setup.terms.push_back(term);
     }
     Simulation sim(std::move(setup));

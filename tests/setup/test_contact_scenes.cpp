@@ -84,7 +84,7 @@ BarRun bend_bar(bool contact, double shortening, int steps, double bow) {
   setup.initial = Eigen::Map<const Eigen::VectorXd>(start.data(), start.size());
   std::shared_ptr<ContactTerm> term;
   if (contact) {
-    term = std::make_shared<ContactTerm>(F, m.vertices, 0.01, 3.6e7);
+    term = std::make_shared<ContactTerm>(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, 0.01, 3.6e7);
     setup.terms.push_back(term);
   }
   Simulation sim(std::move(setup));
@@ -178,7 +178,7 @@ BallRun press_ball(bool contact, double travel, int steps) {
   const ColliderPose pose = [travel](double t) { return Eigen::Affine3d(Eigen::Translation3d(0, -travel * t, 0)); };
   std::shared_ptr<MeshColliderTerm> term;
   if (contact) {
-    term = std::make_shared<MeshColliderTerm>(F, m.vertices, B, box.T, pose, 0.02, 2.9e4 * cell / (0.02 * 0.02));
+    term = std::make_shared<MeshColliderTerm>(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, B, box.T, pose, 0.02, 2.9e4 * cell / (0.02 * 0.02));
     setup.terms.push_back(term);
   }
   Simulation sim(std::move(setup));

@@ -88,18 +88,9 @@ double shape_step(const ColliderShape& shape, const Vec3& q, const Vec3& dq, dou
 
 // ---------------------------------------------------------------------------------------------------------
 
-ShapeColliderTerm::ShapeColliderTerm(std::vector<int> vertices, ColliderShape shape, ColliderPose pose, double dhat,
-                                     double stiffness)
-    : ShapeColliderTerm(Eigen::Map<const Eigen::RowVectorXi>(vertices.data(), static_cast<Eigen::Index>(vertices.size())),
-                        Eigen::MatrixXd::Ones(1, static_cast<Eigen::Index>(vertices.size())), std::move(shape), std::move(pose),
-                        dhat, stiffness) {
-  embedded_ = false;
-}
-
-ShapeColliderTerm::ShapeColliderTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, ColliderShape shape, ColliderPose pose,
-                                     double dhat, double stiffness)
-    : points_(std::move(vertex), std::move(weight), "collider: points", -1),
-      embedded_(true),
+ShapeColliderTerm::ShapeColliderTerm(EmbeddedPoints points, ColliderShape shape, ColliderPose pose, double dhat, double stiffness)
+    : points_(std::move(points)),
+      embedded_(!points_.is_plain()),
       shape_(std::move(shape)),
       pose_(std::move(pose)),
       dhat_(dhat),
@@ -140,12 +131,6 @@ ColliderFrame collider_frame(const ColliderPose& pose, double t) {
 
 void ShapeColliderTerm::at_time(double t) { frame_ = frame_at(t); }
 
-double ShapeColliderTerm::distance(const Eigen::VectorXd& x, int v) const {
-  if (v < 0 || 3 * static_cast<Eigen::Index>(v) + 3 > x.size())
-    throw std::logic_error(fmt::format("collider: vertex {} is beyond the {} DOFs given", v, x.size()));
-  return frame_.scale * shape_distance(shape_, frame_.to_base(x.segment<3>(3 * v))).distance;
-}
-
 double ShapeColliderTerm::point_distance(const Eigen::VectorXd& x, Eigen::Index i) const {
   return frame_.scale * shape_distance(shape_, frame_.to_base(points_.point(x, i))).distance;
 }
@@ -156,10 +141,18 @@ double ShapeColliderTerm::min_distance(const Eigen::VectorXd& x) const {
   return d;
 }
 
+int ShapeColliderTerm::active_pairs(const Eigen::VectorXd& x) const {
+  int n = 0;
+  for (Eigen::Index i = 0; i < points_.size(); ++i)
+    if (point_distance(x, i) < dhat_) ++n;
+  return n;
+}
+
 double ShapeColliderTerm::energy(const Eigen::VectorXd& x) const { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
 
 double ShapeColliderTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                                    PsdProjection projection) const {
+  const ScopeTimer timed(counters_.seconds);
   const double s_hat = dhat_ * dhat_;
   const Mat3& R = frame_.rotation;
   double e = 0.0;
@@ -206,9 +199,18 @@ void ShapeColliderTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) cons
 }
 
 double ShapeColliderTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  const ScopeTimer timed(counters_.seconds);
+  ++counters_.ccd_calls;
   if (!x.allFinite() || !dx.allFinite()) return 1.0;  // the line search rejects what follows
+  counters_.ccd_tests += points_.size();
   double t = 1.0;
   for (Eigen::Index i = 0; i < points_.size(); ++i) {
+    if (shape_.kind == ColliderShape::Kind::plane) {  // d linear along the step: the root of d = d₀/10 exactly
+      // d + τ·(−approach) ≥ d/10  ⇔  τ ≤ 0.9 d / approach (the world normal R n: d's rate along the step)
+      const double d = point_distance(x, i), approach = -(frame_.rotation * shape_.b).dot(points_.point(dx, i));
+      if (d > 0.0 && approach > 0.0) t = std::min(t, 0.9 * d / approach);
+      continue;
+    }
     const Vec3 q = frame_.to_base(points_.point(x, i));
     const Vec3 dq = frame_.rotation.transpose() * points_.point(dx, i) / frame_.scale;  // the point moves by W dx
     if (dq == Vec3::Zero()) continue;
@@ -233,31 +235,9 @@ double ShapeColliderTerm::sweep(const Eigen::VectorXd& x, const Eigen::VectorXd&
 
 // ---------------------------------------------------------------------------------------------------------
 
-namespace {
-
-std::vector<int> iota(Eigen::Index n) {
-  std::vector<int> ids(static_cast<std::size_t>(n));
-  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int>(i);
-  return ids;
-}
-
-}  // namespace
-
-MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, Eigen::Matrix3Xd V,
+MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, EmbeddedPoints all, const Eigen::Matrix3Xd& rest, Eigen::Matrix3Xd V,
                                    const Eigen::Matrix3Xi& T, ColliderPose pose, double dhat, double stiffness)
-    : MeshColliderTerm(F, EmbeddedPoints::plain(iota(rest.cols()), "collider: surface"), rest, rest.cols(), false, std::move(V), T,
-                       std::move(pose), dhat, stiffness) {}
-
-MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, Eigen::MatrixXi vertex, Eigen::MatrixXd weight,
-                                   const Eigen::Matrix3Xd& volume_rest, Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T,
-                                   ColliderPose pose, double dhat, double stiffness)
-    : MeshColliderTerm(F, EmbeddedPoints(std::move(vertex), std::move(weight), "collider: surface points", volume_rest.cols()),
-                       volume_rest, volume_rest.cols(), true, std::move(V), T, std::move(pose), dhat, stiffness) {}
-
-MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, const EmbeddedPoints& all, const Eigen::Matrix3Xd& rest,
-                                   Eigen::Index volume_vertices, bool embedded, Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T,
-                                   ColliderPose pose, double dhat, double stiffness)
-    : embedded_(embedded), volume_vertices_(volume_vertices), base_(std::move(V)), collider_T_(T), pose_(std::move(pose)),
+    : embedded_(!all.is_plain()), volume_vertices_(rest.cols()), base_(std::move(V)), collider_T_(T), pose_(std::move(pose)),
       dhat_(dhat), kappa_(stiffness) {
   require_positive("dhat", dhat_);
   require_positive("stiffness", kappa_);
@@ -271,6 +251,7 @@ MeshColliderTerm::MeshColliderTerm(const Eigen::Matrix3Xi& F, const EmbeddedPoin
         throw std::invalid_argument(fmt::format("collider: {} triangle {} repeats a vertex", what, t));
     }
   };
+  all.check_vertices(volume_vertices_, "collider: surface points");
   check(F, all.size(), "surface");
   check(T, base_.cols(), "mesh");
   std::vector<int> ids(F.data(), F.data() + F.size());
@@ -333,6 +314,7 @@ double MeshColliderTerm::energy(const Eigen::VectorXd& x) const { return evaluat
 
 double MeshColliderTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                                   PsdProjection projection) const {
+  const ScopeTimer timed(counters_.seconds);
   if (!x.allFinite()) return nan;
   const Eigen::Matrix3Xd V = combined(x, placed_);
   const auto ns = static_cast<int>(surface_vertices_.size());
@@ -355,18 +337,18 @@ double MeshColliderTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gra
     // The simulated vertices' blocks only (the collider's vertices are not DOFs).
     for (int i = 0; i < 4; ++i) {
       if (id[i] >= ns) continue;
-      const int gi = surface_vertices_[static_cast<std::size_t>(id[i])];
+      const int gi = points_.vertex()(0, id[i]);
       if (gradient) gradient->segment<3>(3 * gi) += kappa_ * d.gradient.segment<3>(3 * i);
       if (hessian)
         for (int j = i; j < 4; ++j)
-          if (id[j] < ns)
-            hessian->add_block(gi, surface_vertices_[static_cast<std::size_t>(id[j])], kappa_ * d.hessian.block<3, 3>(3 * i, 3 * j));
+          if (id[j] < ns) hessian->add_block(gi, points_.vertex()(0, id[j]), kappa_ * d.hessian.block<3, 3>(3 * i, 3 * j));
     }
   }
   return e;
 }
 
 void MeshColliderTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
+  const ScopeTimer timed(counters_.seconds);
   out.arity = 2;
   out.vertices.clear();
   if (!x.allFinite()) return;
@@ -380,8 +362,7 @@ void MeshColliderTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j)
         if (c.local[i] < ns && c.local[j] < ns)
-          out.vertices.insert(out.vertices.end(), {surface_vertices_[static_cast<std::size_t>(c.local[i])],
-                                                   surface_vertices_[static_cast<std::size_t>(c.local[j])]});
+          out.vertices.insert(out.vertices.end(), {points_.vertex()(0, c.local[i]), points_.vertex()(0, c.local[j])});
   }
 }
 
@@ -392,21 +373,34 @@ std::array<int, 4> MeshColliderTerm::simulated_slots(const std::array<int, 4>& l
   return out;
 }
 
-double MeshColliderTerm::min_distance(const Eigen::VectorXd& x) const {
+std::vector<double> MeshColliderTerm::close_distances(const Eigen::VectorXd& x) const {
   const Eigen::Matrix3Xd V = combined(x, placed_);
-  double s = dhat_ * dhat_;
+  std::vector<double> out;
   for (const Candidate& c : candidates(V, V, dhat_)) {
     const auto& id = c.local;
-    s = std::min(s, c.edge_edge ? contact::edge_edge_distance(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3]))
-                                : contact::point_triangle_distance(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3])));
+    const double s = c.edge_edge ? contact::edge_edge_distance(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3]))
+                                 : contact::point_triangle_distance(V.col(id[0]), V.col(id[1]), V.col(id[2]), V.col(id[3]));
+    if (s < dhat_ * dhat_) out.push_back(s);
   }
+  return out;
+}
+
+double MeshColliderTerm::min_distance(const Eigen::VectorXd& x) const {
+  double s = dhat_ * dhat_;
+  for (const double c : close_distances(x)) s = std::min(s, c);
   return std::sqrt(std::max(s, 0.0));
 }
 
-double MeshColliderTerm::ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D) const {
+int MeshColliderTerm::active_pairs(const Eigen::VectorXd& x) const {
+  return x.allFinite() ? static_cast<int>(close_distances(x).size()) : 0;
+}
+
+double MeshColliderTerm::ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D, long long* tested) const {
   double t = 1.0;
   // Boxes grown by d̂, as ContactTerm::max_step: a pair ending in touching is not lost to the boxes' rounding.
-  for (const Candidate& c : candidates(V0, V0 + D, dhat_)) {
+  const std::vector<Candidate> swept = candidates(V0, V0 + D, dhat_);
+  if (tested) *tested += static_cast<long long>(swept.size());
+  for (const Candidate& c : swept) {
     const auto& i = c.local;
     t = std::min(t, c.edge_edge ? contact::edge_edge_ccd(V0.col(i[0]), V0.col(i[1]), V0.col(i[2]), V0.col(i[3]), D.col(i[0]),
                                                          D.col(i[1]), D.col(i[2]), D.col(i[3]))
@@ -417,10 +411,12 @@ double MeshColliderTerm::ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd&
 }
 
 double MeshColliderTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  const ScopeTimer timed(counters_.seconds);
+  ++counters_.ccd_calls;
   if (!x.allFinite() || !dx.allFinite()) return 1.0;  // the line search rejects what follows
   const Eigen::Matrix3Xd V0 = combined(x, placed_);
   const Eigen::Matrix3Xd D = combined(dx, Eigen::Matrix3Xd::Zero(3, placed_.cols()));  // the collider holds still
-  return ccd(V0, D);
+  return ccd(V0, D, &counters_.ccd_tests);
 }
 
 double MeshColliderTerm::sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const {

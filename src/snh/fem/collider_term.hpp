@@ -15,7 +15,9 @@
 // max_step: d along a linear path x + τ dx is convex (the distance to a convex set is convex), so its
 // tangent at τ lies below it: stepping to the tangent's root of d(τ) = d(0)/10 never passes the true
 // root; repeated (Newton from the left on a convex function) it climbs to it. Each vertex keeps at least
-// a tenth of its distance; a vertex not approaching (d′ ≥ 0) does not limit the step.
+// a tenth of its distance; a vertex not approaching (d′ ≥ 0) does not limit the step. A plane's d is linear
+// along the step, so its root is exact at once: τ = 0.9 d / (−d′). The plane is the one barrier against a
+// half-space, fixed (the ground: an empty pose) or moving.
 //
 // MeshColliderTerm: a triangle mesh against the simulated surface: simulated vertex – collider triangle,
 // collider vertex – simulated triangle and simulated edge – collider edge candidates (the broad phase over
@@ -40,14 +42,18 @@
 // tenth would be found a hair short again and again (the fist with its bones' capsules split one step 200
 // times so, creeping towards the boundary).
 //
-// Embedded points (a flesh's render surface inside its lattice or tets): the second constructors take the
-// colliding points as p_i = Σ_k W(k, i) x_{I(k, i)} (fem/embedded_points.hpp). Everything above then runs on
+// Statistics (contact_term_base.hpp): a shape's active pairs are its points within d̂, a mesh's its
+// candidates within d̂.
+//
+// Embedded points (a flesh's render surface inside its lattice or tets): the terms take the colliding
+// points as p_i = Σ_k W(k, i) x_{I(k, i)} (fem/embedded_points.hpp). Everything above then runs on
 // the points: a shape's distance, barrier and derivatives per point, a mesh's candidates between the
 // points' surface and the collider's; the derivatives over the points (a mesh pair's 12 by 12 Hessian
 // projected first, then its simulated points' rows kept) are pulled back by the chain rule, g_x = Jᵀ g_p and
 // H_x = Jᵀ H_p J, so the Hessian stays PSD; the stencil couples each point's cell (a shape: fixed, the
 // cells' own coupling; a mesh: the cells of each pair's simulated points); max_step and sweep run on the
-// points' motion W dx, exact as the map is linear. The direct constructors keep their own arithmetic.
+// points' motion W dx, exact as the map is linear. Plain points (a mesh's own boundary vertices, one weight 1
+// each) keep their own arithmetic: direct gathers and scatters.
 #include <array>
 #include <functional>
 #include <vector>
@@ -55,8 +61,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "snh/fem/contact_term_base.hpp"
 #include "snh/fem/embedded_points.hpp"
-#include "snh/fem/term.hpp"
 #include "snh/math/types.hpp"
 
 namespace snh {
@@ -99,17 +105,14 @@ struct ColliderFrame {
 /// (d convex along the line); 0 when q is not outside.
 [[nodiscard]] double shape_step(const ColliderShape& shape, const Vec3& q, const Vec3& dq, double keep = 0.1);
 
-class ShapeColliderTerm final : public Term {
+class ShapeColliderTerm final : public ContactTermBase {
  public:
-  /// vertices  the simulated vertices that collide (each once; e.g. the surface's)
+  /// points  the colliding points, each once: a mesh's boundary vertices as plain points
+  ///         (EmbeddedPoints::plain), or a render surface's points embedded in the volume
+  /// shape   a plane (fixed: an empty pose), sphere, capsule or box
   /// Throws std::invalid_argument (one line) for a shape that is not valid (radius, half extents, normal,
-  /// non-finite numbers), d̂ or κ not finite and > 0, or a negative vertex id.
-  ShapeColliderTerm(std::vector<int> vertices, ColliderShape shape, ColliderPose pose, double dhat, double stiffness);
-  /// Embedded points (a flesh's render surface): vertex and weight k by #p, point i = Σ_k weight(k, i)
-  /// x_{vertex(k, i)} (see "Embedded points" above). Throws as above, and for shapes that differ or a
-  /// non-finite weight.
-  ShapeColliderTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, ColliderShape shape, ColliderPose pose, double dhat,
-                    double stiffness);
+  /// non-finite numbers) or d̂ or κ not finite and > 0.
+  ShapeColliderTerm(EmbeddedPoints points, ColliderShape shape, ColliderPose pose, double dhat, double stiffness);
 
   [[nodiscard]] std::string_view name() const override { return "collider"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
@@ -121,40 +124,37 @@ class ShapeColliderTerm final : public Term {
   [[nodiscard]] bool moving() const override { return static_cast<bool>(pose_); }
   [[nodiscard]] double sweep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double t0, double t1) const override;
 
-  /// The distance of vertex v from the shape at its current pose (negative inside).
-  [[nodiscard]] double distance(const Eigen::VectorXd& x, int v) const;
-  /// The number of colliding points (the vertices given, or the embedded points).
+  /// The number of colliding points.
   [[nodiscard]] Eigen::Index point_count() const { return points_.size(); }
-  /// The distance of point i (the i-th vertex given, or the i-th embedded point) at the current pose.
+  /// The distance of point i from the shape at its current pose (negative inside; a plane's: signed).
   [[nodiscard]] double point_distance(const Eigen::VectorXd& x, Eigen::Index i) const;
+  /// The points closer than d̂ at x.
+  [[nodiscard]] int active_pairs(const Eigen::VectorXd& x) const override;
   /// The smallest distance over the points at the current pose (+∞ without points).
-  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const;
+  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const override;
 
  private:
   using Frame = ColliderFrame;
   [[nodiscard]] Frame frame_at(double t) const { return collider_frame(pose_, t); }
-  EmbeddedPoints points_;  ///< plain vertices: one weight 1 each
-  bool embedded_ = false;
+  EmbeddedPoints points_;
+  bool embedded_ = false;  ///< points with weights (not plain: scattered through them)
   ColliderShape shape_;
   ColliderPose pose_;
   Frame frame_;
   double dhat_, kappa_;
 };
 
-class MeshColliderTerm final : public Term {
+class MeshColliderTerm final : public ContactTermBase {
  public:
-  /// F          3 by #F triangles of the simulated surface (vertex ids of the volume mesh)
-  /// rest       3 by #V rest positions of every simulated vertex (mollifier thresholds)
-  /// V, T       the collider's base vertices and triangles (T's ids into V)
+  /// F            3 by #F triangles of the simulated surface over the points (ids into `points`)
+  /// points       the simulated surface's vertices as points of the volume: a mesh's boundary as plain
+  ///              vertices (EmbeddedPoints::every(#V)), or a render surface embedded in the volume
+  /// volume_rest  3 by #V the volume at rest (the points' rest positions give the mollifier thresholds)
+  /// V, T         the collider's base vertices and triangles (T's ids into V)
   /// Throws std::invalid_argument (one line) for ids out of range, a repeated vertex in a triangle,
   /// non-finite positions, d̂ or κ not finite and > 0.
-  MeshColliderTerm(const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T,
-                   ColliderPose pose, double dhat, double stiffness);
-  /// An embedded simulated surface: F's ids are points, point i = Σ_k weight(k, i) x_{vertex(k, i)} (vertex
-  /// and weight k by #p; volume_rest 3 by #V the volume at rest, whose W X give the mollifier thresholds).
-  /// Throws as above, and for shapes that differ, a non-finite weight or a volume vertex id out of range.
-  MeshColliderTerm(const Eigen::Matrix3Xi& F, Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const Eigen::Matrix3Xd& volume_rest,
-                   Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T, ColliderPose pose, double dhat, double stiffness);
+  MeshColliderTerm(const Eigen::Matrix3Xi& F, EmbeddedPoints points, const Eigen::Matrix3Xd& volume_rest, Eigen::Matrix3Xd V,
+                   const Eigen::Matrix3Xi& T, ColliderPose pose, double dhat, double stiffness);
 
   [[nodiscard]] std::string_view name() const override { return "mesh collider"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
@@ -170,14 +170,12 @@ class MeshColliderTerm final : public Term {
   /// The collider's vertices at the current pose (3 by #V of the collider).
   [[nodiscard]] const Eigen::Matrix3Xd& collider_vertices() const { return placed_; }
   [[nodiscard]] const Eigen::Matrix3Xi& collider_triangles() const { return collider_T_; }
+  /// The candidate pairs between the two surfaces closer than d̂ at x.
+  [[nodiscard]] int active_pairs(const Eigen::VectorXd& x) const override;
   /// The smallest distance between the two surfaces over candidates within d̂ at x; d̂ if there is none.
-  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const;
+  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const override;
 
  private:
-  /// Both constructors: the simulated surface F over the points `all` (rest positions `rest_points`).
-  MeshColliderTerm(const Eigen::Matrix3Xi& F, const EmbeddedPoints& all, const Eigen::Matrix3Xd& rest_points,
-                   Eigen::Index volume_vertices, bool embedded, Eigen::Matrix3Xd V, const Eigen::Matrix3Xi& T, ColliderPose pose,
-                   double dhat, double stiffness);
   struct Candidate {
     bool edge_edge;
     std::array<int, 4> local;  ///< combined ids (simulated surface vertices first, then the collider's)
@@ -189,12 +187,14 @@ class MeshColliderTerm final : public Term {
   [[nodiscard]] std::vector<Candidate> candidates(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, double dhat) const;
   /// A candidate's combined ids with the collider's replaced by −1 (EmbeddedPoints::scatter's slots).
   [[nodiscard]] std::array<int, 4> simulated_slots(const std::array<int, 4>& local) const;
-  /// The smallest CCD fraction of the candidates for the step V0 → V0 + D.
-  [[nodiscard]] double ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D) const;
+  /// The smallest CCD fraction of the candidates for the step V0 → V0 + D (their count added to *tested).
+  [[nodiscard]] double ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D, long long* tested = nullptr) const;
   [[nodiscard]] Eigen::Matrix3Xd placed_at(double t) const;
-  std::vector<int> surface_vertices_;  ///< the given id (vertex or point) of each simulated surface vertex (local id order)
-  EmbeddedPoints points_;              ///< the simulated surface's points in local order (plain: one weight 1 each)
-  bool embedded_ = false;
+  /// The squared distances of the candidates within d̂ at x (the statistics).
+  [[nodiscard]] std::vector<double> close_distances(const Eigen::VectorXd& x) const;
+  std::vector<int> surface_vertices_;  ///< the point id of each simulated surface vertex (local id order)
+  EmbeddedPoints points_;              ///< the simulated surface's points in local order
+  bool embedded_ = false;              ///< points with weights (not plain: scattered through them)
   Eigen::Index volume_vertices_ = 0;
   int triangles_simulated_ = 0;        ///< triangles below this index are the simulated surface's
   Eigen::Matrix3Xi F_;                 ///< combined triangles

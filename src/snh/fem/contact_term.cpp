@@ -1,7 +1,6 @@
 #include "snh/fem/contact_term.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -44,19 +43,6 @@ Derivatives<N> weighted_barrier(const Derivatives<N>& s, double s_hat, double sc
   return b;
 }
 
-/// Adds the wall time of its scope to a counter.
-class Timed {
- public:
-  explicit Timed(double& seconds) : seconds_(seconds), start_(std::chrono::steady_clock::now()) {}
-  ~Timed() { seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
-  Timed(const Timed&) = delete;
-  Timed& operator=(const Timed&) = delete;
-
- private:
-  double& seconds_;
-  std::chrono::steady_clock::time_point start_;
-};
-
 /// Adds a pair's energy derivatives (over its `N/3` vertices) to the gradient and the Hessian.
 template <int N>
 void scatter_direct(const Derivatives<N>& d, const std::array<int, 4>& ids, Eigen::VectorXd* gradient,
@@ -87,26 +73,15 @@ ContactPair point_edge(int v, int e0, int e1, double s) {
 
 }  // namespace
 
-ContactTerm::ContactTerm(Eigen::Matrix3Xi F, Eigen::Matrix3Xd rest, double dhat, double stiffness)
-    : F_(std::move(F)), volume_vertices_(rest.cols()), dhat_(dhat), kappa_(stiffness) {
-  check_positive("dhat", dhat_);
-  check_positive("stiffness", kappa_);
-  if (!rest.allFinite()) throw std::invalid_argument("contact: the rest positions are not all finite");
-  number_surface(rest.cols());
-  surface_rest_ = positions(Eigen::Map<const Eigen::VectorXd>(rest.data(), rest.size()));
-}
-
-ContactTerm::ContactTerm(Eigen::Matrix3Xi F, Eigen::MatrixXi vertex, Eigen::MatrixXd weight,
-                         const Eigen::Matrix3Xd& volume_rest, double dhat, double stiffness)
-    : F_(std::move(F)), volume_vertices_(volume_rest.cols()), embedded_(true), dhat_(dhat), kappa_(stiffness) {
+ContactTerm::ContactTerm(Eigen::Matrix3Xi F, EmbeddedPoints points, const Eigen::Matrix3Xd& volume_rest, double dhat,
+                         double stiffness)
+    : F_(std::move(F)), volume_vertices_(volume_rest.cols()), embedded_(!points.is_plain()), dhat_(dhat), kappa_(stiffness) {
   check_positive("dhat", dhat_);
   check_positive("stiffness", kappa_);
   if (!volume_rest.allFinite()) throw std::invalid_argument("contact: the rest positions are not all finite");
-  if (vertex.rows() < 1)
-    throw std::invalid_argument(fmt::format("contact: embedded vertex ids ({} by {}) need at least one row", vertex.rows(), vertex.cols()));
-  const EmbeddedPoints all(std::move(vertex), std::move(weight), "contact: embedded surface", volume_vertices_);
-  number_surface(all.size());
-  points_ = all.select(surface_vertices_);  // only the points the triangles use, in the local order
+  points.check_vertices(volume_vertices_, "contact: surface points");
+  number_surface(points.size());
+  points_ = points.select(surface_vertices_);  // only the points the triangles use, in the local order
   surface_rest_ = positions(Eigen::Map<const Eigen::VectorXd>(volume_rest.data(), volume_rest.size()));
 }
 
@@ -137,7 +112,7 @@ Eigen::Matrix3Xd ContactTerm::positions(const Eigen::VectorXd& x) const {
     throw std::logic_error(fmt::format("contact: {} DOFs for {} vertices", x.size(), volume_vertices_));
   Eigen::Matrix3Xd V(3, static_cast<Eigen::Index>(surface_vertices_.size()));
   if (!embedded_) {
-    for (Eigen::Index i = 0; i < V.cols(); ++i) V.col(i) = x.segment<3>(3 * surface_vertices_[static_cast<std::size_t>(i)]);
+    for (Eigen::Index i = 0; i < V.cols(); ++i) V.col(i) = x.segment<3>(3 * vertex_of(i));
     return V;
   }
   return points_.points(x);
@@ -149,7 +124,7 @@ void ContactTerm::scatter(const Derivatives<N>& d, const std::array<int, 4>& ids
   constexpr int M = N / 3;
   if (!embedded_) {
     std::array<int, 4> global = ids;
-    for (int i = 0; i < M; ++i) global[i] = surface_vertices_[static_cast<std::size_t>(ids[i])];
+    for (int i = 0; i < M; ++i) global[i] = vertex_of(ids[i]);
     scatter_direct(d, global, gradient, hessian);
     return;
   }
@@ -268,7 +243,7 @@ double ContactTerm::energy(const Eigen::VectorXd& x) const { return evaluate(x, 
 
 double ContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                              PsdProjection projection) const {
-  const Timed timed(counters_.seconds);
+  const ScopeTimer timed(counters_.seconds);
   if (!x.allFinite()) return std::numeric_limits<double>::quiet_NaN();
   const Eigen::Matrix3Xd* P = nullptr;
   const std::vector<ContactPair>& pairs = pairs_at(x, &P);
@@ -317,14 +292,14 @@ double ContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
 }
 
 void ContactTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
-  const Timed timed(counters_.seconds);
+  const ScopeTimer timed(counters_.seconds);
   out.arity = 2;
   out.vertices.clear();
   if (!x.allFinite()) return;
   if (!embedded_) {
-    for (const ContactPair& p : pairs(x))
+    for (const ContactPair& p : pairs_at(x))
       for (int i = 0; i < p.arity(); ++i)
-        for (int j = i + 1; j < p.arity(); ++j) out.vertices.insert(out.vertices.end(), {p.vertices[i], p.vertices[j]});
+        for (int j = i + 1; j < p.arity(); ++j) out.vertices.insert(out.vertices.end(), {vertex_of(p.vertices[i]), vertex_of(p.vertices[j])});
     return;
   }
   for (const ContactPair& p : pairs_at(x)) points_.couple(p.vertices, p.arity(), out.vertices);
@@ -337,7 +312,7 @@ double ContactTerm::min_distance(const Eigen::VectorXd& x) const {
 }
 
 double ContactTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
-  const Timed timed(counters_.seconds);
+  const ScopeTimer timed(counters_.seconds);
   ++counters_.ccd_calls;
   if (!x.allFinite() || !dx.allFinite()) return 1.0;  // the line search rejects what follows
   const Eigen::Matrix3Xd V0 = positions(x), D = positions(dx);  // D = W dx: the points move linearly too
@@ -369,99 +344,6 @@ double ipc_barrier_stiffness(double bbox_diagonal, double dhat, double average_m
   if (!(d0 < s_hat)) d0 = 0.5 * s_hat;  // a d̂ below 1e-8 of the scene: the barrier's own middle
   const double scaled = 1e11 * average_mass / (4.0 * d0 * contact::barrier_second_derivative(d0, s_hat));
   return scaled / (dt * dt);
-}
-
-// ---------------------------------------------------------------------------------------------------------
-
-PlaneContactTerm::PlaneContactTerm(std::vector<int> vertices, const Eigen::Vector3d& point,
-                                   const Eigen::Vector3d& normal, double dhat, double stiffness)
-    : PlaneContactTerm(Eigen::Map<const Eigen::RowVectorXi>(vertices.data(), static_cast<Eigen::Index>(vertices.size())),
-                       Eigen::MatrixXd::Ones(1, static_cast<Eigen::Index>(vertices.size())), point, normal, dhat, stiffness) {}
-
-PlaneContactTerm::PlaneContactTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const Eigen::Vector3d& point,
-                                   const Eigen::Vector3d& normal, double dhat, double stiffness)
-    : points_(std::move(vertex), std::move(weight), "contact: plane points", -1), point_(point), dhat_(dhat), kappa_(stiffness) {
-  check_positive("dhat", dhat_);
-  check_positive("stiffness", kappa_);
-  if (!point.allFinite()) throw std::invalid_argument("contact: the plane's point is not finite");
-  if (!normal.allFinite() || !(normal.norm() > 0.0))
-    throw std::invalid_argument("contact: the plane's normal must be finite and non-zero");
-  normal_ = normal.normalized();
-}
-
-double PlaneContactTerm::distance(const Eigen::VectorXd& x, Eigen::Index i) const {
-  return normal_.dot(points_.point(x, i) - point_);
-}
-
-double PlaneContactTerm::energy(const Eigen::VectorXd& x) const {
-  return evaluate(x, nullptr, nullptr, PsdProjection::none);
-}
-
-double PlaneContactTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
-                                  PsdProjection projection) const {
-  const Timed timed(counters_.seconds);
-  const Eigen::MatrixXi& V = points_.vertex();
-  const Eigen::MatrixXd& W = points_.weight();
-  const double s_hat = dhat_ * dhat_;
-  double e = 0.0;
-  for (Eigen::Index i = 0; i < points_.size(); ++i) {
-    const double d = distance(x, i);
-    if (std::isnan(d)) return std::numeric_limits<double>::quiet_NaN();
-    if (d <= 0.0) return std::numeric_limits<double>::infinity();
-    const double s = d * d;
-    if (!(s < s_hat)) continue;
-    const double b1 = contact::barrier_first_derivative(s, s_hat);
-    e += kappa_ * contact::barrier(s, s_hat);
-    // Through the weights: ∂p/∂x_a = w_a I, so g_a = w_a g_p and H_ab = w_a w_b H_pp (a rank-one c n nᵀ).
-    if (gradient)
-      for (Eigen::Index k = 0; k < points_.arity(); ++k)
-        gradient->segment<3>(3 * V(k, i)) += (W(k, i) * (kappa_ * b1 * 2.0 * d)) * normal_;
-    if (hessian) {
-      double c = kappa_ * (4.0 * s * contact::barrier_second_derivative(s, s_hat) + 2.0 * b1);
-      if (projection != PsdProjection::none) c = std::max(c, 0.0);  // clamped, as the pairs' projection
-      for (Eigen::Index a = 0; a < points_.arity(); ++a)
-        for (Eigen::Index b = a; b < points_.arity(); ++b) {
-          // Two weights on one vertex (not in a cell, but allowed) add their cross terms to its diagonal block.
-          const double w = W(a, i) * W(b, i) * (a != b && V(a, i) == V(b, i) ? 2.0 : 1.0);
-          hessian->add_block(V(a, i), V(b, i), (w * c) * normal_ * normal_.transpose());
-        }
-    }
-  }
-  return e;
-}
-
-void PlaneContactTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) const {
-  out.vertices.clear();
-  out.arity = 0;
-  if (points_.arity() < 2) return;  // plain vertices: a diagonal Hessian
-  out.arity = static_cast<int>(points_.arity());
-  out.vertices.assign(points_.vertex().data(), points_.vertex().data() + points_.vertex().size());
-}
-
-double PlaneContactTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
-  const Timed timed(counters_.seconds);
-  ++counters_.ccd_calls;
-  counters_.ccd_tests += points_.size();
-  double t = 1.0;
-  for (Eigen::Index i = 0; i < points_.size(); ++i) {
-    const double d = distance(x, i), approach = -normal_.dot(points_.point(dx, i));  // the point moves by W dx
-    // d + t·(−approach) ≥ d/10  ⇔  t ≤ 0.9 d / approach (exact for the linear motion)
-    if (d > 0.0 && approach > 0.0) t = std::min(t, 0.9 * d / approach);
-  }
-  return t;
-}
-
-int PlaneContactTerm::active_pairs(const Eigen::VectorXd& x) const {
-  int n = 0;
-  for (Eigen::Index i = 0; i < points_.size(); ++i)
-    if (distance(x, i) < dhat_) ++n;
-  return n;
-}
-
-double PlaneContactTerm::min_distance(const Eigen::VectorXd& x) const {
-  double m = dhat_;
-  for (Eigen::Index i = 0; i < points_.size(); ++i) m = std::min(m, distance(x, i));
-  return m;
 }
 
 }  // namespace snh

@@ -1,10 +1,10 @@
 #pragma once
-// Contact as energy terms of the problem Newton minimises (IPC, Li et al. 2020): a barrier on the squared
-// distances of the pairs of a triangle surface that come closer than d̂ (self-contact, ContactTerm), and a
-// barrier keeping vertices above a plane (PlaneContactTerm). Both bound every Newton step by continuous
-// collision detection (max_step), so no iterate the line search tries ever has a pair in contact.
+// Self-contact as an energy term of the problem Newton minimises (IPC, Li et al. 2020): a barrier on the
+// squared distances of the pairs of a triangle surface that come closer than d̂ (ContactTerm). It bounds
+// every Newton step by continuous collision detection (max_step), so no iterate the line search tries ever
+// has a pair in contact. Planes and other colliders: collider_term.hpp.
 //
-// ContactTerm at x (the surface's vertices are vertices of the volume mesh: x holds them all):
+// ContactTerm at x (the surface's vertices are points of the volume mesh, x holds the volume's vertices):
 //   1. candidates: the broad phase (contact/broad_phase.hpp) with the static boxes of x grown by d̂/2:
 //      vertex–triangle and edge–edge pairs that share no vertex, over the surface's vertices only (the
 //      volume's interior vertices never collide);
@@ -40,15 +40,14 @@
 // additive CCD (contact/ccd.hpp) of every vertex–triangle and edge–edge candidate: the smallest t, in
 // (0, 1] for a separated x.
 //
-// Embedded surfaces (a flesh's render surface inside its lattice or tets): the second constructor takes the
-// surface's vertices as points of the volume, p_i = Σ_k W(k, i) x_{I(k, i)} (k = 8 trilinear or 4 barycentric
-// weights). Everything above then runs on the points p = W x: candidates, pairs (adjacency by the surface's
+// Embedded surfaces (a flesh's render surface inside its lattice or tets): the surface's vertices are points
+// of the volume, p_i = Σ_k W(k, i) x_{I(k, i)} (k = 8 trilinear or 4 barycentric weights). Everything above then runs on the points p = W x: candidates, pairs (adjacency by the surface's
 // own vertex ids), merging, barriers. The pair's derivatives over its points (its 2 to 4 points, 6 to 12
 // coordinates) are PSD-projected first (when asked) and then pulled back to the volume by the chain rule:
 // g_x = Jᵀ g_p and H_x = Jᵀ H_p J with J the pair's weights (so H_x stays PSD); the stencil couples every
 // volume vertex of the pair's cells (up to 32); max_step runs CCD on the points' motion dp = W dx, which is
-// exactly linear in the step. The direct constructor is the case of one weight 1 per point, kept on its own
-// path (plain gathers and scatters, bit-identical to before).
+// exactly linear in the step. Plain points (one weight 1 each: a mesh's own boundary) take their own path,
+// plain gathers and scatters of the vertices' coordinates.
 #include <array>
 #include <vector>
 
@@ -56,31 +55,10 @@
 
 #include "snh/contact/broad_phase.hpp"
 #include "snh/contact/distance_core.hpp"
+#include "snh/fem/contact_term_base.hpp"
 #include "snh/fem/embedded_points.hpp"
-#include "snh/fem/term.hpp"
 
 namespace snh {
-
-/// What a contact term did since its counters were last reset (statistics per frame).
-struct ContactCounters {
-  double seconds = 0.0;     ///< wall time in energy, evaluate, stencil and max_step
-  long long ccd_calls = 0;  ///< max_step evaluations
-  long long ccd_tests = 0;  ///< primitive pairs (self-contact) or points (plane) max_step tested
-};
-
-/// What the contact terms share for statistics: counters, and the active pairs and smallest distance at x.
-class ContactTermBase : public Term {
- public:
-  /// Active pairs at x (self-contact: merged pairs with s < ŝ; plane: points closer than d̂).
-  [[nodiscard]] virtual int active_pairs(const Eigen::VectorXd& x) const = 0;
-  /// The smallest distance of an active pair at x; d̂ if there is none.
-  [[nodiscard]] virtual double min_distance(const Eigen::VectorXd& x) const = 0;
-  [[nodiscard]] const ContactCounters& counters() const { return counters_; }
-  void reset_counters() { counters_ = {}; }
-
- protected:
-  mutable ContactCounters counters_;
-};
 
 /// One contact pair of ContactTerm (exposed for tests and statistics).
 struct ContactPair {
@@ -97,24 +75,17 @@ struct ContactPair {
 
 class ContactTerm final : public ContactTermBase {
  public:
-  /// F          3 by #F triangles of the contact surface, vertex ids of the volume mesh (e.g.
-  ///            boundary_triangles(mesh))
-  /// rest       3 by #V rest positions of every vertex (the mollifier thresholds come from them)
-  /// dhat       the distance below which pairs repel (> 0)
-  /// stiffness  κ (> 0)
-  /// Throws std::invalid_argument (one line) for a vertex id out of range, a degenerate triangle (a
-  /// repeated vertex), d̂ or κ not finite and > 0, or non-finite rest positions.
-  ContactTerm(Eigen::Matrix3Xi F, Eigen::Matrix3Xd rest, double dhat, double stiffness);
-  /// An embedded surface:
-  /// F            3 by #F triangles over the points (ids into the columns of vertex and weight)
-  /// vertex       k by #p: the volume vertices point i is interpolated from (k ≥ 1)
-  /// weight       k by #p: their weights
-  /// volume_rest  3 by #V rest positions of the volume (the points' rest positions W X give the mollifier
+  /// F            3 by #F triangles over the points (ids into `points`)
+  /// points       the surface's vertices as points of the volume: a mesh's own boundary as plain vertices
+  ///              (EmbeddedPoints::every(#V) with F = boundary_triangles(mesh)), or a render surface embedded
+  ///              in the volume (k weights per point)
+  /// volume_rest  3 by #V rest positions of the volume (the points' rest positions give the mollifier
   ///              thresholds)
-  /// Throws std::invalid_argument (one line) as above, and for a volume vertex id out of range, a
-  /// non-finite weight or vertex and weight of different shapes.
-  ContactTerm(Eigen::Matrix3Xi F, Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const Eigen::Matrix3Xd& volume_rest,
-              double dhat, double stiffness);
+  /// dhat         the distance below which pairs repel (> 0)
+  /// stiffness    κ (> 0)
+  /// Throws std::invalid_argument (one line) for a point id out of range, a degenerate triangle (a repeated
+  /// vertex), a volume vertex id out of range, d̂ or κ not finite and > 0, or non-finite rest positions.
+  ContactTerm(Eigen::Matrix3Xi F, EmbeddedPoints points, const Eigen::Matrix3Xd& volume_rest, double dhat, double stiffness);
 
   [[nodiscard]] std::string_view name() const override { return "contact"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
@@ -124,16 +95,16 @@ class ContactTerm final : public ContactTermBase {
   [[nodiscard]] bool stencil_varies() const override { return true; }
   [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 
-  /// The active pairs at x (s < ŝ), merged and sorted as described above.
+  /// The active pairs at x (s < ŝ), merged and sorted as described above, their ids the points'.
   [[nodiscard]] std::vector<ContactPair> pairs(const Eigen::VectorXd& x) const;
   [[nodiscard]] int active_pairs(const Eigen::VectorXd& x) const override;
   /// The smallest distance (not squared) over all candidate pairs within d̂ at x; d̂ if there is none.
   [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const override;
-  /// The surface's vertex positions at x (3 by #surface vertices: the direct surface's vertices in
-  /// increasing id order, an embedded surface's points that F uses, in increasing order).
+  /// The surface's vertex positions at x (3 by #surface vertices: the points that F uses, in increasing
+  /// order).
   [[nodiscard]] Eigen::Matrix3Xd positions(const Eigen::VectorXd& x) const;
 
-  [[nodiscard]] const Eigen::Matrix3Xi& triangles() const { return F_; }
+  [[nodiscard]] const Eigen::Matrix3Xi& triangles() const { return F_; }  ///< over the points
   [[nodiscard]] const Eigen::Matrix2Xi& edges() const { return E_; }
   [[nodiscard]] double dhat() const { return dhat_; }
   [[nodiscard]] double stiffness() const { return kappa_; }
@@ -145,19 +116,21 @@ class ContactTerm final : public ContactTermBase {
   const std::vector<ContactPair>& pairs_at(const Eigen::VectorXd& x, const Eigen::Matrix3Xd** P = nullptr) const;
   /// Numbers the surface's vertices (ids of F, increasing) and lists its edges.
   void number_surface(Eigen::Index id_count);
+  /// The volume vertex of local surface vertex i (plain points).
+  [[nodiscard]] int vertex_of(Eigen::Index i) const { return points_.vertex()(0, i); }
   /// The active pairs at the surface positions P, in local ids.
   std::vector<ContactPair> local_pairs(const Eigen::Matrix3Xd& P) const;
   /// Adds a pair's derivatives (over its local points `ids`) to the volume's gradient and Hessian.
   template <int N>
   void scatter(const contact::Derivatives<N>& d, const std::array<int, 4>& ids, Eigen::VectorXd* gradient,
                const HessianValues* hessian) const;
-  Eigen::Matrix3Xi F_, local_F_;        ///< triangles in the given ids and in surface ids
+  Eigen::Matrix3Xi F_, local_F_;        ///< triangles in point ids and in surface ids
   Eigen::Matrix2Xi E_, local_E_;        ///< edges likewise
-  std::vector<int> surface_vertices_;   ///< the given id of each surface vertex, increasing
+  std::vector<int> surface_vertices_;   ///< the point id of each surface vertex, increasing
   Eigen::Matrix3Xd surface_rest_;       ///< rest positions of the surface vertices
   Eigen::Index volume_vertices_ = 0;    ///< #V of the x the term is given
-  bool embedded_ = false;
-  EmbeddedPoints points_;               ///< embedded: the surface's points, in local order
+  bool embedded_ = false;               ///< points with weights (not plain: gathered and scattered through them)
+  EmbeddedPoints points_;               ///< the surface's points, in local order
   double dhat_, kappa_;
   mutable Eigen::VectorXd cache_x_;     ///< pairs_at's last x (empty: none)
   mutable Eigen::Matrix3Xd cache_positions_;
@@ -180,41 +153,5 @@ class ContactTerm final : public ContactTermBase {
 /// distances keep shrinking; snh keeps it fixed. Throws std::invalid_argument (one line) for an argument
 /// that is not finite and > 0.
 [[nodiscard]] double ipc_barrier_stiffness(double bbox_diagonal, double dhat, double average_mass, double dt);
-
-/// A fixed plane n·x = n·p that vertices (or embedded points p = Σ w x, the second constructor) stay above (on the side n points to): for each vertex at signed
-/// distance d = n·(x − p) (n of unit length) with d² < d̂², the energy κ b(d², d̂²); a vertex at or below the
-/// plane makes the energy +∞. The Hessian per vertex is κ(4d²b'' + 2b') n nᵀ (rank one; its projection
-/// clamps the coefficient at 0). max_step: each vertex moving towards the plane keeps at least a tenth of
-/// its distance (exact: the motion is linear), min 1. An embedded point's derivatives go through its weights
-/// (gradient w_a g, Hessian w_a w_b c n nᵀ: still PSD once c is clamped), its stencil its cell's vertices.
-class PlaneContactTerm final : public ContactTermBase {
- public:
-  /// vertices   the vertex ids that collide with the plane (each once; e.g. the surface's vertices)
-  /// point, normal  a point of the plane and its normal (any non-zero length: it is normalised)
-  /// Throws std::invalid_argument (one line) for a zero or non-finite normal, a non-finite point, d̂ or κ
-  /// not finite and > 0, or a negative vertex id.
-  PlaneContactTerm(std::vector<int> vertices, const Eigen::Vector3d& point, const Eigen::Vector3d& normal, double dhat,
-                   double stiffness);
-  /// Embedded points: vertex and weight k by #p (each column a point: its volume vertices and weights).
-  /// Throws as above, and for shapes that differ or a non-finite weight.
-  PlaneContactTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const Eigen::Vector3d& point,
-                   const Eigen::Vector3d& normal, double dhat, double stiffness);
-
-  [[nodiscard]] std::string_view name() const override { return "plane"; }
-  [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
-  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
-                  PsdProjection projection) const override;
-  void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
-  [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
-  [[nodiscard]] int active_pairs(const Eigen::VectorXd& x) const override;
-  [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const override;
-  /// Signed distance of point i (the i-th vertex given, or the i-th embedded point) above the plane at x.
-  [[nodiscard]] double distance(const Eigen::VectorXd& x, Eigen::Index i) const;
-
- private:
-  EmbeddedPoints points_;  ///< k by #p (k = 1 for plain vertices)
-  Eigen::Vector3d point_, normal_;
-  double dhat_, kappa_;
-};
 
 }  // namespace snh

@@ -14,6 +14,10 @@ EmbeddedPoints::EmbeddedPoints(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, c
     throw std::invalid_argument(fmt::format("{}: vertex ids ({} by {}) and weights ({} by {}) differ in shape", who,
                                             vertex_.rows(), vertex_.cols(), weight_.rows(), weight_.cols()));
   if (!weight_.allFinite()) throw std::invalid_argument(fmt::format("{}: the weights are not all finite", who));
+  check_vertices(volume_vertices, who);
+}
+
+void EmbeddedPoints::check_vertices(Eigen::Index volume_vertices, const std::string& who) const {
   for (Eigen::Index i = 0; i < vertex_.size(); ++i) {
     const int v = vertex_.data()[i];
     if (v < 0 || (volume_vertices >= 0 && v >= volume_vertices))
@@ -28,6 +32,15 @@ EmbeddedPoints EmbeddedPoints::plain(const std::vector<int>& vertices, const std
   const auto n = static_cast<Eigen::Index>(vertices.size());
   return {Eigen::Map<const Eigen::RowVectorXi>(vertices.data(), n), Eigen::MatrixXd::Ones(1, n), who, -1};
 }
+
+EmbeddedPoints EmbeddedPoints::every(Eigen::Index n) {
+  EmbeddedPoints out;
+  out.vertex_ = Eigen::RowVectorXi::LinSpaced(n, 0, static_cast<int>(n) - 1);
+  out.weight_ = Eigen::MatrixXd::Ones(1, n);
+  return out;
+}
+
+bool EmbeddedPoints::is_plain() const { return arity() == 1 && (weight_.array() == 1.0).all(); }
 
 EmbeddedPoints EmbeddedPoints::select(const std::vector<int>& ids) const {
   EmbeddedPoints out;

@@ -6,7 +6,9 @@
 // the distinct volume vertices involved),
 //     g_x = Jᵀ g_p,    H_x = Jᵀ H_p J,
 // so a PSD H_p (projected first) gives a PSD H_x. The map is linear: a step dx moves the points by W dx
-// exactly, which is what the terms' continuous collision detection runs on.
+// exactly, which is what the terms' continuous collision detection runs on. A mesh's own surface is the case
+// of one weight 1 per point (is_plain): every contact term takes its points this way, whether they are a
+// volume's boundary vertices or a render surface embedded in it.
 #include <array>
 #include <string>
 #include <vector>
@@ -29,6 +31,15 @@ class EmbeddedPoints {
   EmbeddedPoints(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, const std::string& who, Eigen::Index volume_vertices);
   /// Plain vertices: one weight 1 each.
   static EmbeddedPoints plain(const std::vector<int>& vertices, const std::string& who);
+  /// Throws std::invalid_argument (one line, starting with `who`) for a volume vertex id at or beyond
+  /// volume_vertices.
+  void check_vertices(Eigen::Index volume_vertices, const std::string& who) const;
+  /// Every vertex of a volume of n vertices as itself: point i is vertex i (a mesh's own surface).
+  static EmbeddedPoints every(Eigen::Index n);
+
+  /// True when each point is one vertex with weight exactly 1 (plain()/every()): the terms then gather and
+  /// scatter coordinates directly, bit for bit, instead of through the weights.
+  [[nodiscard]] bool is_plain() const;
 
   [[nodiscard]] Eigen::Index size() const { return vertex_.cols(); }
   [[nodiscard]] Eigen::Index arity() const { return vertex_.rows(); }

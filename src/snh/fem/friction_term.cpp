@@ -96,7 +96,7 @@ double LaggedFrictionTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g
       const Mat3 H = l.mu_lambda * (f.over_y * l.tangent + f.outer * u * u.transpose());
       for (std::size_t a = 0; a < l.vertex.size(); ++a)
         for (std::size_t b = a; b < l.vertex.size(); ++b) {
-          // Two coefficients on one vertex add their cross terms to its diagonal block (as PlaneContactTerm).
+          // Two coefficients on one vertex add their cross terms to its diagonal block.
           const double w = l.coef[a] * l.coef[b] * (a != b && l.vertex[a] == l.vertex[b] ? 2.0 : 1.0);
           hessian->add_block(l.vertex[a], l.vertex[b], w * H);
         }
@@ -107,19 +107,13 @@ double LaggedFrictionTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g
 
 // ---- against a collider
 
-FrictionTerm::FrictionTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, ColliderShape shape, ColliderPose pose, double dhat,
-                           double stiffness, double mu, double velocity)
-    : LaggedFrictionTerm(mu, velocity), points_(std::move(vertex), std::move(weight), "friction", -1), shape_(shape),
-      pose_(std::move(pose)), dhat_(dhat), kappa_(stiffness) {
+FrictionTerm::FrictionTerm(EmbeddedPoints points, ColliderShape shape, ColliderPose pose, double dhat, double stiffness, double mu,
+                           double velocity)
+    : LaggedFrictionTerm(mu, velocity), points_(std::move(points)), shape_(shape), pose_(std::move(pose)), dhat_(dhat),
+      kappa_(stiffness) {
   check(std::isfinite(dhat) && dhat > 0.0, "dhat", dhat);
   check(std::isfinite(stiffness) && stiffness > 0.0, "the stiffness", stiffness);
 }
-
-FrictionTerm::FrictionTerm(const std::vector<int>& vertices, ColliderShape shape, ColliderPose pose, double dhat, double stiffness,
-                           double mu, double velocity)
-    : FrictionTerm(Eigen::Map<const Eigen::RowVectorXi>(vertices.data(), static_cast<Eigen::Index>(vertices.size())),
-                   Eigen::MatrixXd::Ones(1, static_cast<Eigen::Index>(vertices.size())), shape, std::move(pose), dhat, stiffness, mu,
-                   velocity) {}
 
 void FrictionTerm::begin_step(const Eigen::VectorXd& x, double t0, double t1) {
   lagged_.clear();
@@ -158,10 +152,9 @@ void FrictionTerm::stencil(const Eigen::VectorXd& /*x*/, Stencil& out) const {
 
 // ---- between self-contact pairs
 
-SelfFrictionTerm::SelfFrictionTerm(std::shared_ptr<const ContactTerm> contact, Eigen::MatrixXi vertex, Eigen::MatrixXd weight,
-                                   double dhat, double stiffness, double mu, double velocity)
-    : LaggedFrictionTerm(mu, velocity), contact_(std::move(contact)), points_(std::move(vertex), std::move(weight), "friction", -1),
-      dhat_(dhat), kappa_(stiffness) {
+SelfFrictionTerm::SelfFrictionTerm(std::shared_ptr<const ContactTerm> contact, EmbeddedPoints points, double dhat, double stiffness,
+                                   double mu, double velocity)
+    : LaggedFrictionTerm(mu, velocity), contact_(std::move(contact)), points_(std::move(points)), dhat_(dhat), kappa_(stiffness) {
   if (!contact_) throw std::invalid_argument("friction: no contact term");
   check(std::isfinite(dhat) && dhat > 0.0, "dhat", dhat);
   check(std::isfinite(stiffness) && stiffness > 0.0, "the stiffness", stiffness);

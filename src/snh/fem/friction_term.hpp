@@ -64,24 +64,20 @@ class LaggedFrictionTerm : public Term {
 
 class FrictionTerm final : public LaggedFrictionTerm {
  public:
-  /// vertex, weight  k by #points: each point's volume vertices and weights (k = 1, weight 1: plain vertices)
+  /// points          the points that slide on the collider (plain vertices, or points embedded in the volume)
   /// shape, pose     the collider (as ShapeColliderTerm's; an empty pose: fixed)
   /// dhat, stiffness the collider's barrier (the normal force is its push)
   /// mu              the friction coefficient (≥ 0)
   /// velocity        ε_v (> 0): slip slower than this counts as sticking
-  /// Throws std::invalid_argument (one line) for sizes that differ, a negative vertex id, non-finite
-  /// weights, μ negative or not finite, or d̂, κ, ε_v not finite and > 0.
-  FrictionTerm(Eigen::MatrixXi vertex, Eigen::MatrixXd weight, ColliderShape shape, ColliderPose pose, double dhat,
-               double stiffness, double mu, double velocity);
-  /// Plain vertices.
-  FrictionTerm(const std::vector<int>& vertices, ColliderShape shape, ColliderPose pose, double dhat, double stiffness,
-               double mu, double velocity);
+  /// Throws std::invalid_argument (one line) for μ negative or not finite, or d̂, κ, ε_v not finite and > 0.
+  FrictionTerm(EmbeddedPoints points, ColliderShape shape, ColliderPose pose, double dhat, double stiffness, double mu,
+               double velocity);
 
   void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
   void begin_step(const Eigen::VectorXd& x, double t0, double t1) override;
 
  private:
-  EmbeddedPoints points_;  ///< plain vertices: one weight 1 each
+  EmbeddedPoints points_;
   ColliderShape shape_;
   ColliderPose pose_;
   double dhat_, kappa_;
@@ -97,12 +93,11 @@ class FrictionTerm final : public LaggedFrictionTerm {
 class SelfFrictionTerm final : public LaggedFrictionTerm {
  public:
   /// contact         the self-contact term (its pairs are asked at each step's start)
-  /// vertex, weight  k by #points: the surface's points as the term has them (for a term on volume vertices:
-  ///                 1 by #V, vertex i, weight 1)
+  /// points          the surface's points as the term has them (its pairs' ids are theirs)
   /// dhat, stiffness the term's d̂ and κ
   /// Throws std::invalid_argument (one line) as FrictionTerm, or for a null term.
-  SelfFrictionTerm(std::shared_ptr<const ContactTerm> contact, Eigen::MatrixXi vertex, Eigen::MatrixXd weight, double dhat,
-                   double stiffness, double mu, double velocity);
+  SelfFrictionTerm(std::shared_ptr<const ContactTerm> contact, EmbeddedPoints points, double dhat, double stiffness, double mu,
+                   double velocity);
 
   void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
   [[nodiscard]] bool stencil_varies() const override { return true; }

@@ -5,6 +5,7 @@
 // vertices their Hessian couples (stencil), may bound a Newton step (max_step: the largest safe fraction,
 // as continuous collision detection does for contact), may update lagged state when an iterate is
 // accepted, and may follow a script in time (at_time). A Problem (problem.hpp) sums them. PolyFEM's summed forms are the model.
+#include <limits>
 #include <string_view>
 
 #include <Eigen/Core>
@@ -13,6 +14,16 @@
 #include "snh/material/psd_projection.hpp"
 
 namespace snh {
+
+/// What the contact terms report for a frame (stats.json's contact columns): their active pairs and the
+/// smallest distance among them at the state reported, and what they did since they last reported.
+struct ContactStatistics {
+  int pairs = 0;                                                    ///< active pairs (points within d̂ of a collider count one each)
+  double min_distance = std::numeric_limits<double>::quiet_NaN();  ///< of an active pair; NaN without any
+  long long ccd_calls = 0;                                          ///< step bounds asked (max_step)
+  long long ccd_tests = 0;                                          ///< primitive pairs or points they tested
+  double seconds = 0.0;                                             ///< wall time in the contact terms
+};
 
 class Term {
  public:
@@ -49,6 +60,10 @@ class Term {
   /// at time t0; kinematic DOFs where they were then) and the time it solves for: a term with lagged data
   /// (friction: the normal forces and tangents of the step's start) takes them here.
   virtual void begin_step(const Eigen::VectorXd& /*x*/, double /*t0*/, double /*t1*/) {}
+  /// True for a contact term (self-contact, a collider): it has statistics to report.
+  [[nodiscard]] virtual bool reports_contact() const { return false; }
+  /// A contact term adds its statistics at x to `into` and starts counting anew; others add nothing.
+  virtual void report_contact(const Eigen::VectorXd& /*x*/, ContactStatistics& /*into*/) {}
   /// True for a term whose data move with time (a moving collider).
   [[nodiscard]] virtual bool moving() const { return false; }
   /// A moving term: the largest fraction α ∈ [0, 1] of the joint motion — the state from x to x + dx (every

@@ -271,8 +271,9 @@ std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Fle
       a.linear() = svd.singularValues().mean() * r;
       return a;
     };
-    terms.push_back(std::make_shared<ShapeColliderTerm>(skin.points.vertex(Eigen::all, points), skin.points.weight(Eigen::all, points),
-                                                        shape, std::move(pose), dhat, stiffness));
+    terms.push_back(std::make_shared<ShapeColliderTerm>(
+        EmbeddedPoints(skin.points.vertex(Eigen::all, points), skin.points.weight(Eigen::all, points), "collider: bone", -1), shape,
+        std::move(pose), dhat, stiffness));
   }
   return terms;
 }
@@ -317,7 +318,9 @@ double flesh_contact_dhat(const Flesh& flesh) {
   // contact at the start: fingers lying close together at rest are not pushed apart by the barrier.
   const EmbeddedSurface surface = contact_surface(flesh);
   const VolumeMesh& volume = flesh.volume;
-  const ContactTerm probe(surface.triangles, surface.points.vertex, surface.points.weight, volume.vertices, quarter, 1.0);
+  const ContactTerm probe(surface.triangles,
+                          EmbeddedPoints(surface.points.vertex, surface.points.weight, "contact: render surface", volume.vertex_count()),
+                          volume.vertices, quarter, 1.0);
   const double closest = probe.min_distance(Eigen::Map<const Eigen::VectorXd>(volume.vertices.data(), volume.vertices.size()));
   return closest > 0.0 ? std::min(quarter, 0.5 * closest) : quarter;
 }

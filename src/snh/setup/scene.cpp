@@ -17,13 +17,12 @@
 #include "snh/io/mesh_read.hpp"
 #include "snh/io/obj.hpp"
 #include "snh/io/surface_read.hpp"
-#include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
-#include "snh/fem/friction_term.hpp"
 #include "snh/io/usda.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/run/driver.hpp"
+#include "snh/setup/contact_setup.hpp"
 #include "snh/setup/scene/sections.hpp"
 
 namespace snh {
@@ -65,111 +64,6 @@ int checked_substeps(const TimeSpec& t, const std::string& file) {
                                  "(raise dt or lower end_time)",
                                  file, t.dt, t.end_time, t.frames, total, max_substeps_in_run));
   return static_cast<int>(per_frame);
-}
-
-/// The vertices the triangles F use, ascending, each once (the plane colliders act on them).
-std::vector<int> vertices_of(const Eigen::Matrix3Xi& F) {
-  std::vector<int> out(F.data(), F.data() + F.size());
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
-}
-
-/// A collider's pose in time: its motions, turning and scaling about its centroid (empty: fixed).
-ColliderPose collider_pose(const ColliderSpec& c) {
-  using T = ColliderSpec::Type;
-  if (c.motions.empty()) return {};
-  const Eigen::Vector3d centroid = c.type == T::mesh      ? Eigen::Vector3d(c.vertices.rowwise().mean())
-                                   : c.type == T::capsule ? Eigen::Vector3d(0.5 * (c.a + c.b))
-                                                          : c.a;
-  return [motions = c.motions, centroid](double t) { return motion_transform(motions, centroid, t); };
-}
-
-/// A plane, sphere, capsule or box collider's shape.
-ColliderShape collider_shape(const ColliderSpec& c) {
-  using T = ColliderSpec::Type;
-  ColliderShape shape;
-  shape.kind = c.type == T::plane    ? ColliderShape::Kind::plane
-               : c.type == T::sphere ? ColliderShape::Kind::sphere
-               : c.type == T::capsule ? ColliderShape::Kind::capsule
-                                      : ColliderShape::Kind::box;
-  shape.a = c.a;
-  shape.b = c.b;
-  shape.radius = c.radius;
-  return shape;
-}
-
-/// The term of a sphere, capsule, box, mesh or moving plane collider over the surface F of the mesh (rest
-/// positions `rest`), its pose following its motions. With `points` (a flesh's render surface) F's ids are
-/// those points, embedded in the mesh, and the collider acts on them.
-std::shared_ptr<Term> collider_term(const ColliderSpec& c, const Eigen::Matrix3Xi& F, const Eigen::Matrix3Xd& rest, double dhat,
-                                    double kappa, const Embedding* points = nullptr) {
-  const ColliderPose pose = collider_pose(c);
-  if (c.type == ColliderSpec::Type::mesh)
-    return points ? std::make_shared<MeshColliderTerm>(F, points->vertex, points->weight, rest, c.vertices, c.triangles, pose, dhat, kappa)
-                  : std::make_shared<MeshColliderTerm>(F, rest, c.vertices, c.triangles, pose, dhat, kappa);
-  return points ? std::make_shared<ShapeColliderTerm>(points->vertex, points->weight, collider_shape(c), pose, dhat, kappa)
-                : std::make_shared<ShapeColliderTerm>(vertices_of(F), collider_shape(c), pose, dhat, kappa);
-}
-
-/// A fixed plane as a shape (for friction).
-ColliderShape plane_shape(const PlaneColliderSpec& p) { return {ColliderShape::Kind::plane, p.point, p.normal, 0.0}; }
-
-std::string_view type_name(ColliderSpec::Type t) {
-  constexpr std::string_view names[] = {"plane", "sphere", "capsule", "box", "mesh"};
-  return names[static_cast<int>(t)];
-}
-
-/// Contact needs a separated start: every vertex of the mesh's boundary surface (a flesh's: of its render
-/// surface) strictly above each plane and outside each shape collider, none touching a mesh collider, and
-/// (self-contact) no two of its primitives touching (a barrier is +∞ there, and Newton could only report a
-/// state that is not finite).
-void check_contact_start(const Scene& s, const VolumeMesh& mesh, const Eigen::VectorXd& x0, const std::string& file) {
-  if (!s.contact.enabled) return;
-  const bool flesh = s.loaded && s.loaded->flesh;
-  EmbeddedSurface skin;  // a flesh's render surface, embedded in the volume
-  if (flesh) skin = contact_surface(*s.loaded->flesh);
-  const Eigen::Matrix3Xi F = flesh ? skin.triangles : boundary_triangles(mesh);
-  const Embedding* points = flesh ? &skin.points : nullptr;
-  // The surface's vertices at the start: (id as reported, position).
-  std::vector<std::pair<int, Eigen::Vector3d>> start;
-  if (flesh) {
-    const Eigen::Matrix3Xd P = skin.points.apply(x0);
-    for (Eigen::Index v = 0; v < P.cols(); ++v) start.emplace_back(static_cast<int>(v), P.col(v));
-  } else {
-    for (const int v : vertices_of(F)) start.emplace_back(v, x0.segment<3>(3 * v));
-  }
-  const char* surface = flesh ? "the render surface (welded)" : "the mesh's surface";
-  const char* move = flesh ? "move the collider" : "move the collider or the mesh";
-  for (const PlaneColliderSpec& plane : s.contact.planes)
-    for (const auto& [v, p] : start)
-      if (const double d = plane.normal.dot(p - plane.point); !(d > 0.0))
-        throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of {} is {:g} from the plane, on or behind it at the start "
-                                     "(contact needs a separated start: {})",
-                                     file, plane.index, v, surface, d, flesh ? "move the plane" : "move the plane or the mesh"));
-  for (const ColliderSpec& c : s.contact.colliders) {
-    const std::shared_ptr<Term> term = collider_term(c, F, mesh.vertices, s.contact.dhat, 1.0, points);
-    if (const auto* shape = dynamic_cast<const ShapeColliderTerm*>(term.get())) {
-      for (Eigen::Index i = 0; i < shape->point_count(); ++i)
-        if (const double d = shape->point_distance(x0, i); !(d > 0.0))
-          throw SceneError(fmt::format("{}: colliders[{}]: vertex {} of {} is {:g} from the {}, on or inside it at the start "
-                                       "(contact needs a separated start: {})",
-                                       file, c.index, start[static_cast<std::size_t>(i)].first, surface, d, type_name(c.type), move));
-    } else if (!std::isfinite(term->energy(x0))) {
-      throw SceneError(fmt::format("{}: colliders[{}]: {} touches the collider's ({}) at the start (distance 0): contact needs a "
-                                   "separated start",
-                                   file, c.index, surface, c.file.string()));
-    }
-  }
-  if (!s.contact.self) return;
-  const bool touching = flesh ? !std::isfinite(ContactTerm(skin.triangles, skin.points.vertex, skin.points.weight, mesh.vertices,
-                                                           s.contact.dhat, 1.0)
-                                                   .energy(x0))
-                              : !std::isfinite(ContactTerm(F, mesh.vertices, s.contact.dhat, 1.0).energy(x0));
-  if (touching)
-    throw SceneError(fmt::format("{}: contact.self: {} touches itself at the start (two of its triangles at distance 0): contact "
-                                 "needs a separated start",
-                                 file, surface));
 }
 
 /// Two pin sets may share a vertex, each holding its own coordinates; a moving set must then not move the
@@ -297,7 +191,10 @@ Scene parse_scene(const json& j, const std::filesystem::path& source) {
                                  source.string(), scene::max_magnitude, x0.array().abs().maxCoeff()));
   (void)as_scene_error([&] { return kinematic_dof_flags(scene_kinematics(s, s.loaded->mesh, x0), s.loaded->mesh.vertex_count()); });
   check_shared_pins(s, scene_kinematics(s, s.loaded->mesh, x0));
-  check_contact_start(s, s.loaded->mesh, x0, source.string());
+  if (s.contact.enabled) {
+    const ContactSurface surface = s.loaded->flesh ? skin_contact_surface(*s.loaded->flesh) : boundary_contact_surface(s.loaded->mesh);
+    check_contact_start(s.contact, surface, s.loaded->mesh.vertices, x0, s.contact.dhat, source.string());
+  }
   return s;
 }
 
@@ -513,23 +410,20 @@ void add_flesh_output(const Flesh& flesh, const Scene& s, const Simulation& sim,
 }
 
 /// The contact terms' statistics in every frame's record (contact_table): active pairs and the smallest
-/// distance at the frame's solution, and what the terms counted during its solve (their counters are then
-/// reset); the progress line gets the pairs and the distance.
-void add_contact_statistics(const std::vector<std::shared_ptr<ContactTermBase>>& terms, const Simulation& sim, RunPlan& plan) {
+/// distance at the frame's solution, and what the terms counted during its solve (Term::report_contact, which
+/// then starts their counts anew); the progress line gets the pairs and the distance.
+void add_contact_statistics(Simulation& sim, RunPlan& plan) {
   plan.table = &contact_table(*plan.table);
   const auto base_fill = plan.fill;
-  plan.fill = [terms, &sim, base_fill](StepRecord& r, const StepReport* rep) {
+  plan.fill = [&sim, base_fill](StepRecord& r, const StepReport* rep) {
     if (base_fill) base_fill(r, rep);
-    r.min_contact_distance = std::numeric_limits<double>::quiet_NaN();
-    for (const std::shared_ptr<ContactTermBase>& t : terms) {
-      const int pairs = t->active_pairs(sim.x());
-      r.contact_pairs += pairs;
-      if (pairs > 0) r.min_contact_distance = std::fmin(r.min_contact_distance, t->min_distance(sim.x()));
-      r.ccd_calls += static_cast<int>(t->counters().ccd_calls);
-      r.ccd_tests += static_cast<int>(std::min<long long>(t->counters().ccd_tests, std::numeric_limits<int>::max()));
-      r.contact_seconds += t->counters().seconds;
-      t->reset_counters();
-    }
+    ContactStatistics c;
+    for (Term* t : sim.problem().terms()) t->report_contact(sim.x(), c);
+    r.contact_pairs = c.pairs;
+    r.min_contact_distance = c.min_distance;
+    r.ccd_calls = static_cast<int>(c.ccd_calls);
+    r.ccd_tests = static_cast<int>(std::min<long long>(c.ccd_tests, std::numeric_limits<int>::max()));
+    r.contact_seconds = c.seconds;
   };
   const auto base_line = plan.line;
   plan.line = [base_line](const StepRecord& r) {
@@ -567,9 +461,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
     if (std::shared_ptr<Term> soft = soft_binding_term(loaded->flesh, s.flesh->soft_stiffness, youngs_modulus(s.material.params)))
       setup.terms.push_back(std::move(soft));
   double kappa = s.contact.stiffness;
-  std::vector<std::shared_ptr<ContactTermBase>> contact;  // the contact terms, for the statistics
-  int bone_colliders = 0;                                  // a flesh's bones with a capsule collider
-  double slip_velocity = 0.0;                              // friction's ε_v
+  int bone_colliders = 0;     // a flesh's bones with a capsule collider
+  double slip_velocity = 0.0;  // friction's ε_v
   if (s.contact.enabled) {
     if (kappa == 0.0) {  // "auto": IPC's choice on the mesh's size, its average vertex mass and the substep
       const Eigen::Matrix3Xd& X = mesh.vertices;
@@ -577,67 +470,17 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
       const double mass = s.material.density * std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.vertex_count());
       kappa = as_scene_error([&] { return ipc_barrier_stiffness(diagonal, s.contact.dhat, mass, h); });
     }
-    const Eigen::Matrix3Xi F = boundary_triangles(mesh);
-    // Lagged Coulomb friction (μ > 0) in self-contact and against the planes and shapes, on the points they keep out.
-    const double mu = s.contact.friction;
     slip_velocity = s.contact.friction_velocity > 0.0 ? s.contact.friction_velocity
                                                       : 1e-3 * (mesh.vertices.rowwise().maxCoeff() - mesh.vertices.rowwise().minCoeff()).norm();
-    const EmbeddedSurface surface = loaded->flesh ? contact_surface(*loaded->flesh) : EmbeddedSurface{};
-    // Friction against a plane or shape, on the points it keeps out: a flesh's skin, or the volume's boundary.
-    const auto friction = [&](const ColliderShape& shape, ColliderPose pose) {
-      return loaded->flesh ? std::make_shared<FrictionTerm>(surface.points.vertex, surface.points.weight, shape, std::move(pose),
-                                                            s.contact.dhat, kappa, mu, slip_velocity)
-                           : std::make_shared<FrictionTerm>(vertices_of(F), shape, std::move(pose), s.contact.dhat, kappa, mu,
-                                                            slip_velocity);
-    };
-    if (loaded->flesh) {  // on the render surface, embedded in the volume
-      if (s.contact.self) {
-        auto self = std::make_shared<ContactTerm>(surface.triangles, surface.points.vertex, surface.points.weight, mesh.vertices,
-                                                  s.contact.dhat, kappa);
-        setup.terms.push_back(self);
-        if (mu > 0.0)
-          setup.terms.push_back(std::make_shared<SelfFrictionTerm>(self, surface.points.vertex, surface.points.weight, s.contact.dhat,
-                                                                   kappa, mu, slip_velocity));
-      }
-      for (const PlaneColliderSpec& plane : s.contact.planes) {
-        setup.terms.push_back(
-            std::make_shared<PlaneContactTerm>(surface.points.vertex, surface.points.weight, plane.point, plane.normal, s.contact.dhat, kappa));
-        if (mu > 0.0)
-          setup.terms.push_back(friction(plane_shape(plane), ColliderPose{}));
-      }
-      if (s.contact.bones)
-        for (std::shared_ptr<Term>& t : bone_collider_terms(loaded->flesh, s.contact.dhat, kappa)) {
-          setup.terms.push_back(std::move(t));
-          ++bone_colliders;
-        }
-    } else {
-      if (s.contact.self) {
-        auto self = std::make_shared<ContactTerm>(F, mesh.vertices, s.contact.dhat, kappa);
-        setup.terms.push_back(self);
-        if (mu > 0.0) {  // the term's points are the volume's vertices
-          const auto n = static_cast<int>(mesh.vertex_count());
-          setup.terms.push_back(std::make_shared<SelfFrictionTerm>(self, Eigen::RowVectorXi::LinSpaced(n, 0, n - 1), Eigen::MatrixXd::Ones(1, n),
-                                                                   s.contact.dhat, kappa, mu, slip_velocity));
-        }
-      }
-      const std::vector<int> boundary = vertices_of(F);
-      for (const PlaneColliderSpec& plane : s.contact.planes) {
-        setup.terms.push_back(
-            std::make_shared<PlaneContactTerm>(boundary, plane.point, plane.normal, s.contact.dhat, kappa));
-        if (mu > 0.0)
-          setup.terms.push_back(friction(plane_shape(plane), ColliderPose{}));
-      }
-    }
-    // Shapes and meshes act on the volume's boundary, or on a flesh's render surface (its points embedded).
-    for (const ColliderSpec& c : s.contact.colliders) {
-      setup.terms.push_back(collider_term(c, loaded->flesh ? surface.triangles : F, mesh.vertices, s.contact.dhat, kappa,
-                                          loaded->flesh ? &surface.points : nullptr));
-      if (mu > 0.0 && c.type != ColliderSpec::Type::mesh)
-        setup.terms.push_back(friction(collider_shape(c), collider_pose(c)));
-    }
+    // On the volume's boundary, or on a flesh's render surface embedded in the volume.
+    const ContactSurface surface = loaded->flesh ? skin_contact_surface(*loaded->flesh) : boundary_contact_surface(mesh);
+    std::vector<std::shared_ptr<Term>> bones;
+    if (loaded->flesh && s.contact.bones) bones = bone_collider_terms(loaded->flesh, s.contact.dhat, kappa);
+    bone_colliders = static_cast<int>(bones.size());
+    for (std::shared_ptr<Term>& t :
+         contact_terms(s.contact, surface, mesh.vertices, {s.contact.dhat, kappa, s.contact.friction, slip_velocity}, std::move(bones)))
+      setup.terms.push_back(std::move(t));
   }
-  for (const std::shared_ptr<Term>& t : setup.terms)
-    if (auto c = std::dynamic_pointer_cast<ContactTermBase>(t)) contact.push_back(std::move(c));
   setup.initial = x0;
   setup.linear.name = s.solver.linear;
   setup.linear.reuse_factor = !s.solver.refactorize;
@@ -745,7 +588,8 @@ SceneResult run_scene(const Scene& s, std::ostream& log) {
   };
 
   if (const std::shared_ptr<const Flesh> flesh = loaded->flesh) add_flesh_output(*flesh, s, sim, plan);
-  if (!contact.empty()) add_contact_statistics(contact, sim, plan);
+  if (std::any_of(sim.problem().terms().begin(), sim.problem().terms().end(), [](const Term* t) { return t->reports_contact(); }))
+    add_contact_statistics(sim, plan);
   if (s.run.check_only) {
     plan.header(log);
     log << fmt::format("checked: {} {}, {} vertices, {} free DOFs; no frame run\n", mesh.cell_count(), cells, mesh.vertex_count(),
