@@ -23,7 +23,7 @@
 #include "snh/io/mesh_check.hpp"
 #include "snh/run/interrupt.hpp"
 #include "snh/run/run_directory.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 #include "snh/sim/simulation.hpp"
 #ifdef SNH_PYTHON_REPORT
 #include "snh/report/report.hpp"
@@ -246,7 +246,7 @@ Scene scene_of(const pyb::handle& obj) {
 /// Runs the scene on a worker thread while this one, holding the GIL in short turns, lets Python see
 /// Ctrl-C: a KeyboardInterrupt asks the run to stop as snh run's SIGINT does (the frames so far and the
 /// stats are kept), and is raised once the run has stopped.
-SceneResult run_interruptibly(const Scene& scene, std::ostream& log) {
+SceneResult run_interruptibly(const BuiltScene& scene, std::ostream& log) {
   SceneResult result;
   std::exception_ptr error;
   std::atomic<bool> done{false};
@@ -279,27 +279,30 @@ SceneResult run_interruptibly(const Scene& scene, std::ostream& log) {
 
 pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesystem::path> out, bool force, bool resume,
                        bool report, bool quiet, int threads, bool check) {
-  Scene scene = scene_of(scene_obj);
+  Scene parsed = scene_of(scene_obj);
   if (out) {
     require(!out->empty(), "out must not be empty");
-    scene.output.dir = *out;
+    parsed.output.dir = *out;
   }
-  scene.run.resume = resume;
-  scene.run.command_line = "snh.run_scene (Python)";
+  parsed.run.resume = resume;
+  parsed.run.command_line = "snh.run_scene (Python)";
   require(threads >= 0 && threads <= 1024, fmt::format("threads must be from 0 to 1024, got {}", threads));
   const int previous_threads = omp_get_max_threads();
   if (threads > 0) omp_set_num_threads(threads);
-  scene.run.lock = std::make_shared<RunDirectoryLock>(scene.output.dir, force);
   std::ostringstream discard;
   std::ostream& log = quiet ? static_cast<std::ostream&>(discard) : std::cout;
+  BuiltScene built;
   SceneResult r;
   try {
-    r = run_interruptibly(scene, log);
+    built = build_scene(parsed);  // before the output directory is touched: a scene that cannot run writes nothing
+    built.scene.run.lock = std::make_shared<RunDirectoryLock>(built.scene.output.dir, force);
+    r = run_interruptibly(built, log);
   } catch (...) {
     omp_set_num_threads(previous_threads);
     throw;
   }
   omp_set_num_threads(previous_threads);
+  const Scene& scene = built.scene;
   log.flush();
   pyb::dict d;
   d["out"] = scene.output.dir;
@@ -321,7 +324,7 @@ pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesyst
 #else
   (void)report;
 #endif
-  scene.run.lock.reset();
+  built.scene.run.lock.reset();
   if (!r.all_converged && check) throw std::runtime_error(r.failure);
   return d;
 }

@@ -7,11 +7,12 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <omp.h>
 
 #include "../common/out_option.hpp"
 #include "parameter_options.hpp"
 #include "run_command.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_build.hpp"
 
 namespace snh::cli {
 
@@ -21,7 +22,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     int resolution = FleshSpec{}.resolution;
     ParameterOptions params;
     bool quasi_static = false, dynamic = false, resume = false, no_report = false, force = false;
-    double fps = FleshSpec::fps;
+    double fps = FleshSpec{}.fps;
     double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness;
     std::string joint_cells = to_string(FleshSpec{}.joint_cells);
     int threads = 0;
@@ -71,7 +72,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                   "Coulomb friction coefficient mu of the skin on itself (--self-contact) and on the --ground (default 0: frictionless)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
-  add_parameter_options(cmd, o->params);
+  add_parameter_options(cmd, o->params, "--youngs 1e5 --poisson 0.488, the paper's flesh");
   auto* qs = cmd->add_flag("--quasi-static", o->quasi_static, "Quasi-static frames (the default, as the paper)");
   cmd->add_flag("--dynamic", o->dynamic, "Backward Euler with gravity -9.81 y instead (density 1000)")->excludes(qs);
   cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(CLI::PositiveNumber);
@@ -127,19 +128,15 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     }
     j["output"] = {{"dir", o->out.empty() ? "output/" + std::filesystem::path(o->model).stem().string() : o->out}};
     // The clip's length (known once the model is read) and --fps decide the frames.
-    Scene scene = parse_scene(j, "snh flesh");
-    const double duration = scene.loaded->flesh->clip.duration();
-    if (!(duration > 0.0))
-      throw SceneError(fmt::format("{}: animation \"{}\" has no length (a single key): nothing to play", o->model,
-                                   scene.loaded->flesh->clip.name));
-    scene.time.end_time = duration;
-    scene.time.frames = std::max(1, static_cast<int>(std::lround(duration * o->fps)));
-    j["end_time"] = scene.time.end_time;
-    j["frames"] = scene.time.frames;
-    scene.settings = j.dump();
-    scene.source = o->model;
-    scene.run.resume = o->resume;
-    exit_code = run_scene_command(scene, o->threads, o->no_report, o->force);
+    j["flesh"]["fps"] = o->fps;
+    if (o->threads > 0) omp_set_num_threads(o->threads);
+    BuiltScene built = build_scene(parse_scene(j, "snh flesh"));
+    if (const Clip& clip = built.body->flesh->clip; !(clip.duration() > 0.0))
+      throw SceneError(fmt::format("{}: animation \"{}\" has no length (a single key): nothing to play", o->model, clip.name));
+    built.scene.source = o->model;
+    built.scene.run.program = "snh flesh";
+    built.scene.run.resume = o->resume;
+    exit_code = run_scene_command(built, o->no_report, o->force);
   });
 }
 

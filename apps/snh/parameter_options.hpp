@@ -28,17 +28,19 @@ struct ParameterOptions {
   }
 };
 
-/// Adds --mu, --lambda, --youngs, --poisson (exclusive with the first two) and --reparametrize.
-inline void add_parameter_options(CLI::App* cmd, ParameterOptions& o) {
-  auto* mu = cmd->add_option("--mu", o.mu, "Lame mu (default 1)");
-  auto* lambda = cmd->add_option("--lambda", o.lambda, "Lame lambda (default 10, the paper's example)");
+/// Adds --mu, --lambda, --youngs, --poisson (exclusive with the first two) and --reparametrize. `defaults`:
+/// the help's words for what is used when none is given (the paper's example mu 1, lambda 10 by default).
+inline void add_parameter_options(CLI::App* cmd, ParameterOptions& o, const std::string& defaults = "") {
+  auto* mu = cmd->add_option("--mu", o.mu, defaults.empty() ? "Lame mu (default 1)" : "Lame mu (with --lambda; default: " + defaults + ")");
+  auto* lambda = cmd->add_option("--lambda", o.lambda,
+                                 defaults.empty() ? "Lame lambda (default 10, the paper's example)" : "Lame lambda (with --mu)");
   auto* E = cmd->add_option("--youngs", o.youngs, "Young's modulus E (with --poisson, instead of --mu/--lambda)");
   auto* nu = cmd->add_option("--poisson", o.poisson, "Poisson's ratio nu, -1 < nu < 0.5");
   E->excludes(mu)->excludes(lambda);
   nu->excludes(mu)->excludes(lambda);
   cmd->add_flag("--reparametrize", o.reparametrize,
                 "Take the parameters as linear-elastic mu_L, lambda_L and map them so the energy matches linear "
-                "elasticity at rest (MATH.md section 2); without it they are used as given, as the paper's programs do");
+                "elasticity at rest (docs/math.md section 2); without it they are used as given, as the paper's programs do");
 }
 
 /// "stable_neo_hookean, stable_neo_hookean_log, ..." for help texts.

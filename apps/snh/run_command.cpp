@@ -1,5 +1,6 @@
 #include "run_command.hpp"
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -10,7 +11,7 @@
 #include "../common/out_option.hpp"
 #include "../common/run_report.hpp"
 #include "snh/run/interrupt.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 
 namespace snh::cli {
 
@@ -26,9 +27,11 @@ void add_run_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
       "run",
-      "Runs a scene file (JSON; format in the README): backward Euler or quasi-static steps of a box mesh with pins, "
-      "scripted motion, gravity and an initial deformation. Writes NNN.obj and NNN.vtu frames, frames.pvd, stats.json "
-      "and stats.csv. Exit code 0 when every step converged, 1 when the run stopped early, 2 for bad input.");
+      "Runs a scene file (JSON; the keys in docs/scenes.md): backward Euler or quasi-static steps of a mesh (a box, a mesh "
+      "file, or a rigged model's flesh) with pins, scripted motion, gravity, an initial deformation, contact and colliders. "
+      "Writes NNN.obj and NNN.vtu frames, frames.pvd, stats.json, stats.csv and the report (a flesh scene also its "
+      "surface/, lbs/ and flesh.usda). Exit code 0 when every step converged, 1 when the run stopped early, 2 for bad "
+      "input.");
   cmd->add_option("scene", o->scene, "Scene file (.json)")->required();
   cmd->add_option("--out", o->out, "Output directory (default: the scene's output.dir, else output/<scene name>)")->check(non_empty_path());
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
@@ -40,24 +43,26 @@ void add_run_command(CLI::App& app, int& exit_code) {
                 "without running or writing anything")
       ->excludes("--resume");
   cmd->callback([o, &exit_code]() {
-    Scene scene = load_scene(o->scene);
-    if (!o->out.empty()) scene.output.dir = o->out;
-    scene.run.resume = o->resume;
-    scene.run.check_only = o->check;
-    exit_code = run_scene_command(scene, o->threads, o->no_report, o->force);
+    if (o->threads > 0) omp_set_num_threads(o->threads);
+    BuiltScene built = build_scene(load_scene(o->scene));
+    if (!o->out.empty()) built.scene.output.dir = o->out;
+    built.scene.run.resume = o->resume;
+    built.scene.run.check_only = o->check;
+    exit_code = run_scene_command(built, o->no_report, o->force);
   });
 }
 
-int run_scene_command(Scene& scene, int threads, bool no_report, bool force) {
-  scene.run.command_line = invocation();
-  scene.run.live_progress = ::isatty(STDOUT_FILENO) != 0;
-  if (threads > 0) omp_set_num_threads(threads);
-  if (scene.run.check_only) return run_scene(scene, std::cout).all_converged ? 0 : 1;
+int run_scene_command(BuiltScene& built, bool no_report, bool force) {
+  RunControl& run = built.scene.run;
+  run.command_line = invocation();
+  run.live_progress = ::isatty(STDOUT_FILENO) != 0;
+  if (run.check_only) return run_scene(built, std::cout).all_converged ? 0 : 1;
   install_stop_handlers();
   // The directory stays locked until the report is written: no other run can start there meanwhile.
-  scene.run.lock = std::make_shared<RunDirectoryLock>(scene.output.dir, force);
-  const SceneResult r = run_scene(scene, std::cout);
-  if (!no_report) (void)write_run_report(scene.output.dir, "snh");
+  const std::filesystem::path out = built.scene.output.dir;
+  run.lock = std::make_shared<RunDirectoryLock>(out, force);
+  const SceneResult r = run_scene(built, std::cout);
+  if (!no_report) (void)write_run_report(out, "snh");
   return r.interrupted_by ? 128 + r.interrupted_by : r.all_converged ? 0 : 1;
 }
 

@@ -31,7 +31,7 @@
 #include "snh/report/report.hpp"
 #include "snh/run/interrupt.hpp"
 #include "snh/setup/lab.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 #include "snh/setup/stretch.hpp"
 
 namespace snh {

@@ -20,7 +20,7 @@
 #include "limb_model.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/mesh/surface.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 
 namespace snh {
 namespace {
@@ -59,8 +59,9 @@ class FleshLimb : public ::testing::Test {
 
 TEST_F(FleshLimb, TheEmbeddedSurfaceIsTheInputSurfaceAtRest) {
   for (const char* volume : {"lattice", "tets"}) {
-    const Scene s = parse_scene(scene(volume, 10, "rest"), dir_ / "limb.json");
-    const Flesh& f = *s.loaded->flesh;
+    const BuiltScene built = build_scene(parse_scene(scene(volume, 10, "rest"), dir_ / "limb.json"));
+    const Scene& s = built.scene;
+    const Flesh& f = *built.body->flesh;
     EXPECT_EQ(f.model.skeleton.size(), 3);
     EXPECT_GT(f.volume.cell_count(), 0);
     EXPECT_EQ(edge_counts(f.model.surface_triangles).open, 0);
@@ -70,7 +71,8 @@ TEST_F(FleshLimb, TheEmbeddedSurfaceIsTheInputSurfaceAtRest) {
     // The defaults of a flesh scene: quasi-static, the paper's nu = 0.488, the clip's length and 24 fps.
     EXPECT_EQ(s.time.integrator, Integrator::quasi_static);
     EXPECT_NEAR(s.material.params.lambda / (2.0 * (s.material.params.lambda + s.material.params.mu)), 0.488, 1e-12);
-    EXPECT_DOUBLE_EQ(s.time.end_time, 1.0);
+    EXPECT_DOUBLE_EQ(built.end_time, 1.0);
+    EXPECT_EQ(built.frames, 4);  // given
     // Every segment binds vertices of this volume (the tip, a point on the surface, binds none: warned),
     // and a lattice holds the surface's volume and more.
     for (std::size_t b = 0; b < f.bones.size(); ++b)
@@ -80,13 +82,27 @@ TEST_F(FleshLimb, TheEmbeddedSurfaceIsTheInputSurfaceAtRest) {
     if (std::string(volume) == "lattice") EXPECT_GT(f.volume_of_cells, f.surface_volume);
     else EXPECT_NEAR(f.volume_of_cells, f.surface_volume, 1e-9 * f.surface_volume);
   }
+  // Without "frames": the clip's second at 24 frames per second, or at flesh.fps; a material that names an
+  // energy alone keeps the flesh's parameters.
+  json j = scene("lattice", 6, "rest");
+  j.erase("frames");
+  j["material"] = {{"name", "neo_hookean"}};
+  const BuiltScene at24 = build_scene(parse_scene(j, dir_ / "limb.json"));
+  EXPECT_EQ(at24.frames, 24);
+  EXPECT_EQ(at24.scene.material.name, "neo_hookean");
+  EXPECT_NEAR(youngs_modulus(at24.scene.material.params), 1e5, 1e-6);
+  j["flesh"]["fps"] = 30;
+  EXPECT_EQ(build_scene(parse_scene(j, dir_ / "limb.json")).frames, 30);
+  j["flesh"]["fps"] = 0;
+  EXPECT_THROW((void)parse_scene(j, dir_ / "limb.json"), SceneError);
 }
 
 TEST_F(FleshLimb, BentElbowKeepsTheFleshVolumeWhereSkinningLosesIt) {
   const SceneResult r = run(scene("lattice", 14, "lattice"));
   ASSERT_EQ(r.frames.size(), 5u);
-  const Scene s = parse_scene(scene("lattice", 14, "lattice"), dir_ / "limb.json");
-  const Flesh& f = *s.loaded->flesh;
+  const BuiltScene built = build_scene(parse_scene(scene("lattice", 14, "lattice"), dir_ / "limb.json"));
+  const Scene& s = built.scene;
+  const Flesh& f = *built.body->flesh;
 
   // Bound vertices sit exactly where their bones carry them at the last frame (t = 1: the elbow at 90°).
   const std::vector<Eigen::Affine3d> world = joint_world(f, 1.0);
@@ -140,8 +156,9 @@ TEST_F(FleshLimb, SoftBindingPullsTheShellTowardItsBonesAndStiffensWithItsStiffn
     if (stiffness) j["flesh"]["soft_binding"] = {{"shell", shell}, {"stiffness", *stiffness}};
     return j;
   };
-  const Scene s = parse_scene(soft_scene("soft_rest", 1.0), dir_ / "limb.json");
-  const Flesh& f = *s.loaded->flesh;
+  const BuiltScene built = build_scene(parse_scene(soft_scene("soft_rest", 1.0), dir_ / "limb.json"));
+  const Scene& s = built.scene;
+  const Flesh& f = *built.body->flesh;
   ASSERT_GT(f.soft.vertex.size(), 0u);
   for (std::size_t i = 0; i < f.soft.vertex.size(); ++i) {  // outside every capsule, within the shell of its own
     const Eigen::Vector3d X = f.volume.vertices.col(f.soft.vertex[i]);
@@ -182,8 +199,9 @@ TEST_F(FleshLimb, CellsSpanningTheElbowAreHeldByOneJointAtMost) {
   for (const char* mode : {"soft", "free", "hard"}) {
     json j = scene("lattice", 14, std::string("joints_") + mode);
     j["flesh"]["joint_cells"] = mode;
-    const Scene s = parse_scene(j, dir_ / "limb.json");
-    const Flesh& f = *s.loaded->flesh;
+    const BuiltScene built = build_scene(parse_scene(j, dir_ / "limb.json"));
+    const Scene& s = built.scene;
+    const Flesh& f = *built.body->flesh;
     released[mode] = f.released.vertex.size();
     std::vector<int> joint(f.volume.vertex_count(), -1);
     for (std::size_t i = 0; i < f.binding.vertex.size(); ++i) joint[f.binding.vertex[i]] = f.bones[f.binding.bone[i]].joint;
@@ -217,13 +235,13 @@ TEST_F(FleshLimb, LatticeAndTetsAgreeInShape) {
   // cells 0.20, 0.14, 0.10, 0.072 wide), while the bend moves the tip by 1.4.
   const SceneResult lattice = run(scene("lattice", 14, "shape_lattice"));
   const SceneResult tets = run(scene("tets", 14, "shape_tets"));
-  const Scene sl = parse_scene(scene("lattice", 14, "shape_lattice"), dir_ / "limb.json");
-  const Scene st = parse_scene(scene("tets", 14, "shape_tets"), dir_ / "limb.json");
-  const Eigen::Matrix3Xd a = flesh_surface(*sl.loaded->flesh, lattice.final_positions);
-  const Eigen::Matrix3Xd b = flesh_surface(*st.loaded->flesh, tets.final_positions);
+  const BuiltScene sl = build_scene(parse_scene(scene("lattice", 14, "shape_lattice"), dir_ / "limb.json"));
+  const BuiltScene st = build_scene(parse_scene(scene("tets", 14, "shape_tets"), dir_ / "limb.json"));
+  const Eigen::Matrix3Xd a = flesh_surface(*sl.body->flesh, lattice.final_positions);
+  const Eigen::Matrix3Xd b = flesh_surface(*st.body->flesh, tets.final_positions);
   const double gap = (a - b).colwise().norm().maxCoeff();
-  EXPECT_LT(gap, sl.loaded->flesh->cell_size);
-  const double moved = (a - sl.loaded->flesh->model.vertices).colwise().norm().maxCoeff();
+  EXPECT_LT(gap, sl.body->flesh->cell_size);
+  const double moved = (a - sl.body->flesh->model.vertices).colwise().norm().maxCoeff();
   EXPECT_GT(moved, 1.0);
 }
 
@@ -243,7 +261,7 @@ TEST_F(FleshLimb, TheCommittedLimbIsTheGeneratedOne) {
 TEST_F(FleshLimb, BadFleshScenesAreNamed) {
   auto error_of = [&](const json& j) -> std::string {
     try {
-      (void)parse_scene(j, dir_ / "limb.json");
+      (void)build_scene(parse_scene(j, dir_ / "limb.json"));
     } catch (const std::exception& e) {
       return e.what();
     }

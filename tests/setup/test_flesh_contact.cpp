@@ -22,7 +22,7 @@
 #include "snh/rig/gltf.hpp"
 #include "snh/fem/collider_term.hpp"
 #include "snh/setup/flesh.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 
 namespace snh {
 namespace {
@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 struct FistRun {
-  Scene scene;
+  BuiltScene scene;
   SceneResult result;
   std::string log;
   json stats;
@@ -51,14 +51,14 @@ FistRun run_fist(bool self_contact, const fs::path& out) {
   j["output"] = {{"dir", out.string()}};
   if (self_contact) j["contact"] = {{"self", true}, {"bones", true}};
   FistRun run;
-  run.scene = parse_scene(j, file);
+  run.scene = build_scene(parse_scene(j, file));
   std::ostringstream log;
   run.result = run_scene(run.scene, log);
   run.log = log.str();
   std::ifstream st(out / "stats.json");
   run.stats = json::parse(st);
   // Every frame's render surface (model order), welded, checked for intersecting triangles.
-  const Flesh& flesh = *run.scene.loaded->flesh;
+  const Flesh& flesh = *run.scene.body->flesh;
   const RiggedModel& m = flesh.model;
   const double dhat = self_contact ? run.stats.at("contact").at("dhat").get<double>() : flesh_contact_dhat(flesh);
   const std::vector<std::vector<int>> colliding = bone_collider_points(flesh, dhat);
@@ -210,7 +210,7 @@ TEST(FleshColliders, ShapesActOnTheSkinAndAStartInsideOneIsRefusedNamingIt) {
     j["flesh"]["resolution"] = 8;
     j["contact"] = {{"self", false}};
     j["colliders"] = json::array({{{"type", "sphere"}, {"center", {center[0], center[1], center[2]}}, {"radius", 0.002}}});
-    return parse_scene(j, file);
+    return build_scene(parse_scene(j, file));
   };
   try {
     (void)scene_with(at);

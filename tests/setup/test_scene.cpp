@@ -13,9 +13,10 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "snh/io/mesh_check.hpp"
 #include "snh/run/interrupt.hpp"
 #include "scene_error.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 
 namespace snh {
 namespace {
@@ -31,8 +32,8 @@ TEST(SceneFile, DefaultsAndAFullScene) {
   EXPECT_EQ(d.output.dir, std::filesystem::path("output") / "empty");
   // The defaults live in the sections' structs: a scene built in code means what an empty file means.
   const Scene code;
-  EXPECT_EQ(code.solver.newton.tolerance, d.solver.newton.tolerance);
-  EXPECT_EQ(code.solver.newton.tolerance, 0.0) << "scale-aware: no absolute rule unless given";
+  EXPECT_EQ(code.solver.tolerance, d.solver.tolerance);
+  EXPECT_FALSE(d.solver.tolerance) << "scale-aware: no absolute rule unless given";
   EXPECT_EQ(code.solver.force_fraction, d.solver.force_fraction);
   EXPECT_EQ(code.solver.newton.relative_step_tolerance, d.solver.newton.relative_step_tolerance);
   EXPECT_GT(d.solver.newton.relative_step_tolerance, 0.0);
@@ -74,8 +75,40 @@ TEST(SceneFile, DefaultsAndAFullScene) {
   EXPECT_EQ(s.solver.newton.max_iterations, 20);
   EXPECT_EQ(s.output.dir, "here");
   EXPECT_FALSE(s.output.vtu);
-  ASSERT_TRUE(s.loaded);
-  EXPECT_EQ(s.loaded->mesh.cell_count(), 6 * 27) << "the mesh is read once, by the parser";
+  EXPECT_EQ(s.solver.tolerance, 1e-6);
+  // The build makes the body and resolves what depends on it; the given values stay.
+  const BuiltScene b = build_scene(s);
+  EXPECT_EQ(b.body->mesh.cell_count(), 6 * 27);
+  EXPECT_EQ(b.end_time, 3);
+  EXPECT_EQ(b.frames, 6);
+  EXPECT_EQ(b.newton.tolerance, 1e-6);
+  EXPECT_EQ(b.newton.max_iterations, 20);
+  // An empty scene's defaults: 25 frames over 1 s, |g| < force_fraction E l² on the cube of 64 hexes (l = 1/2).
+  const BuiltScene e = build_scene(d);
+  EXPECT_EQ(e.end_time, TimeSpec::default_end_time);
+  EXPECT_EQ(e.frames, TimeSpec::default_frames);
+  EXPECT_DOUBLE_EQ(e.newton.tolerance, d.solver.force_fraction * youngs_modulus(d.material.params) / 4);
+}
+
+TEST(SceneFile, ParsingReadsNoFile) {
+  // Pure: a scene naming files that do not exist parses; its build names the file that is missing.
+  const Scene s = parse_scene(json::parse(R"({"mesh": {"file": "/nonexistent/mesh.msh"},
+    "contact": {"dhat": 0.1, "stiffness": 1}, "colliders": [{"type": "mesh", "file": "/nonexistent/plate.obj"}]})"),
+                              "s.json");
+  EXPECT_EQ(s.mesh.file, "/nonexistent/mesh.msh");
+  EXPECT_EQ(s.contact.colliders.at(0).triangles.cols(), 0) << "not read";
+  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1},
+    "colliders": [{"type": "mesh", "file": "/nonexistent/plate.obj"}]})")).substr(0, 48),
+            "s.json: colliders[0].file: /nonexistent/plate.ob");
+  try {
+    (void)build_scene(parse_scene(json::parse(R"({"mesh": {"file": "/nonexistent/mesh.msh"}})"), "s.json"));
+    ADD_FAILURE() << "no error";
+  } catch (const MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/mesh.msh"), std::string::npos) << e.what();
+  }
+  const Scene f = parse_scene(json::parse(R"({"flesh": {"model": "/nonexistent/model.glb"}})"), "s.json");
+  EXPECT_EQ(f.flesh->model, "/nonexistent/model.glb");
+  EXPECT_THROW((void)build_scene(f), std::exception);
 }
 
 TEST(SceneFile, ErrorsNameTheKey) {
@@ -118,8 +151,9 @@ TEST(SceneFile, ContactNeedsASeparatedStart) {
   // Touching the plane is refused too; just above it is fine.
   EXPECT_NE(error_of(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, -1, 0], "normal": [0, 1, 0]}]})")),
             "");
-  EXPECT_NO_THROW(parse_scene(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, -1.001, 0], "normal": [0, 1, 0]}]})"),
-                              "s.json"));
+  EXPECT_NO_THROW((void)build_scene(
+      parse_scene(json::parse("{" + contact + R"("colliders": [{"type": "plane", "point": [0, -1.001, 0], "normal": [0, 1, 0]}]})"),
+                  "s.json")));
 }
 
 TEST(SceneFile, SelfContactNeedsASurfaceThatDoesNotTouchItself) {
@@ -131,7 +165,7 @@ TEST(SceneFile, SelfContactNeedsASurfaceThatDoesNotTouchItself) {
   std::ofstream(dir / "touch.ele") << "2 4 0\n1 1 2 3 4\n2 5 7 6 8\n";
   const std::string scene = R"({"mesh": {"file": "touch.ele"}, "contact": {"self": true, "dhat": 0.01, "stiffness": 1e3}})";
   try {
-    (void)parse_scene(json::parse(scene), dir / "s.json");
+    (void)build_scene(parse_scene(json::parse(scene), dir / "s.json"));
     ADD_FAILURE() << "no error";
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("contact.self: the mesh's surface touches itself at the start"), std::string::npos) << e.what();
@@ -139,7 +173,7 @@ TEST(SceneFile, SelfContactNeedsASurfaceThatDoesNotTouchItself) {
   // Apart (the second tet lifted by 0.5), the same scene is accepted.
   std::ofstream(dir / "touch.node") << "8 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"
                                        "5 0 0 2.5\n6 1 0 2.5\n7 0 1 2.5\n8 0 0 1.5\n";
-  EXPECT_NO_THROW((void)parse_scene(json::parse(scene), dir / "s.json"));
+  EXPECT_NO_THROW((void)build_scene(parse_scene(json::parse(scene), dir / "s.json")));
   std::filesystem::remove_all(dir);
 }
 
@@ -157,7 +191,9 @@ TEST(SceneFile, ContactKeysAreChecked) {
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": -1, "stiffness": 1}})")), "s.json: contact.dhat: must be > 0, got -1");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1}})")),
             "s.json: contact.stiffness: required: the barrier's stiffness kappa (> 0, or \"auto\")");
-  EXPECT_EQ(parse_scene(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "auto"}})"), "s.json").contact.stiffness, 0.0);
+  const Scene automatic = parse_scene(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "auto"}})"), "s.json");
+  EXPECT_FALSE(automatic.contact.stiffness) << "auto: resolved by the build";
+  EXPECT_GT(build_scene(automatic).contact.stiffness, 0.0);
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "soft"}})")),
             "s.json: contact.stiffness: expected a number > 0 or \"auto\", got \"soft\"");
   EXPECT_EQ(error_of(json::parse(R"({"integrator": "quasi_static", "contact": {"dhat": 0.1, "stiffness": "auto"}})")),
@@ -220,14 +256,15 @@ TEST(SceneFile, ShapeAndMeshCollidersAreCheckedKeyByKeyAndNeedASeparatedStart) {
     std::ofstream f(obj);
     f << "v -3 2 -3\nv 3 2 -3\nv 3 2 3\nv -3 2 3\nf 1 2 3\nf 1 3 4\n";
   }
-  const Scene s = parse_scene(colliders(R"([{"type": "sphere", "center": [0, 3, 0], "radius": 1.5,
+  const BuiltScene b = build_scene(parse_scene(colliders(R"([{"type": "sphere", "center": [0, 3, 0], "radius": 1.5,
       "motion": [{"type": "translate", "by": [0, -1, 0]}]},
     {"type": "capsule", "a": [-3, 0, 0], "b": [-3, 0, 2], "radius": 0.5},
     {"type": "box", "center": [3, 0, 0], "size": [1, 2, 3], "motion": [{"type": "rotate", "axis": [0, 1, 0], "degrees": 30}]},
     {"type": "plane", "point": [0, -2, 0], "normal": [0, 1, 0], "motion": [{"type": "translate", "by": [0, 0.5, 0]}]},
     {"type": "plane", "point": [0, -3, 0], "normal": [0, 1, 0]},
     {"type": "mesh", "file": ")" + obj.string() + R"(", "motion": [{"type": "scale", "factors": [1, 2, 1]}]}])"),
-                              "s.json");
+                                                "s.json"));
+  const Scene& s = b.scene;
   ASSERT_EQ(s.contact.colliders.size(), 5u);
   ASSERT_EQ(s.contact.planes.size(), 1u);
   EXPECT_EQ(s.contact.planes[0].index, 4);
@@ -289,7 +326,7 @@ TEST(SceneFile, UnreadableAndMalformedFiles) {
 
 TEST(SceneFile, InitialDeformations) {
   Scene s = parse_scene(json::parse(R"({"mesh": {"box": {"res": 2}}})"), "s.json");
-  const VolumeMesh mesh = scene_mesh(s)->mesh;
+  const VolumeMesh mesh = scene_body(s)->mesh;
   auto positions = [&](const char* ops) {
     s.initial = parse_scene(json::parse(std::string(R"({"mesh": {"box": {"res": 2}}, "initial": )") + ops + "}"), "s.json").initial;
     const Eigen::VectorXd x = initial_positions(s, mesh);
@@ -493,7 +530,7 @@ TEST(SceneRun, AMeshFileRelativeToTheScene) {
                                              "gravity": [0, 0, -1], "frames": 2, "end_time": 0.1})"),
                               dir / "s.json");
   EXPECT_EQ(s.mesh.file, dir / "meshes" / "two.ele");
-  const std::shared_ptr<const SceneMesh> m = scene_mesh(s);
+  const std::shared_ptr<const SceneBody> m = scene_body(s);
   EXPECT_EQ(m->mesh.cell_count(), 2);
   EXPECT_EQ(m->reoriented, 1);
   Scene run = s;
@@ -506,7 +543,7 @@ TEST(SceneRun, AMeshFileRelativeToTheScene) {
   // A broken mesh file: its reader's one-line error, naming the file and line.
   std::ofstream(dir / "meshes" / "two.ele") << "2 4 0\n1 1 2 3 4\n";
   try {
-    (void)parse_scene(json::parse(R"({"mesh": {"file": "meshes/two.ele"}})"), dir / "s.json");
+    (void)build_scene(parse_scene(json::parse(R"({"mesh": {"file": "meshes/two.ele"}})"), dir / "s.json"));
     ADD_FAILURE() << "no error";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("two.ele:3: the file ends"), std::string::npos) << e.what();

@@ -13,7 +13,7 @@
 
 #include "io/bytes_read.hpp"
 #include "scene_error.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 
 namespace snh {
 namespace {

@@ -11,7 +11,7 @@
 #include "snh/mesh/box.hpp"
 #include "fem/problem_fd.hpp"
 #include "snh/sim/dynamics.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 #include "snh/solve/newton.hpp"
 
 namespace snh {
@@ -189,7 +189,7 @@ TEST(Dynamics, NewtonStopsAtTheSameStateInAnyUnits) {
   // rule, which scenes used) took the scaled-down bar for converged at rest: it never fell.
   const SceneResult unit = run_quietly(falling_bar(1.0, 1000.0, 0.01, 4), "units_1");
   ASSERT_TRUE(unit.all_converged) << unit.failure;
-  const double fall = (unit.final_positions - flatten(scene_mesh(falling_bar(1, 1000, 0.01, 4))->mesh.vertices)).cwiseAbs().maxCoeff();
+  const double fall = (unit.final_positions - flatten(scene_body(falling_bar(1, 1000, 0.01, 4))->mesh.vertices)).cwiseAbs().maxCoeff();
   EXPECT_GT(fall, 0.01);
   for (double scale : {1e-6, 1e6}) {
     const SceneResult r = run_quietly(falling_bar(scale, 1000.0 * scale, 0.01, 4), "units_scaled");
@@ -198,7 +198,7 @@ TEST(Dynamics, NewtonStopsAtTheSameStateInAnyUnits) {
     EXPECT_LT((r.final_positions - unit.final_positions).cwiseAbs().maxCoeff(), 1e-9 * fall) << scale;
   }
   Scene absolute = falling_bar(1e-6, 1e-3, 0.01, 4);
-  absolute.solver.newton.tolerance = 1e-6;
+  absolute.solver.tolerance = 1e-6;
   absolute.solver.newton.relative_step_tolerance = 0.0;
   const SceneResult stuck = run_quietly(absolute, "units_absolute");
   EXPECT_EQ(fewest_newton_iterations(stuck), 0) << "the absolute rule, asked for, is the user's";
@@ -215,7 +215,7 @@ TEST(Dynamics, TinyTimeStepsConvergeWhereRoundingBoundsTheResidual) {
     ASSERT_TRUE(r.all_converged) << dt << ": " << r.failure;
     for (std::size_t f = 1; f < r.frames.size(); ++f) EXPECT_LE(r.frames[f].newton_iterations, 5 * 10) << dt;
     const double n = 3 * 5, fall = 0.5 * n * (n + 1) * dt * dt * 9.81;
-    const Eigen::VectorXd X = flatten(scene_mesh(falling_bar(1000, 1e5, dt, 3))->mesh.vertices);
+    const Eigen::VectorXd X = flatten(scene_body(falling_bar(1000, 1e5, dt, 3))->mesh.vertices);
     double drop = 0.0;  // the largest drop in y
     for (Eigen::Index i = 1; i < X.size(); i += 3) drop = std::max(drop, X(i) - r.final_positions(i));
     EXPECT_NEAR(drop, fall, 1e-3 * fall) << dt;
@@ -236,7 +236,7 @@ TEST(Dynamics, PinnedBarUnderGravitySettlesAtTheQuasiStaticSolution) {
   end.select.region = Eigen::AlignedBox3d(Eigen::Vector3d(0, -1, -1), Eigen::Vector3d(0, 1, 1));
   s.pins.push_back(end);
   s.output.vtu = false;
-  s.solver.newton.tolerance = 1e-8;
+  s.solver.tolerance = 1e-8;
   Scene statics = s;
   statics.time.integrator = Integrator::quasi_static;
   statics.time.frames = 1;
@@ -248,7 +248,7 @@ TEST(Dynamics, PinnedBarUnderGravitySettlesAtTheQuasiStaticSolution) {
   const SceneResult a = run_quietly(statics, "static"), b = run_quietly(dynamics, "dynamic");
   ASSERT_TRUE(a.all_converged) << a.failure;
   ASSERT_TRUE(b.all_converged) << b.failure;
-  const double sag = (a.final_positions - flatten(scene_mesh(s)->mesh.vertices)).cwiseAbs().maxCoeff();
+  const double sag = (a.final_positions - flatten(scene_body(s)->mesh.vertices)).cwiseAbs().maxCoeff();
   EXPECT_GT(sag, 0.05) << "the bar bends under gravity";
   std::cout << "bar: sag " << sag << ", dynamic vs static " << (b.final_positions - a.final_positions).cwiseAbs().maxCoeff() << ", kinetic " << b.frames.back().kinetic_energy << "\n";
   EXPECT_LT((b.final_positions - a.final_positions).cwiseAbs().maxCoeff(), 1e-5 * sag)

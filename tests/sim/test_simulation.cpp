@@ -18,7 +18,7 @@
 
 #include "snh/mesh/box.hpp"
 #include "snh/run/interrupt.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 #include "snh/sim/simulation.hpp"
 #include "snh/run/stats.hpp"
 #include "snh/setup/stretch.hpp"
@@ -349,7 +349,7 @@ TEST(Driver, WritesTheRunsStatus) {
 TEST(SceneSections, MixedOrMeaninglessInputIsRefused) {
   auto error_of = [](const char* text) {
     try {
-      (void)parse_scene(json::parse(text), "s.json");
+      (void)build_scene(parse_scene(json::parse(text), "s.json"));
     } catch (const SceneError& e) {
       return std::string(e.what());
     }

@@ -19,7 +19,7 @@
 #include "snh/fem/elastic_term.hpp"
 #include "snh/fem/problem.hpp"
 #include "snh/mesh/box.hpp"
-#include "snh/setup/scene.hpp"
+#include "snh/setup/scene_run.hpp"
 #include "snh/setup/stretch.hpp"
 #include "snh/solve/multigrid.hpp"
 #include "snh/solve/newton.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// Skeleton-driven flesh (DESIGN.md setup/; the paper's Figure 1 workflow): a rigged model's closed render
+// Skeleton-driven flesh (docs/design.md setup/, docs/flesh.md; the paper's Figure 1 workflow): a rigged model's closed render
 // surface is filled with a volume (a hexahedral lattice or TetGen's tets), the volume vertices inside the
 // bones' capsules follow their bones exactly (a kinematic set whose targets come from the animation), the
 // rest of the flesh is solved, and the render surface, embedded in the volume, follows it. Linear blend
@@ -66,7 +66,8 @@ struct FleshSpec {
   // Defaults of a flesh run (the paper's: nu = 0.488) where the scene or command gives none:
   static constexpr double youngs = 1e5, poisson = 0.488;  ///< Pa; with quasi-static bones only nu matters
   static constexpr double density = 1000.0;               ///< kg/m³ (dynamics)
-  static constexpr double fps = 24.0;                     ///< frames per second of animation
+  /// Frames per second of animation: a scene without "frames" runs end_time × fps of them.
+  double fps = 24.0;
 };
 
 /// The flesh of a rigged model, ready to simulate.

@@ -1,17 +1,18 @@
 #pragma once
-// Scenes (DESIGN.md setup/): a JSON file describing a mesh, a material, time stepping, forces, pins with
-// scripted motion and an initial deformation, run by `snh run SCENE.json`. The format is in the README
-// ("Scene files"); every key is checked, and an unknown key or a bad value is an error that names it.
-// A Scene is made of sections, each with its own parser (setup/scene/*.cpp) and its defaults in its struct,
-// so a Scene built in code and one read from JSON mean the same; a section for contact (issue 16) goes
-// beside them. A scene with a "flesh" section (flesh.hpp) takes its volume from a rigged model and its
-// bones as a kinematic set, and writes the render surface (flesh and skinned) per frame and a USD stage.
+// Scenes (docs/design.md setup/, docs/scenes.md): a JSON file describing a mesh (or a rigged model's flesh), a
+// material, time stepping, forces, pins with scripted motion, an initial deformation, contact and colliders,
+// run by `snh run SCENE.json`. A scene goes through three stages:
+//   parse (this file: pure, reads no file but the scene's own text) → build (scene_build.hpp: the body read or
+//   made, every default that depends on it resolved, everything checked) → run (scene_run.hpp).
+// Every key is checked at parse, and an unknown key or a bad value is an error that names it. A Scene is made
+// of sections, each with its own parser (setup/scene/*.cpp) and its defaults in its struct, so a Scene built in
+// code and one read from JSON mean the same; the keys whose defaults depend on the body (a flesh's clip and
+// cell size, a mesh's size and masses) are optional here and resolved by the build, in one place each.
 #include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
-#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -24,11 +25,10 @@
 #include "snh/material/lame.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/volume_mesh.hpp"
+#include "snh/run/run_directory.hpp"
 #include "snh/setup/flesh.hpp"
 #include "snh/sim/kinematics.hpp"
-#include "snh/run/run_directory.hpp"
 #include "snh/sim/simulation.hpp"
-#include "snh/run/stats.hpp"
 #include "snh/solve/newton.hpp"
 
 namespace snh {
@@ -59,9 +59,12 @@ struct MaterialSpec {
 /// "integrator", "dt", "end_time", "frames".
 struct TimeSpec {
   Integrator integrator = Integrator::backward_euler;
-  double dt = 0.01;        ///< backward Euler: the largest substep (each frame is split into equal substeps)
-  double end_time = 1.0;
-  int frames = 25;
+  double dt = 0.01;                ///< backward Euler: the largest substep (each frame is split into equal substeps)
+  std::optional<double> end_time;  ///< unset: 1 s, or a flesh scene's clip length
+  std::optional<int> frames;       ///< unset: 25, or a flesh scene's end time at flesh.fps frames per second
+  static constexpr double default_end_time = 1.0;
+  static constexpr int default_frames = 25;
+  static constexpr int max_frames = 100000;
 };
 
 /// "gravity" and "damping".
@@ -114,25 +117,26 @@ struct SolverSpec {
   bool refactorize = false;
   /// Newton's stopping rule for scenes, scale-aware (the same for any units, density, stiffness or time
   /// step): converged when ‖g‖ < force_fraction · E ℓ² (E ℓ²: the force a unit strain puts on a cell of
-  /// size ℓ, the cube root of the mean cell volume), or when the Newton step's largest entry is below
-  /// newton.relative_step_tolerance of how far the step's solve has moved the vertices, or below their
-  /// coordinates' rounding (IPC's and PolyFEM's rule on the step, relative: it stops where rounding keeps
-  /// ‖g‖ from falling, as with a tiny time step). A positive `newton.tolerance` (on ‖g‖, absolute: the
-  /// paper programs' rule) replaces the force fraction; `newton.step_tolerance` (a length) adds a step rule.
+  /// size ℓ, the cube root of the mean cell volume; a flesh scene: 1e-6 E h², h its cell size, or a step
+  /// under 1e-4 h), or when the Newton step's largest entry is below newton.relative_step_tolerance of how
+  /// far the step's solve has moved the vertices, or below their coordinates' rounding (IPC's and PolyFEM's
+  /// rule on the step, relative: it stops where rounding keeps ‖g‖ from falling, as with a tiny time step).
+  /// A given `tolerance` (on ‖g‖, absolute: the paper programs' rule) replaces the force fraction; a given
+  /// `step_tolerance` (a length) the flesh's step rule. The build resolves both (scene_build.hpp).
+  std::optional<double> tolerance;
+  std::optional<double> step_tolerance;
+  double force_fraction = 1e-6;
+  /// Every other Newton option (the build sets tolerance and step_tolerance from the two above).
   NewtonOptions newton = [] {
     NewtonOptions o;
     o.tolerance = 0.0;
     o.relative_step_tolerance = 1e-8;
     return o;
   }();
-  double force_fraction = 1e-6;
 };
 
-/// The Newton options a scene's solver section means on its mesh and material (Young's modulus E): the
-/// force fraction turned into a force.
-[[nodiscard]] NewtonOptions newton_options(const SolverSpec& solver, const VolumeMesh& rest, double youngs);
-
-/// "contact" and "colliders": IPC barriers (fem/contact_term.hpp) on the mesh's boundary surface.
+/// "contact" and "colliders": IPC barriers (fem/contact_term.hpp, fem/collider_term.hpp) on the mesh's
+/// boundary surface, or on a flesh's render surface (setup/contact_setup.hpp).
 struct PlaneColliderSpec {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  ///< unit length; the surface stays on its side
@@ -145,22 +149,25 @@ struct ColliderSpec {
   /// plane: point, unit normal; sphere: centre (a); capsule: the segment a–b; box: centre (a), half extents (b)
   Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
   double radius = 0.0;                  ///< sphere, capsule
-  std::filesystem::path file;           ///< mesh: the file read
-  Eigen::Matrix3Xd vertices;            ///< mesh: its vertices and triangles
+  std::filesystem::path file;           ///< mesh: the surface file (read by the build)
+  Eigen::Matrix3Xd vertices;            ///< mesh: its vertices and triangles, once read (scene_build.hpp)
   Eigen::Matrix3Xi triangles;
   std::vector<Motion> motions;          ///< composed in order from the pose at t = 0
   int index = 0;                        ///< in "colliders" (messages)
 };
 struct ContactSpec {
-  bool enabled = false;    ///< a "contact" section was given
-  bool self = false;       ///< self-contact of the boundary surface
-  bool bones = false;      ///< a flesh scene: the bones' capsules keep the volume's free boundary vertices out
-  double dhat = 0.0;       ///< the distance below which the barrier acts
-  double stiffness = 0.0;  ///< κ; 0: "auto" (ipc_barrier_stiffness on the mesh, its mass and time step)
-  double friction = 0.0;   ///< μ of lagged Coulomb friction against planes and shapes (fem/friction_term.hpp); 0: none
-  double friction_velocity = 0.0;  ///< ε_v: slower slip counts as sticking; 0: 1e-3 of the mesh's diagonal per second
-  std::vector<PlaneColliderSpec> planes;  ///< fixed planes
-  std::vector<ColliderSpec> colliders;     ///< every other collider (a moving plane too)
+  bool enabled = false;            ///< a "contact" section was given
+  bool self = false;               ///< self-contact of the boundary surface
+  bool bones = false;              ///< a flesh scene: the bones' capsules keep the skin not bound to them out
+  /// The distance below which the barrier acts; unset: a flesh scene's default (flesh_contact_dhat).
+  std::optional<double> dhat;
+  /// κ; unset: "auto" (ipc_barrier_stiffness on the mesh, its mass and time step), or a flesh scene's default
+  /// (flesh_contact_stiffness).
+  std::optional<double> stiffness;
+  double friction = 0.0;           ///< μ of lagged Coulomb friction against planes and shapes (fem/friction_term.hpp); 0: none
+  std::optional<double> friction_velocity;  ///< ε_v: slower slip counts as sticking; unset: 1e-3 of the mesh's diagonal per second
+  std::vector<PlaneColliderSpec> planes;    ///< fixed planes
+  std::vector<ColliderSpec> colliders;      ///< every other collider (a moving plane too)
 };
 
 /// "output".
@@ -171,22 +178,14 @@ struct OutputSpec {
 
 /// How this run is driven (not part of the scene's physics or its fingerprint).
 struct RunControl {
+  std::string program = "snh run";  ///< the program that runs it (stats.json, the header)
   bool resume = false;         ///< continue the run in output.dir from its checkpoint (the last completed frame)
   std::string command_line;    ///< as the user typed it, for stats.json and the report
   bool live_progress = false;  ///< the log is a terminal: update a line per Newton iteration
-  /// Build the mesh (a flesh scene: its volume and binding) and the problem, print the run's header, and
-  /// stop before any frame: nothing is written.
+  /// Build the problem, print the run's header, and stop before any frame: nothing is written.
   bool check_only = false;
   /// The lock on the output directory if the caller holds it (run_directory.hpp); null: the run takes it.
   std::shared_ptr<RunDirectoryLock> lock;
-};
-
-/// A mesh read from a file (and checked), or built from a box.
-struct SceneMesh {
-  VolumeMesh mesh;
-  int reoriented = 0;      ///< inverted cells of the file turned round
-  std::string digest;      ///< the file's contents (checksum.hpp); empty for a box
-  std::shared_ptr<const Flesh> flesh;  ///< a flesh scene's model, volume, embedding and bones
 };
 
 struct Scene {
@@ -203,47 +202,16 @@ struct Scene {
   ContactSpec contact;
   OutputSpec output;
   RunControl run;
-  /// The mesh, read once by parse_scene (which needs it to check the selections); built on demand for a
-  /// Scene made in code.
-  std::shared_ptr<const SceneMesh> loaded;
 };
 
-/// Reads and checks a scene file. Throws SceneError.
+/// Reads and checks a scene file's keys (parse_scene). Throws SceneError.
 [[nodiscard]] Scene load_scene(const std::filesystem::path& file);
 /// A scene file's text as JSON, strictly: a key given twice in one object, a number beyond double's range
 /// (1e309) or nesting over 64 levels is a SceneError naming `file` and the key or line. Also for bad JSON.
 [[nodiscard]] nlohmann::json read_scene_json(std::string_view text, const std::string& file);
-/// Checks a parsed scene; `source` names it in messages. Throws SceneError (MeshError for a bad mesh file).
+/// Checks a parsed scene's keys and values; `source` names it in messages and is the directory relative file
+/// names are resolved against. Pure: reads no file (the build reads the mesh, model and collider files).
+/// Throws SceneError.
 [[nodiscard]] Scene parse_scene(const nlohmann::json& j, const std::filesystem::path& source);
-
-/// The scene's mesh: the one parse_scene read, or its file read now, or its box scaled to its bounds.
-/// Throws MeshError for a bad file.
-[[nodiscard]] std::shared_ptr<const SceneMesh> scene_mesh(const Scene& scene);
-/// The vertices of a selection. Throws SceneError naming `where` when it selects nothing or an index is
-/// out of range.
-[[nodiscard]] std::vector<int> select_vertices(const Selection& s, const Eigen::Matrix3Xd& X, const std::string& where);
-/// The initial positions: the rest positions with scene.initial applied (3 #V).
-[[nodiscard]] Eigen::VectorXd initial_positions(const Scene& scene, const VolumeMesh& mesh);
-/// The pins as kinematic sets on this mesh, their motions starting from `x0` (3 #V), and a flesh scene's bones.
-[[nodiscard]] std::vector<KinematicSet> scene_kinematics(const Scene& scene, const VolumeMesh& mesh, const Eigen::VectorXd& x0);
-
-using FrameStats = StepRecord;
-
-struct SceneResult {
-  std::vector<FrameStats> frames;  ///< frame 0 is the initial state
-  bool all_converged = true;
-  std::string failure;             ///< why the run stopped early (empty when it ran to the end)
-  int interrupted_by = 0;          ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
-  double total_seconds = 0.0, peak_memory_mib = 0.0;
-  CellType element = CellType::hex8;
-  Eigen::Index vertices = 0, cells = 0;
-  Eigen::VectorXd final_positions;
-};
-
-/// Runs the scene into scene.output.dir: NNN.obj / NNN.vtu frames, frames.pvd, stats.json, stats.csv and
-/// checkpoint.bin, printing a header and one line per frame to log. Stops at the first substep that fails
-/// (its frame and the stats are still written). A starting state outside the energy's domain stops the
-/// run at frame 0 with that reason.
-[[nodiscard]] SceneResult run_scene(const Scene& scene, std::ostream& log);
 
 }  // namespace snh

@@ -1,5 +1,5 @@
 #pragma once
-// The JSON reader shared by the scene's section parsers (internal to sim/): reads the keys of one object,
+// The JSON reader shared by the scene's section parsers (internal to setup/): reads the keys of one object,
 // remembering which were used, so that unknown keys can be named; every error is one line,
 // "FILE: PATH.KEY: what is wrong".
 #include <algorithm>

@@ -9,27 +9,25 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
     Keys k(*c, "contact", top.file());
     s.enabled = true;
     s.self = k.boolean("self", s.self);
-    // A flesh scene may leave dhat and stiffness to its defaults (flesh_contact_dhat and _stiffness, set
-    // once the flesh is built): 0 here.
+    // A flesh scene may leave dhat and stiffness to its defaults (flesh_contact_dhat and _stiffness, resolved
+    // by the build once the flesh is built): unset here.
     const bool flesh = top.has("flesh");
     if (k.has("bones") && !flesh) k.fail("only a flesh scene has bones", "bones");
     s.bones = k.boolean("bones", s.bones);
     if (!k.has("dhat") && !flesh) k.fail("required: the distance below which surfaces repel (> 0)", "dhat");
-    s.dhat = k.has("dhat") ? k.positive("dhat", 0.0) : 0.0;
+    if (k.has("dhat")) s.dhat = k.positive("dhat", 0.0);
     if (!k.has("stiffness") && !flesh) k.fail("required: the barrier's stiffness kappa (> 0, or \"auto\")", "stiffness");
-    if (const json* st = k.get("stiffness"); !st) {
-      s.stiffness = 0.0;
-    } else if (st->is_string()) {
+    if (const json* st = k.get("stiffness"); st && st->is_string()) {
       if (st->get<std::string>() != "auto") k.fail("expected a number > 0 or \"auto\", got " + st->dump(), "stiffness");
       if (integrator != Integrator::backward_euler && !flesh)
         k.fail("\"auto\" needs backward_euler (its masses and time step set the scale): give a number", "stiffness");
-      s.stiffness = 0.0;  // auto: chosen on the mesh (ipc_barrier_stiffness)
-    } else {
+      // auto: unset, chosen on the mesh by the build (ipc_barrier_stiffness)
+    } else if (st) {
       s.stiffness = k.positive("stiffness", 0.0);
     }
     s.friction = k.non_negative("friction", 0.0);
     if (k.get("friction_velocity") && !(s.friction > 0.0)) k.fail("has no effect without friction > 0", "friction_velocity");
-    s.friction_velocity = k.has("friction_velocity") ? k.positive("friction_velocity", 0.0) : 0.0;
+    if (k.has("friction_velocity")) s.friction_velocity = k.positive("friction_velocity", 0.0);
     k.finish();
   }
   if (const json* list = top.get("colliders")) {
@@ -90,22 +88,6 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
         const std::filesystem::path f = file->get<std::string>();
         c.file = f.is_absolute() ? f : source.parent_path() / f;
         if (!is_surface_file(c.file)) k.fail("expected a .obj, .off, .ply or .stl file, got " + file->dump(), "file");
-        SurfaceMesh surface;
-        try {
-          surface = read_surface(c.file);
-        } catch (const std::exception& e) {
-          k.fail(e.what(), "file");
-        }
-        if (surface.triangles.cols() == 0) k.fail(fmt::format("{} has no triangles", c.file.string()), "file");
-        if (!(surface.vertices.array().abs() <= max_magnitude).all())
-          k.fail(fmt::format("{} has a coordinate beyond the {:g} a scene allows", c.file.string(), max_magnitude), "file");
-        for (Eigen::Index t = 0; t < surface.triangles.cols(); ++t) {
-          const auto& T = surface.triangles.col(t);
-          if (T[0] == T[1] || T[1] == T[2] || T[2] == T[0])
-            k.fail(fmt::format("{}: triangle {} repeats a vertex", c.file.string(), t), "file");
-        }
-        c.vertices = std::move(surface.vertices);
-        c.triangles = std::move(surface.triangles);
       }
       k.finish();
       if (c.type == ColliderSpec::Type::plane && c.motions.empty()) s.planes.push_back({c.a, c.b, c.index});
@@ -121,6 +103,27 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
               "colliders are frictionless)",
               "friction");
   return s;
+}
+
+void read_collider_mesh(ColliderSpec& c, const std::string& file) {
+  const auto fail = [&](const std::string& what) {
+    throw SceneError(fmt::format("{}: colliders[{}].file: {}", file, c.index, what));
+  };
+  SurfaceMesh surface;
+  try {
+    surface = read_surface(c.file);
+  } catch (const std::exception& e) {
+    fail(e.what());
+  }
+  if (surface.triangles.cols() == 0) fail(fmt::format("{} has no triangles", c.file.string()));
+  if (!(surface.vertices.array().abs() <= max_magnitude).all())
+    fail(fmt::format("{} has a coordinate beyond the {:g} a scene allows", c.file.string(), max_magnitude));
+  for (Eigen::Index t = 0; t < surface.triangles.cols(); ++t) {
+    const auto& T = surface.triangles.col(t);
+    if (T[0] == T[1] || T[1] == T[2] || T[2] == T[0]) fail(fmt::format("{}: triangle {} repeats a vertex", c.file.string(), t));
+  }
+  c.vertices = std::move(surface.vertices);
+  c.triangles = std::move(surface.triangles);
 }
 
 }  // namespace snh::scene

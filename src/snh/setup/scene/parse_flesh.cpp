@@ -93,6 +93,8 @@ std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& sou
   }
   const std::string joints = k.choice("joint_cells", to_string(s.joint_cells), {"soft", "free", "hard"});
   s.joint_cells = joints == "soft" ? JointCells::soft : joints == "free" ? JointCells::free : JointCells::hard;
+  s.fps = k.positive("fps", s.fps);
+  if (s.fps > 1e6) k.fail(fmt::format("must be at most 1e6 frames per second, got {:g}", s.fps), "fps");
   if (const json* soft = k.get("soft_binding")) {
     Keys b(*soft, "flesh.soft_binding", top.file());
     if (b.has("shell")) s.soft_shell = b.positive("shell", 0.0);

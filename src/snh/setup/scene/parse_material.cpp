@@ -3,8 +3,8 @@
 
 namespace snh::scene {
 
-MaterialSpec parse_material(Keys& top) {
-  MaterialSpec s;
+MaterialSpec parse_material(Keys& top, const MaterialSpec& defaults) {
+  MaterialSpec s = defaults;
   if (const json* mat = top.get("material")) {
     Keys m(*mat, "material", top.file());
     if (const json* name = m.get("name")) {

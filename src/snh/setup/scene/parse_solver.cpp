@@ -9,9 +9,9 @@ SolverSpec parse_solver(Keys& top) {
     Keys k(*solver, "solver", top.file());
     s.linear = k.choice("linear", s.linear, linear_solver_names());
     s.refactorize = k.boolean("refactorize", s.refactorize);
-    // Given, an absolute tolerance on |g| replaces the fraction of E l².
-    if (k.has("tolerance")) s.newton.tolerance = k.positive("tolerance", s.newton.tolerance);
-    s.newton.step_tolerance = k.non_negative("step_tolerance", s.newton.step_tolerance);
+    // Given, an absolute tolerance on |g| replaces the fraction of E l² (a flesh scene's: of E h²).
+    if (k.has("tolerance")) s.tolerance = k.positive("tolerance", 0.0);
+    if (const double step = k.non_negative("step_tolerance", 0.0); k.has("step_tolerance")) s.step_tolerance = step;
     s.newton.relative_step_tolerance = k.non_negative("relative_step_tolerance", s.newton.relative_step_tolerance);
     s.newton.max_iterations = static_cast<int>(k.integer("max_iterations", s.newton.max_iterations, 1, 100000));
     s.newton.try_true_hessian = !k.boolean("projected_only", !s.newton.try_true_hessian);

@@ -8,8 +8,11 @@ TimeSpec parse_time(Keys& top) {
                      ? Integrator::quasi_static
                      : Integrator::backward_euler;
   s.dt = top.positive("dt", s.dt);
-  s.end_time = top.positive("end_time", s.end_time);
-  s.frames = static_cast<int>(top.integer("frames", s.frames, 1, 100000));
+  // Asked for either way (so that an unknown key's message lists them), kept where given.
+  const double end_time = top.positive("end_time", TimeSpec::default_end_time);
+  const auto frames = static_cast<int>(top.integer("frames", TimeSpec::default_frames, 1, 100000));
+  if (top.has("end_time")) s.end_time = end_time;
+  if (top.has("frames")) s.frames = frames;
   return s;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
-// The scene's section parsers (internal to sim/), one file each: every one reads its keys from the
+// The scene's section parsers (internal to setup/), one file each: every one reads its keys from the
 // top-level object (or its own sub-object) and starts from its struct's defaults.
 #include <filesystem>
+#include <stdexcept>
 #include <optional>
 #include <vector>
 
@@ -10,12 +11,25 @@
 
 namespace snh::scene {
 
+/// f(), with a bad-input error from below (a rig, a kinematic set, a term) turned into a SceneError of the same
+/// line.
+template <class F>
+auto as_scene_error(F&& f) {
+  try {
+    return f();
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(e.what());
+  }
+}
+
 /// "mesh": {"box": {...}} or {"file": "..."} (relative to the scene file's directory).
 [[nodiscard]] MeshSpec parse_mesh(Keys& top, const std::filesystem::path& source);
 /// "flesh": a rigged model (relative to the scene file's directory), its volume, animation and bone radii.
 [[nodiscard]] std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& source);
-/// "material" and "density".
-[[nodiscard]] MaterialSpec parse_material(Keys& top);
+/// "material" and "density", from `defaults` where the scene gives none (a flesh scene's differ).
+[[nodiscard]] MaterialSpec parse_material(Keys& top, const MaterialSpec& defaults);
 /// "integrator", "dt", "end_time", "frames".
 [[nodiscard]] TimeSpec parse_time(Keys& top);
 /// "gravity" and "damping".
@@ -31,8 +45,12 @@ namespace snh::scene {
 /// "solver".
 [[nodiscard]] SolverSpec parse_solver(Keys& top);
 /// "contact" and "colliders" ("auto" stiffness only with backward Euler; mesh files relative to the scene
-/// file's directory, read here; motions default to ending at end_time).
+/// file's directory, named here and read by read_collider_mesh; motions default to ending at end_time).
 [[nodiscard]] ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesystem::path& source, double end_time);
+/// A mesh collider's surface file read into its vertices and triangles. Throws SceneError naming `file` (the
+/// scene) and the collider: the file cannot be read, has no triangles, a coordinate beyond max_magnitude or a
+/// degenerate triangle.
+void read_collider_mesh(ColliderSpec& c, const std::string& file);
 /// "output" (the directory defaults to output/<file stem>).
 [[nodiscard]] OutputSpec parse_output(Keys& top, const std::filesystem::path& source);
 

@@ -1,0 +1,177 @@
+#include "snh/setup/flesh_scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "snh/io/atomic_file.hpp"
+#include "snh/io/obj.hpp"
+#include "snh/io/surface_read.hpp"
+#include "snh/io/usda.hpp"
+#include "snh/run/stats.hpp"
+
+namespace snh {
+namespace {
+
+using json = nlohmann::json;
+
+std::string frame_name(int index) { return fmt::format("{:03d}.obj", index); }
+
+/// The flesh's settings in stats.json: the model, the volume, the binding.
+void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& settings) {
+  const RiggedModel& m = flesh.model;
+  json bones = json::array();
+  for (std::size_t b = 0; b < flesh.bones.size(); ++b)
+    bones.push_back({{"name", flesh.bones[b].name}, {"radius", flesh.bones[b].radius}, {"bound", flesh.bound_per_bone[b]}});
+  settings["model"] = spec.model.string();
+  settings["volume"] = spec.volume == FleshVolume::lattice ? "lattice" : "tets";
+  settings["resolution"] = spec.resolution;
+  settings["animation"] = flesh.clip.name;
+  settings["model_vertices"] = m.vertices.cols();
+  settings["model_triangles"] = m.triangles.cols();
+  settings["joints"] = m.skeleton.size();
+  settings["bound_vertices"] = flesh.binding.vertex.size();
+  settings["volume_of_cells"] = flesh.volume_of_cells;
+  settings["surface_volume"] = flesh.surface_volume;
+  settings["bones"] = bones;
+  settings["joint_cells"] = to_string(spec.joint_cells);
+  settings["released_vertices"] = flesh.released.vertex.size();
+  if (spec.soft_shell > 0.0)
+    settings["soft_binding"] = {{"shell", spec.soft_shell}, {"stiffness", spec.soft_stiffness}, {"vertices", flesh.soft.vertex.size()}};
+}
+
+/// The header's lines on the model, the volume and the binding.
+void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream& o) {
+  const RiggedModel& m = flesh.model;
+  o << fmt::format("model {}: {} vertices ({} welded), {} triangles, {} joints (hierarchy from the {}), animation \"{}\" "
+                   "of {:g} s\n",
+                   m.source.string(), m.vertices.cols(), m.surface_vertices.cols(), m.triangles.cols(), m.skeleton.size(),
+                   m.hierarchy == "names" ? "joint names" : "file", flesh.clip.name, flesh.clip.duration());
+  o << fmt::format("volume: {} at resolution {} ({} {:.4g} wide): {} cells, {} vertices; volume {:.6g} against the surface's "
+                   "{:.6g} ({:.3f}x)\n",
+                   spec.volume == FleshVolume::lattice ? "hexahedral lattice" : "tets (TetGen)", spec.resolution,
+                   spec.volume == FleshVolume::lattice ? "cubes" : "tets no larger than a sixth of a cube", flesh.cell_size,
+                   flesh.volume.cell_count(), flesh.volume.vertex_count(), flesh.volume_of_cells, flesh.surface_volume,
+                   flesh.volume_of_cells / flesh.surface_volume);
+  std::string counts;
+  for (std::size_t b = 0; b < flesh.bones.size(); ++b)
+    counts += fmt::format("{}{} {}", b ? ", " : "", flesh.bones[b].name, flesh.bound_per_bone[b]);
+  o << fmt::format("bones: {} binding {} volume vertices ({})\n", flesh.bones.size(), flesh.binding.vertex.size(), counts);
+  if (!flesh.released.vertex.empty())
+    o << fmt::format("joints: {} vertices of capsules in cells spanning two joints {} (joint cells {})\n", flesh.released.vertex.size(),
+                     spec.joint_cells == JointCells::soft ? "bound softly instead" : "released", to_string(spec.joint_cells));
+  if (spec.soft_shell > 0.0)
+    o << fmt::format("soft binding: {} more volume vertices within {:.4g} of the capsules, pulled by springs of {:g} x E x h "
+                     "(fading to 0 at the shell's edge)\n",
+                     flesh.soft.vertex.size(), spec.soft_shell, spec.soft_stiffness);
+  for (std::size_t b = 0; b < flesh.bones.size(); ++b)
+    if (flesh.bound_per_bone[b] == 0)
+      o << fmt::format("warning: bone {} binds no volume vertex (capsule radius {:.4g}; cells {:.4g} wide)\n", flesh.bones[b].name,
+                       flesh.bones[b].radius, flesh.cell_size);
+}
+
+/// flesh.usda from the surface/ and lbs/ frames on disk (so that a resumed run's stage holds them all), and
+/// bones.json (the bones' segments at every frame written, for the report). Nothing without frames.
+void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, double fps, json& stats) {
+  std::vector<UsdMesh> meshes{{.name = "flesh", .triangles = flesh.model.triangles, .frames = {}},
+                              {.name = "linear_blend_skinning", .triangles = flesh.model.triangles, .frames = {}}};
+  for (int i = 0; std::filesystem::exists(out / "surface" / frame_name(i)) && std::filesystem::exists(out / "lbs" / frame_name(i)); ++i) {
+    meshes[0].frames.push_back(read_surface(out / "surface" / frame_name(i)).vertices);
+    meshes[1].frames.push_back(read_surface(out / "lbs" / frame_name(i)).vertices);
+  }
+  if (meshes[0].frames.empty()) return;
+  write_usda(out / "flesh.usda", "character", meshes, fps);
+  stats["usd"] = "flesh.usda";
+  // The bones at every frame written: segment ends in world space.
+  json names = json::array(), frames = json::array();
+  for (const Bone& b : flesh.bones) names.push_back(b.name);
+  for (std::size_t i = 0; i < meshes[0].frames.size(); ++i) {
+    const double t = static_cast<double>(i) / fps;
+    const std::vector<Eigen::Affine3d> world = joint_world(flesh, t);
+    json segments = json::array();
+    for (const Bone& b : flesh.bones) {
+      const Eigen::Vector3d a = world[b.joint] * (flesh.rest_world[b.joint].inverse() * b.a);
+      const Eigen::Vector3d c = world[b.joint] * (flesh.rest_world[b.joint].inverse() * b.b);
+      segments.push_back({a[0], a[1], a[2], c[0], c[1], c[2]});
+    }
+    frames.push_back({{"time", t}, {"segments", segments}});
+  }
+  write_atomically(out / "bones.json", [&](std::ostream& o) { o << json{{"bones", names}, {"frames", frames}}.dump() << "\n"; });
+}
+
+}  // namespace
+
+void flesh_time(const Scene& s, const Flesh& flesh, double& end_time, int& frames) {
+  const double duration = flesh.clip.duration();
+  if (!s.time.end_time && duration > 0.0) end_time = duration;
+  if (s.time.frames) return;
+  const double fps = s.flesh ? s.flesh->fps : FleshSpec{}.fps;
+  const double n = std::max(1.0, std::round(end_time * fps));
+  if (!(n <= TimeSpec::max_frames))
+    throw SceneError(fmt::format("{}: end_time: {:g} s at {:g} frames per second makes {:.3g} frames; at most {} can run",
+                                 s.source.string(), end_time, fps, n, TimeSpec::max_frames));
+  frames = static_cast<int>(n);
+}
+
+NewtonOptions flesh_newton_options(const SolverSpec& solver, const Flesh& flesh, double youngs) {
+  const double h = flesh.cell_size;
+  NewtonOptions o = solver.newton;
+  o.tolerance = solver.tolerance ? *solver.tolerance : 1e-6 * youngs * h * h;
+  o.step_tolerance = solver.step_tolerance ? *solver.step_tolerance : 1e-4 * h;
+  return o;
+}
+
+ContactParameters flesh_contact(const ContactSpec& contact, const Flesh& flesh, double youngs) {
+  ContactParameters p;
+  p.dhat = contact.dhat ? *contact.dhat : flesh_contact_dhat(flesh);
+  p.stiffness = contact.stiffness ? *contact.stiffness : flesh_contact_stiffness(flesh, youngs, p.dhat);
+  return p;
+}
+
+void add_flesh_terms(const BuiltScene& b, SimulationSetup& setup, std::vector<std::shared_ptr<Term>>& bones) {
+  const Scene& s = b.scene;
+  const std::shared_ptr<const Flesh>& flesh = b.body->flesh;
+  if (s.time.integrator != Integrator::backward_euler) setup.carrier = flesh_carrier(flesh);  // guesses that follow the bones
+  if (std::shared_ptr<Term> soft = soft_binding_term(flesh, s.flesh->soft_stiffness, youngs_modulus(s.material.params)))
+    setup.terms.push_back(std::move(soft));
+  if (s.contact.enabled && s.contact.bones) bones = bone_collider_terms(flesh, b.contact.dhat, b.contact.stiffness);
+}
+
+void add_flesh_output(const BuiltScene& b, const Simulation& sim, RunPlan& plan) {
+  const Flesh& flesh = *b.body->flesh;
+  const FleshSpec& spec = *b.scene.flesh;
+  plan.table = &flesh_table();
+  add_flesh_settings(flesh, spec, plan.settings);
+  if (b.scene.contact.enabled) {  // the bones with a capsule collider (add_flesh_terms)
+    std::vector<std::vector<int>> points;
+    if (b.scene.contact.bones) points = bone_collider_points(flesh, b.contact.dhat);
+    plan.settings["contact"]["bone_colliders"] =
+        std::count_if(points.begin(), points.end(), [](const std::vector<int>& p) { return !p.empty(); });
+  }
+  const auto base_header = plan.header;
+  plan.header = [&flesh, &spec, base_header](std::ostream& o) {
+    write_flesh_header(flesh, spec, o);
+    if (base_header) base_header(o);
+  };
+  const double rest_surface = surface_volume(flesh, flesh.model.vertices);
+  const auto base_fill = plan.fill;
+  plan.fill = [&flesh, &sim, rest_surface, base_fill](StepRecord& r, const StepReport* rep) {
+    if (base_fill) base_fill(r, rep);
+    r.surface_volume_ratio = surface_volume(flesh, flesh_surface(flesh, sim.x())) / rest_surface;
+    r.lbs_volume_ratio = surface_volume(flesh, skinned_surface(flesh, r.time)) / rest_surface;
+  };
+  const std::filesystem::path out = plan.out;
+  plan.write_frame = [&flesh, out](int index, double time, const Eigen::VectorXd& x) {
+    ensure_writable_directory(out / "surface");
+    ensure_writable_directory(out / "lbs");
+    write_obj(out / "surface" / frame_name(index), flesh_surface(flesh, x), flesh.model.triangles);
+    write_obj(out / "lbs" / frame_name(index), skinned_surface(flesh, time), flesh.model.triangles);
+  };
+  const double fps = b.frames / b.end_time;
+  plan.finish = [&flesh, out, fps](json& stats) { write_flesh_cache(flesh, out, fps, stats); };
+}
+
+}  // namespace snh

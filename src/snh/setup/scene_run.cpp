@@ -1,0 +1,202 @@
+#include "snh/setup/scene_run.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "snh/run/driver.hpp"
+#include "snh/setup/flesh_scene.hpp"
+
+namespace snh {
+namespace {
+
+using json = nlohmann::json;
+
+const char* cells_name(const VolumeMesh& mesh) { return mesh.type == CellType::tet4 ? "tets" : "hexes"; }
+
+/// Newton's stopping rule in words, for the header line.
+std::string stopping_rule(const NewtonOptions& o) {
+  std::string rule;
+  if (o.tolerance > 0.0) rule = fmt::format("|g| < {:.3g}", o.tolerance);
+  if (o.step_tolerance > 0.0) rule += fmt::format("{}a step < {:.3g}", rule.empty() ? "" : " or ", o.step_tolerance);
+  if (o.relative_step_tolerance > 0.0)
+    rule += fmt::format("{}a step < {:.3g} of its motion", rule.empty() ? "" : " or ", o.relative_step_tolerance);
+  return "Newton stops at " + rule;
+}
+
+/// stats.json's description of the run: the scene's sections as built (every default resolved), what the
+/// solver "auto" chose, and the body's size.
+json scene_settings(const BuiltScene& b, const Simulation& sim) {
+  const Scene& s = b.scene;
+  const VolumeMesh& mesh = b.body->mesh;
+  json j;
+  j["program"] = s.run.program;
+  if (!s.run.command_line.empty()) j["command_line"] = s.run.command_line;
+  j["scene"] = s.source.string();
+  j["element"] = std::string(to_string(mesh.type));
+  if (s.mesh.file.empty()) j["resolution"] = s.mesh.resolution;
+  else j["mesh_file"] = s.mesh.file.string();
+  j["material"] = s.material.name;
+  j["mu"] = s.material.params.mu;
+  j["lambda"] = s.material.params.lambda;
+  j["reparametrize"] = s.material.reparametrize;
+  j["density"] = s.material.density;
+  j["integrator"] = s.time.integrator == Integrator::backward_euler ? "backward_euler" : "quasi_static";
+  j["dt"] = s.time.dt;
+  j["end_time"] = b.end_time;
+  j["gravity"] = {s.forces.gravity[0], s.forces.gravity[1], s.forces.gravity[2]};
+  j["mass_damping"] = s.forces.mass_damping;
+  j["stiffness_damping"] = s.forces.stiffness_damping;
+  j["solver"] = std::string(sim.solver().name());  // what "auto" chose
+  j["tolerance"] = b.newton.tolerance;
+  j["step_tolerance"] = b.newton.step_tolerance;
+  j["relative_step_tolerance"] = b.newton.relative_step_tolerance;
+  j["vertices"] = mesh.vertex_count();
+  j["cells"] = mesh.cell_count();
+  if (s.contact.enabled) {
+    const ContactSpec& c = s.contact;
+    json planes = json::array();
+    for (const PlaneColliderSpec& p : c.planes)
+      planes.push_back({{"point", {p.point[0], p.point[1], p.point[2]}}, {"normal", {p.normal[0], p.normal[1], p.normal[2]}}});
+    j["contact"] = {{"self", c.self},
+                    {"dhat", b.contact.dhat},
+                    {"stiffness", b.contact.stiffness},
+                    {"stiffness_auto", !c.stiffness && !b.body->flesh},  // IPC's automatic κ (a flesh's default is its own)
+                    {"planes", planes},
+                    {"colliders", c.planes.size() + c.colliders.size()},
+                    {"friction", c.friction}};
+    if (c.friction > 0.0) j["contact"]["friction_velocity"] = b.contact.slip_velocity;
+  }
+  return j;
+}
+
+/// The header: the mesh file, the body and material, the time stepping, the solver and where it writes.
+void write_header(const BuiltScene& b, const Simulation& sim, std::ostream& o) {
+  const Scene& s = b.scene;
+  const VolumeMesh& mesh = b.body->mesh;
+  const bool dynamic = s.time.integrator == Integrator::backward_euler;
+  if (!s.mesh.file.empty())
+    o << fmt::format("mesh {}: {} vertices, {} {}{}\n", s.mesh.file.string(), mesh.vertex_count(), mesh.cell_count(), cells_name(mesh),
+                     b.body->reoriented ? fmt::format("; warning: {} inverted cell(s) re-oriented", b.body->reoriented) : "");
+  o << fmt::format("{} {}: {} {} ({} vertices), material {}, mu {:g}, lambda {:g}{}, density {:g}\n", s.run.program,
+                   s.source.string(), mesh.cell_count(), cells_name(mesh), mesh.vertex_count(), s.material.name, s.material.params.mu,
+                   s.material.params.lambda, s.material.reparametrize ? " (linear, reparametrized)" : "", s.material.density);
+  o << fmt::format("{}, {} frames to t = {:g}{}, gravity ({:g}, {:g}, {:g}), solver {} ({}), output {}\n",
+                   dynamic ? "backward Euler" : "quasi-static", b.frames, b.end_time,
+                   dynamic ? fmt::format(" ({} substeps of {:g} per frame)", b.substeps, b.substep) : "", s.forces.gravity[0],
+                   s.forces.gravity[1], s.forces.gravity[2],
+                   s.solver.linear == "auto" ? fmt::format("{} (auto)", sim.solver().name()) : s.solver.linear,
+                   stopping_rule(sim.setup().newton), s.output.dir.string());
+}
+
+/// The contact terms' statistics in every frame's record (contact_table): active pairs and the smallest
+/// distance at the frame's solution, and what the terms counted during its solve (Term::report_contact, which
+/// then starts their counts anew); the progress line gets the pairs and the distance.
+void add_contact_statistics(Simulation& sim, RunPlan& plan) {
+  plan.table = &contact_table(*plan.table);
+  const auto base_fill = plan.fill;
+  plan.fill = [&sim, base_fill](StepRecord& r, const StepReport* rep) {
+    if (base_fill) base_fill(r, rep);
+    ContactStatistics c;
+    for (Term* t : sim.problem().terms()) t->report_contact(sim.x(), c);
+    r.contact_pairs = c.pairs;
+    r.min_contact_distance = c.min_distance;
+    r.ccd_calls = static_cast<int>(std::min<long long>(c.ccd_calls, std::numeric_limits<int>::max()));
+    r.ccd_tests = static_cast<int>(std::min<long long>(c.ccd_tests, std::numeric_limits<int>::max()));
+    r.contact_seconds = c.seconds;
+  };
+  const auto base_line = plan.line;
+  plan.line = [base_line](const StepRecord& r) {
+    return base_line(r) + (r.contact_pairs > 0 ? fmt::format(", {} contact pairs, min distance {:.3g}", r.contact_pairs,
+                                                             r.min_contact_distance)
+                                               : std::string(", no contact pairs"));
+  };
+}
+
+/// The driver's plan for a scene: its frames and substeps, the fingerprint a resume must match, and the log's
+/// header and lines; a flesh's output and contact statistics added where the scene has them.
+RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
+  const Scene& s = b.scene;
+  RunPlan plan;
+  plan.out = s.output.dir;
+  plan.lock = s.run.lock;
+  plan.table = &scene_table();
+  plan.frames = b.frames;
+  plan.frame_duration = b.end_time / b.frames;
+  plan.substeps = b.substeps;
+  plan.substep = b.substep;
+  plan.write_vtu = s.output.vtu;
+  plan.resume = s.run.resume;
+  // The scene as parsed (or its source, for one built in code) and the mesh file's (model's) contents.
+  plan.fingerprint = "scene " + (s.settings.empty() ? s.source.string() : s.settings) +
+                     (b.body->digest.empty() ? "" : " mesh contents " + b.body->digest);
+  plan.settings = scene_settings(b, sim);
+  plan.live_progress = s.run.live_progress;
+  plan.header = [&b, &sim](std::ostream& o) { write_header(b, sim, o); };
+  plan.fill = [&sim](StepRecord& f, const StepReport*) {
+    const Eigen::VectorXd& x = sim.x();
+    f.elastic_energy = sim.elastic().energy(x);
+    f.kinetic_energy = sim.inertia().kinetic_energy(sim.v());
+    f.gravity_energy = sim.inertia().gravity_energy(x);
+    f.total_energy = f.elastic_energy + f.kinetic_energy + f.gravity_energy;
+  };
+  const int frames = b.frames, substeps = b.substeps;
+  plan.line = [frames](const StepRecord& f) {
+    if (f.index == 0)
+      return fmt::format("frame {:>3}/{}: t = {:.4g}, volume {:.4f}, min J {:.4f}{}", 0, frames, 0.0, f.volume_ratio, f.min_J,
+                         f.failure.empty() ? "" : "  " + f.failure);
+    return fmt::format("frame {:>3}/{}: t = {:.4g}, {} Newton iterations, |g| = {:.2e}, energy {:.8g} (kinetic {:.4g}), "
+                       "volume {:.4f}, min J {:.4f}, {:.3f} s{}",
+                       f.index, frames, f.time, f.newton_iterations, f.residual, f.total_energy, f.kinetic_energy, f.volume_ratio,
+                       f.min_J, f.wall_seconds, f.converged ? "" : "  NOT CONVERGED: " + f.failure);
+  };
+  plan.live = [frames, substeps](int frame, int sub, int it, double r) {
+    return fmt::format("frame {:>3}/{}: substep {}/{}, Newton iteration {}, |g| = {:.2e} ...", frame, frames, sub, substeps, it, r);
+  };
+  plan.failure = [](const StepReport& r) {
+    return fmt::format("substep {} (t = {:.6g}): {}", r.failed_substep, r.failed_time, r.failure);
+  };
+  plan.summary = [out = s.output.dir](const RunResult& r) {
+    return fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); frames, stats.json and stats.csv in {}",
+                       r.all_converged ? "finished" : "STOPPED: " + r.failure, r.total_seconds, r.peak_memory_mib, out.string());
+  };
+  if (b.body->flesh) add_flesh_output(b, sim, plan);
+  const auto& terms = sim.problem().terms();
+  if (std::any_of(terms.begin(), terms.end(), [](const Term* t) { return t->reports_contact(); })) add_contact_statistics(sim, plan);
+  return plan;
+}
+
+}  // namespace
+
+SceneResult run_scene(const BuiltScene& b, std::ostream& log) {
+  const Scene& s = b.scene;
+  if (s.output.dir.empty()) throw SceneError(fmt::format("{}: no output directory", s.source.string()));
+  const VolumeMesh& mesh = b.body->mesh;
+  Simulation sim(simulation_setup(b));
+  const RunPlan plan = scene_plan(b, sim);
+  SceneResult result;
+  result.element = mesh.type;
+  result.vertices = mesh.vertex_count();
+  result.cells = mesh.cell_count();
+  if (s.run.check_only) {
+    plan.header(log);
+    log << fmt::format("checked: {} {}, {} vertices, {} free DOFs; no frame run\n", mesh.cell_count(), cells_name(mesh),
+                       mesh.vertex_count(), sim.problem().dofs().free_count());
+    return result;
+  }
+  RunResult run = run_simulation(sim, plan, log);
+  result.frames = std::move(run.records);
+  result.all_converged = run.all_converged;
+  result.failure = std::move(run.failure);
+  result.interrupted_by = run.interrupted_by;
+  result.total_seconds = run.total_seconds;
+  result.peak_memory_mib = run.peak_memory_mib;
+  result.final_positions = sim.x();
+  return result;
+}
+
+SceneResult run_scene(const Scene& scene, std::ostream& log) { return run_scene(build_scene(scene), log); }
+
+}  // namespace snh
