@@ -63,9 +63,8 @@ void sweep_rows(Level& L, bool lexicographic) {
     std::vector<int> next(L.colour_start.begin(), L.colour_start.end() - 1);
     for (int i = 0; i < n; ++i) L.by_colour[next[L.colour[i]]++] = i;
   }
-  // The rows in sweep order: each sweep then reads them front to back (by node, a colour's rows lie every
-  // eighth row apart: bench_multigrid's hex V-cycle took 0.84 and 0.89 of that time on 1 and 2 threads,
-  // medians of 10 pairs of runs in turn).
+  // The rows in sweep order, so that each sweep reads them front to back as one stream (in node order a
+  // colour's rows lie every eighth row apart, and a sweep would skip through memory).
   std::vector<int> start(n), slot(L.row_slot.size()), node(L.row_node.size());
   L.row_end.resize(n);
   int filled = 0;

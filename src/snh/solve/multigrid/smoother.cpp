@@ -47,8 +47,8 @@ inline Lanes multiply_add(const Lanes& a, double x, const Lanes& t) {
 /// s −= Σ A_ik x_k over row i's off-diagonal blocks `from` .. `to` (sweep_rows()), single-precision blocks
 /// stored by columns: column j of a block, widened to four doubles (the fourth is the float after it; it goes
 /// to the sums' unused lane), times x_kj. Six independent sums (the columns of the even and of the odd blocks)
-/// with fused multiply-adds: the loop is not one chain of dependent additions (bench_multigrid, hex V-cycle:
-/// 0.93-0.97 of the time of one sum by unfused operations).
+/// with fused multiply-adds (one rounding and one instruction each): the loop is not one chain of dependent
+/// additions, whose latency would bound it.
 inline void subtract_row(const Level& L, int from, int to, const double* x, Lanes& s) {
   const float* val = L.row_val.data() + 9 * static_cast<std::size_t>(from);
   const int* node = L.row_node.data();

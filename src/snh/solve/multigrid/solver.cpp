@@ -40,11 +40,11 @@ class MultigridSolver final : public LinearSolver {
     if (fresh_iterations_ < 0) fresh_iterations_ = r.iterations;
     // Truncated Newton (Nocedal and Wright, Algorithm 7.1): a matrix given to try_factorize() that shows
     // negative curvature after the first CG step yields the iterate before it, if that already solves the
-    // system to half of ‖b‖ (an inexact Newton step of forcing ½). Measured on the flesh benchmark's hardest
-    // step (45 272 hexes, inverted cells; truncated at a residual of 0.22): 15 Newton iterations, ten of them
-    // on the projected Hessian after a failed true one, became 6, to the same energy. Without the residual
-    // rule, boxes squashed through themselves took up to 3.8x the iterations (truncations at residuals up to
-    // 138 ‖b‖); with it, the same as without truncation (tests/solve/test_multigrid.cpp).
+    // system to half of ‖b‖ (an inexact Newton step of forcing ½): a step of the true Hessian where it is
+    // indefinite, rather than a failed true step and a fall-back to the projected Hessian, whose steps converge
+    // slowly on inverted cells. The residual rule refuses truncated iterates that solve the system poorly:
+    // those cost more Newton iterations than no truncation (a box squashed through itself,
+    // tests/solve/test_multigrid.cpp).
     truncated_ = may_truncate_ && r.status == CgStatus::indefinite && r.iterations > 1 && r.residual <= 0.5 * b.norm();
     if (truncated_) return x;
     return r.status == CgStatus::converged ? x : Eigen::VectorXd::Constant(b.size(), std::nan(""));
@@ -62,8 +62,9 @@ class MultigridSolver final : public LinearSolver {
   }
   /// The V-cycle for A. Both keep their coarse levels (the costly part: the Galerkin products, amg's smoothed
   /// P, the coarsest factorization) from an earlier Newton matrix while the last solve needed at most half
-  /// as many iterations again as the first solve after they were made. (mg made them for every matrix until
-  /// measured: hex stretch res 30 10.0 -> 8.8 s, a hand lattice's frame 2.2 -> 1.7 s.)
+  /// as many iterations again as the first solve after they were made: consecutive Newton matrices differ
+  /// little, so older coarse levels still serve, and remaking them for every matrix costs more than the few
+  /// iterations it saves.
   bool compute(const SparseLower& A) {
     const bool coarse = fresh_iterations_ < 0 || 2 * iterations_ > 3 * fresh_iterations_;
     if (coarse) fresh_iterations_ = -1;
