@@ -1,7 +1,8 @@
 #pragma once
-// Multigrid V-cycles that precondition conjugate gradients (DESIGN.md solve/, issue 15): geometric for
+// Multigrid V-cycles that precondition conjugate gradients (docs/design.md solve/, issue 15): geometric for
 // hexahedral lattices, named "mg" in the registry, and algebraic (smoothed aggregation) for any mesh, "amg".
-// Both share the V-cycle below; only the prolongation P differs.
+// Both share the V-cycle below; only the prolongation P differs. The implementation is in solve/multigrid/,
+// one concern a file (its levels.hpp lists them).
 //
 // Levels: the simulated hex mesh, then lattices of twice the cell size, each cube of a coarse level the
 // union of the (up to 8) fine cubes inside it, until a level has few enough unknowns for a direct solve
@@ -18,8 +19,9 @@
 // when A is. Colours come from the matrix, never from the thread count: lattice levels the parity of the
 // lattice coordinates (8 colours) where no block couples two nodes of one parity, else (and on aggregation
 // levels) a greedy colouring in node order. The nodes of one colour, the rows of A x, of the restriction Pᵀ r
-// and of the prolongation P e run in parallel (OpenMP; levels of at least 4 096 nodes), each row's sum in a
-// fixed order: results are bit-identical for any thread count.
+// and of the prolongation P e run in parallel (OpenMP; levels of at least set_parallel_nodes() nodes, smaller
+// ones on one thread with a lexicographic sweep), each row's sum in a fixed order: results are bit-identical
+// for any thread count.
 //
 // Smoothed aggregation (amg): levels from the matrix's nodal block graph, not from positions. Greedy
 // aggregation of the nodes with a free DOF (every block of the pattern a connection); a tentative
