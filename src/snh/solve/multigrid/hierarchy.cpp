@@ -46,7 +46,11 @@ MultigridPreconditioner::Impl::Impl(const VolumeMesh& mesh, const std::vector<in
     levels.push_back(std::move(L));
     return;  // the levels follow the matrix's pattern (structure())
   }
-  lattice_level(mesh, L);
+  // The coordinates stay alive until the levels are grown, as they did before the code was split into files:
+  // freed first, they changed how glibc's malloc reuses memory for the coarse levels, and repeated set-ups
+  // page-faulted much more (the same allocations, in another order).
+  const LatticeCoordinates lattice = lattice_coordinates(mesh);
+  lattice_level(mesh, lattice, L);
   levels.push_back(std::move(L));
   grow([this] { coarsen(); });
 }

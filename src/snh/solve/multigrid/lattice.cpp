@@ -89,9 +89,8 @@ LatticeCoordinates lattice_coordinates(const VolumeMesh& mesh) {
   return out;
 }
 
-/// Level 0's lattice (coordinates, pieces, cells) for a hex mesh (lattice_coordinates() refuses others).
-void multigrid::lattice_level(const VolumeMesh& mesh, Level& L) {
-  const LatticeCoordinates lattice = lattice_coordinates(mesh);
+/// Level 0's lattice (coordinates, pieces, cells) for a hex mesh from its lattice_coordinates().
+void multigrid::lattice_level(const VolumeMesh& mesh, const LatticeCoordinates& lattice, Level& L) {
   L.at.resize(L.nodes);
   L.piece = lattice.piece;
   for (int v = 0; v < L.nodes; ++v) L.at[v] = lattice.coordinates.col(v);

@@ -146,7 +146,7 @@ void backward_sweep(Level& L, bool parallel);                    // smoother.cpp
 void forward_residual(Level& L, bool parallel);                  // smoother.cpp
 void subtract_product(Level& L, const double* x, double* y, bool parallel);  // smoother.cpp
 void rigid_body_modes(const VolumeMesh& mesh, Level& L);         // aggregation.cpp
-void lattice_level(const VolumeMesh& mesh, Level& L);            // lattice.cpp
+void lattice_level(const VolumeMesh& mesh, const LatticeCoordinates& lattice, Level& L);  // lattice.cpp
 
 }  // namespace multigrid
 
