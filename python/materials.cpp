@@ -254,7 +254,7 @@ void add_materials(pyb::module_& m) {
         "name"_a, pyb::kw_only(), "mu"_a = pyb::none(), "lam"_a = pyb::none(), "youngs"_a = pyb::none(),
         "poisson"_a = pyb::none(), "reparametrize"_a = false,
         "The energy `name` (snh.material_names()) with Lame mu, lam (defaults 1 and 10) or Young's modulus and Poisson's "
-        "ratio; reparametrize=True takes them as linear-elastic and maps them (MATH.md section 2). The ranges of snh "
+        "ratio; reparametrize=True takes them as linear-elastic and maps them (docs/math.md section 2). The ranges of snh "
         "material: mu in [1e-12, 1e12], lam 0 or |lam| in [1e-12, 1e12], -1 < nu < 0.5; else ValueError.");
 
   m.def("svd", &svd, "F"_a,

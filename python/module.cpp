@@ -1,4 +1,4 @@
-// The Python module `snh` (README "Python"): NumPy arrays in and out over the C++ library, no logic of its
+// The Python module `snh` (docs/python.md): NumPy arrays in and out over the C++ library, no logic of its
 // own. Errors keep the library's one-line messages: bad input (parameters, meshes, scenes, shapes) raises
 // ValueError, a solve that does not converge RuntimeError, a file that cannot be written OSError.
 #include <cmath>

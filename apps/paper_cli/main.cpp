@@ -1,5 +1,5 @@
 // tetcli / tetccli / hexcli: the paper's stretch-test programs, same positional arguments
-// (PAPER_CODE.md):  tetcli resolution material_model mu lambda [output_directory]
+// (docs/paper-programs.md):  tetcli resolution material_model mu lambda [output_directory]
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   }
   snh::StretchConfig config;
   config.program = program;
-  config.solver = "pcg";  // the paper's programs solved with Jacobi-preconditioned CG (PAPER_CODE.md); snh stretch chooses by size
+  config.solver = "pcg";  // the paper's programs solved with Jacobi-preconditioned CG (docs/paper-programs.md); snh stretch chooses by size
   config.command_line = snh::cli::quoted_command_line(argc, argv);
   config.element = kHex ? snh::CellType::hex8 : snh::CellType::tet4;
   config.resolution = parse_int(program, "resolution", argv[1]);

@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
     std::cerr << "snh: error: " << pcg_option_for(app, e.what()) << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
-    std::cerr << "snh: error: out of memory (an allocation failed; see the README's \"Memory\" for what a run needs)\n";
+    std::cerr << "snh: error: out of memory (an allocation failed; docs/solvers.md, \"Memory\", says what a run needs)\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "snh: error: " << e.what() << "\n";

@@ -17,8 +17,9 @@ void add_mesh_commands(CLI::App& app, int& exit_code) {
   auto in = std::make_shared<std::string>();
   CLI::App* info = app.add_subcommand(
       "info",
-      "Reads and checks a mesh (.node/.ele, .mesh, .msh, .vtu) and prints its counts, bounding box, volumes, an "
-      "edge-ratio histogram and the problems found. Exit code 2 when the mesh cannot be used.");
+      "Reads and checks a volume mesh (.node/.ele, .mesh, .msh, .vtu), or a closed surface (.obj, .off, .ply, .stl) "
+      "filled with tets by TetGen, and prints its counts, bounding box, volumes, an edge-ratio histogram and the problems "
+      "found. Exit code 2 when the mesh cannot be used.");
   info->add_option("mesh", *in, "Mesh file")->required();
   info->callback([in, &exit_code]() {
     const MeshFile m = read_mesh(*in);
@@ -50,9 +51,10 @@ void add_mesh_commands(CLI::App& app, int& exit_code) {
 
   auto io = std::make_shared<std::pair<std::string, std::string>>();
   CLI::App* convert = app.add_subcommand(
-      "convert", "Reads and checks a mesh and writes it in another format (.msh Gmsh 4.1, .vtu, .mesh MEDIT); "
-                 "inverted cells are written re-oriented.");
-  convert->add_option("in", io->first, "Input mesh (.node/.ele, .mesh, .msh, .vtu)")->required();
+      "convert", "Reads and checks a mesh (or a closed surface, filled with tets) and writes it in another format (.msh "
+                 "Gmsh 4.1, .vtu, .mesh MEDIT); inverted cells are written re-oriented.");
+  convert->add_option("in", io->first, "Input mesh (.node/.ele, .mesh, .msh, .vtu) or closed surface (.obj, .off, .ply, .stl)")
+      ->required();
   convert->add_option("out", io->second, "Output mesh (.msh, .vtu, .mesh)")->required();
   convert->callback([io, &exit_code]() {
     check_writable_mesh_format(io->second);  // before reading: a bad output name fails at once

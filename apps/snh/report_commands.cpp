@@ -39,10 +39,10 @@ void add_report_commands(CLI::App& app, int& exit_code) {
   auto dir = std::make_shared<std::string>();
   CLI::App* report = app.add_subcommand(
       "report",
-      "Writes (or rewrites) the browser report of an output directory of tetcli, hexcli, snh stretch, snh run or snh "
-      "lab: DIR/index.html, which opens from the file system in any browser (3D playback of the frames, plots of the "
-      "per-step stats, the run's settings; for the lab its tables and curves). Runs write it themselves unless given "
-      "--no-report.");
+      "Writes (or rewrites) the browser report of an output directory of tetcli, hexcli, snh stretch, snh run, snh flesh "
+      "or snh lab: DIR/index.html, which opens from the file system in any browser (3D playback of the frames, a flesh "
+      "run's skin against linear blend skinning and its bones, plots of the per-step stats, the run's settings; for the "
+      "lab its tables and curves). Runs write it themselves unless given --no-report.");
   report->add_option("dir", *dir, "The run's output directory")->required();
   report->callback([dir, &exit_code]() {
     exit_code = exit_code_of([&] {

@@ -11,7 +11,7 @@ from conftest import cli_error, snh_cli, snh_json
 
 NAMES = snh.material_names()
 
-# A general F with J > 0, and a reflected diagonal one (the README's example).
+# A general F with J > 0, and a reflected diagonal one (docs/python.md's example).
 F_GENERAL = np.array([[1.1, 0.2, -0.1], [0.05, 0.9, 0.3], [-0.2, 0.1, 1.2]])
 F_INVERTED = np.diag([1.2, 0.9, -0.5])
 
@@ -63,7 +63,7 @@ def test_rest_state_and_known_values():
     # Stable Neo-Hookean: psi(I) = 0 and P(I) = 0 (its alpha makes the rest state stress-free).
     m = snh.material("stable_neo_hookean", mu=1.0, lam=10.0)
     assert abs(m.psi(np.eye(3))) < 1e-15 and np.abs(m.pk1(np.eye(3))).max() < 1e-14
-    # The README's example: psi at diag(1.2, 0.9, -0.5) is 13.148.
+    # docs/python.md's example: psi at diag(1.2, 0.9, -0.5) is 13.148.
     assert m.psi(F_INVERTED) == pytest.approx(13.148, rel=1e-12)
     # Linear elasticity: psi = mu |eps|^2 + lam/2 tr(eps)^2 with eps = sym(F) - I.
     lin = snh.material("linear", mu=2.0, lam=3.0)

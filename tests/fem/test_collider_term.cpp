@@ -372,7 +372,7 @@ TEST(ShapeColliderTerm, AMovingWallHitsACubeInSubStepsOfBackwardEuler) {
   // of h = 0.01, far more than the gap the barrier leaves: its whole step would carry the cube's face
   // vertices into it. The step is cut into sub-steps of a part of h, each clear of the wall's sweep against
   // the cube's inertial prediction; the cube is struck away. (At 20 m/s the sub-steps shrink below a
-  // millionth of h and the step fails with its one line: README, "Moving colliders within a run".)
+  // millionth of h and the step fails with its one line: docs/solvers.md, "Moving colliders within a run".)
   const VolumeMesh m = box_tets(3);
   SimulationSetup setup = cube_setup(m, Integrator::backward_euler);
   const ColliderPose pose = [](double t) { return Eigen::Affine3d(Eigen::Translation3d(-10.0 * t, 0, 0)); };

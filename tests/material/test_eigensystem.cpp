@@ -87,7 +87,7 @@ TYPED_TEST(Eigensystems, AgainstBruteForce) {
   EXPECT_GE(checked, 30);
 }
 
-/// The SNH closed forms equal the general invariant eigensystem of MATH.md §4.
+/// The SNH closed forms equal the general invariant eigensystem of docs/math.md §4.
 template <class M>
 void closed_form_matches_general(const M& m) {
   for (const Vec3& s : sigma_cases()) {
@@ -109,7 +109,7 @@ TEST(ClosedForm, StableNeoHookeanLogMatchesGeneralInvariantForm) {
 }
 
 TEST(ClosedForm, MathMdExampleValues) {
-  // MATH.md §4 values at σ = (2, 3, 5), μ = 1, λ = 10, production SNH: J = 30, α = 1.1.
+  // docs/math.md §4 values at σ = (2, 3, 5), μ = 1, λ = 10, production SNH: J = 30, α = 1.1.
   const StableNeoHookean m({1.0, 10.0});
   const SigmaEigenvalues e = m.sigma_eigenvalues(Vec3(2, 3, 5));
   const double c = 10.0 * (30.0 - 1.1);

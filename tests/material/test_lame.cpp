@@ -1,5 +1,5 @@
 // Lamé parameters: E/ν conversion, Poisson's ratio, validation messages, and the reparametrizations
-// of MATH.md §2.
+// of docs/math.md §2.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -21,7 +21,7 @@ TEST(Lame, FromYoungsAndPoisson) {
 }
 
 TEST(Lame, ThesisExamplePoissonRatio) {
-  // μ = 1, λ = 10 gives ν = 10/22 = 0.4545 (MATH.md §2).
+  // μ = 1, λ = 10 gives ν = 10/22 = 0.4545 (docs/math.md §2).
   EXPECT_NEAR(poisson_ratio({1.0, 10.0}), 10.0 / 22.0, 1e-15);
 }
 

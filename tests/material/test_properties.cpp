@@ -133,7 +133,7 @@ TEST(Properties, PsiEEqualsProductionStableNeoHookean) {
 }
 
 TEST(Properties, LogAlphaMakesRestStable) {
-  // MATH.md §1: α = 1 + 3μ/(4λ) (the thesis' α = 1 + μ/λ − (μ/4)λ is a typo).
+  // docs/math.md §1: α = 1 + 3μ/(4λ) (the thesis' α = 1 + μ/λ − (μ/4)λ is a typo).
   const StableNeoHookeanLog m({1.0, 10.0});
   EXPECT_DOUBLE_EQ(m.alpha, 1.075);
   const StableNeoHookean prod({1.0, 10.0});

@@ -1,4 +1,4 @@
-// The measured stability table agrees with MATH.md §1 and §5, and its collapse analysis finds the
+// The measured stability table agrees with docs/math.md §1 and §5, and its collapse analysis finds the
 // critical points that the closed-form polynomials predict.
 #include <gtest/gtest.h>
 
@@ -11,9 +11,9 @@ namespace snh {
 namespace {
 
 struct Expected {
-  bool defined_inverted;  // MATH.md §1 "defined for J ≤ 0"
+  bool defined_inverted;  // docs/math.md §1 "defined for J ≤ 0"
   bool reflection;        // independent of where the reflection sits
-  bool rest;              // MATH.md §1 "rest-stable"
+  bool rest;              // docs/math.md §1 "rest-stable"
 };
 
 const std::map<std::string, Expected>& expectations() {
@@ -60,7 +60,7 @@ TEST(Stability, TableAgreesWithMathMd) {
 
 TEST(Stability, CollapsePathProductionHasTrapLogDoesNot) {
   // Reparametrized from ν = 0.4 (λ_L = 4μ_L): production μ = 1, λ = 5, α = 1.2, barrier at the root of
-  // s⁴ − αs + μ/λ near 0.167 (MATH.md §5); the log form has no critical point and F = 0 is not a trap.
+  // s⁴ − αs + μ/λ near 0.167 (docs/math.md §5); the log form has no critical point and F = 0 is not a trap.
   const StabilityReport rep = measure_stability({1.0, 4.0}, true, 20, 1);
   const StabilityRow& prod = row(rep, "stable_neo_hookean");
   ASSERT_EQ(prod.critical_points.size(), 1u);
@@ -75,7 +75,7 @@ TEST(Stability, CollapsePathProductionHasTrapLogDoesNot) {
 }
 
 TEST(Stability, TrapShrinksNearIncompressible) {
-  // ν = 0.488: λ_L/μ_L = 0.976/0.024; production barrier near 0.023 (MATH.md §5).
+  // ν = 0.488: λ_L/μ_L = 0.976/0.024; production barrier near 0.023 (docs/math.md §5).
   const double ratio = 2 * 0.488 / (1 - 2 * 0.488);
   const StabilityReport rep = measure_stability({1.0, ratio}, true, 10, 1);
   const StabilityRow& prod = row(rep, "stable_neo_hookean");
@@ -85,7 +85,7 @@ TEST(Stability, TrapShrinksNearIncompressible) {
 
 TEST(Stability, PsiDShrinksToItsRestingPoint) {
   // ν = 0.4 as given (λ = 4μ): ψ_D's minimum along F = sI is the root of s⁴ − s + μ/λ near 0.897
-  // (MATH.md §5), with a barrier near μ/λ.
+  // (docs/math.md §5), with a barrier near μ/λ.
   const StabilityReport rep = measure_stability({1.0, 4.0}, false, 10, 1);
   const StabilityRow& d = row(rep, "psi_d");
   ASSERT_EQ(d.critical_points.size(), 2u);

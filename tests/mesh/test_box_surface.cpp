@@ -1,4 +1,4 @@
-// Box generators (PAPER_CODE.md) and boundary-surface extraction.
+// Box generators (docs/paper-programs.md) and boundary-surface extraction.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -27,7 +27,7 @@ TEST(Box, LatticeOrderAndPositions) {
 
 TEST(Box, TetsAreTheSixTemplatesWithPositiveVolume) {
   const VolumeMesh m = box_tets(10);
-  EXPECT_EQ(m.cell_count(), 6000);  // PAPER_CODE.md: res 10 -> 6000 tets
+  EXPECT_EQ(m.cell_count(), 6000);  // docs/paper-programs.md: res 10 -> 6000 tets
   EXPECT_EQ(m.vertex_count(), 1331);
   // First cell (0,0,0): corners c0 = 0, c7 = lattice (1,1,1); template {7,4,0,5} up to a swap of the last two.
   const int c7 = lattice_index(10, 1, 1, 1), c4 = lattice_index(10, 0, 0, 1), c5 = lattice_index(10, 1, 0, 1);

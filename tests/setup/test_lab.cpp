@@ -32,7 +32,7 @@ TEST(Lab, RestStabilitySnhStaysPsiDShrinks) {
   const auto runs = lab_rest(o);
   ASSERT_EQ(runs.size(), 2u);
   EXPECT_NEAR(get(runs, "free_cube", "stable_neo_hookean").final_volume, 1.0, 1e-6);
-  // MATH.md §5: at ν = 0.4, psi_d settles near s ≈ 0.897 per axis.
+  // docs/math.md §5: at ν = 0.4, psi_d settles near s ≈ 0.897 per axis.
   EXPECT_NEAR(std::cbrt(get(runs, "free_cube", "psi_d").final_volume), 0.897, 0.005);
   EXPECT_TRUE(std::filesystem::exists(o.out / "rest" / "free_cube" / "psi_d" / "stats.json"));
   std::filesystem::remove_all(o.out);
@@ -69,7 +69,7 @@ TEST(Lab, ReflectionSnhDoesNotDependOnTheAxisCorotatedDoes) {
   };
   EXPECT_LT(spread("stable_neo_hookean"), 1e-4);
   EXPECT_TRUE(get(runs, "reflect_x", "stable_neo_hookean").recovered());
-  // Corotated (signed σ, MATH.md) is not reflection consistent: the outcome depends on the axis.
+  // Corotated (signed σ, docs/math.md) is not reflection consistent: the outcome depends on the axis.
   EXPECT_GT(spread("corotated"), 1e-2);
   for (const char* c : {"reflect_x", "reflect_y", "reflect_z"}) {
     const LabRun& r = get(runs, c, "corotated");
@@ -80,7 +80,7 @@ TEST(Lab, ReflectionSnhDoesNotDependOnTheAxisCorotatedDoes) {
 
 TEST(Lab, DegeneracySnhIsTrappedBelowTheTrapSizeTheLogFormIsNot) {
   const LabOptions o = quick({"stable_neo_hookean", "stable_neo_hookean_log"}, "degeneracy");
-  EXPECT_NEAR(lab_trap_size(), 0.091, 0.001);  // MATH.md §5: near μ/(λ+μ) for μ = 1, λ = 10
+  EXPECT_NEAR(lab_trap_size(), 0.091, 0.001);  // docs/math.md §5: near μ/(λ+μ) for μ = 1, λ = 10
   const auto runs = lab_degeneracy(o);
   for (const char* e : {"stable_neo_hookean", "stable_neo_hookean_log"}) {
     EXPECT_TRUE(std::isfinite(get(runs, "plane", e).recovery_time)) << e << " recovers from a plane";

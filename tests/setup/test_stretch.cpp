@@ -117,7 +117,7 @@ TEST_P(Stretch, ConvergesEveryStepThinsInTheMiddleAndIsSymmetric) {
   const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_paper");
   const StretchResult r = run(GetParam(), out, 1e-3);
   expect_every_step_converged(r);
-  EXPECT_LT(r.middle_width, 1.5);  // from 2 at rest; ≈ 1.01 at res 4, ≈ 1.06 at res 10 (PAPER_CODE.md)
+  EXPECT_LT(r.middle_width, 1.5);  // from 2 at rest; ≈ 1.01 at res 4, ≈ 1.06 at res 10 (docs/paper-programs.md)
   EXPECT_GT(r.middle_width, 0.5);
   EXPECT_TRUE(fs::exists(out / "stats.json"));
   EXPECT_TRUE(fs::exists(out / "stats.csv"));
@@ -388,7 +388,7 @@ TEST(StretchProgress, AnExceptionWritesTheProgressNotYetWritten) {
 }
 
 TEST(StretchFailure, ANonConvergedStepIsReportedWithItsWorstElement) {
-  // Corotated's linear volume term drives the lateral singular values negative at res 4 (README).
+  // Corotated's linear volume term drives the lateral singular values negative at res 4 (docs/results.md).
   const fs::path dir = fresh_dir("corotated");
   StretchConfig c;
   c.resolution = 4;

@@ -368,7 +368,7 @@ TEST(SceneSections, MixedOrMeaninglessInputIsRefused) {
   EXPECT_EQ(error_of(R"({"pins": [{"indices": [0, 1], "axes": "x"}, {"indices": [1], "axes": "yz"}]})"), "");
 }
 
-/// The README's "Library use" example, as written there.
+/// docs/library.md's example, as written there.
 class Lift final : public snh::KinematicProvider {  // where the set's vertices are at time t
  public:
   explicit Lift(Eigen::Matrix3Xd rest) : rest_(std::move(rest)) {}

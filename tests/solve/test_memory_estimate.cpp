@@ -1,5 +1,5 @@
 // Memory estimate (issue 13): lattice sizes, the estimate against peak memory measured on the 2-core VM
-// (README "Memory"), the shortfall against limits, and the refusal.
+// (docs/results.md, "Memory"), the shortfall against limits, and the refusal.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -26,7 +26,7 @@ TEST(MemoryEstimate, LatticeSizeMatchesTheBuiltMesh) {
   EXPECT_EQ(lattice_size(400, CellType::tet4).cells, 6LL * 400 * 400 * 400);  // no int overflow
 }
 
-// Peak resident set (MiB) measured with /usr/bin/time -v, `snh stretch --threads 2` (README "Memory"): the
+// Peak resident set (MiB) measured with /usr/bin/time -v, `snh stretch --threads 2` (docs/results.md, "Memory"): the
 // estimate is above each, but not by more than 2x.
 TEST(MemoryEstimate, BracketsTheMeasuredPeaks) {
   struct Measured {
@@ -51,7 +51,7 @@ TEST(MemoryEstimate, BracketsTheMeasuredPeaks) {
 }
 
 // Peak address space (MiB, VmPeak) of `snh stretch` on one CPU (taskset -c 0, --threads 1) and on two
-// (README "Memory"): the estimate for that many threads is above each, by less than half. The allowance
+// (docs/results.md, "Memory"): the estimate for that many threads is above each, by less than half. The allowance
 // for threads was calibrated on two only and gave 2.9 times the measurement of PCG on one.
 TEST(MemoryEstimate, AddressSpaceBracketsTheMeasuredPeaksOnOneAndTwoCpus) {
   struct Measured {

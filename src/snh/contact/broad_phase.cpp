@@ -98,7 +98,7 @@ Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, c
   // Each entry packs a cell's key (13 bits per axis) and a box's index (25 bits) into one integer to sort.
   constexpr int kBits = 13, kIndexBits = 25;
   constexpr long long kMaxCells = 64;
-  double h = 2.0 * extent / static_cast<double>(boxes.size());  // twice the mean: fewer cells to sort (fastest on the fist)
+  double h = 2.0 * extent / static_cast<double>(boxes.size());  // twice the mean: fewer cells to sort (docs/results.md)
   h = std::max({h, (hi - lo).maxCoeff() / static_cast<double>(1 << kBits), std::numeric_limits<double>::min()});
   const auto cell = [&](const Eigen::Vector3d& p) {
     return ((p - lo) / h).array().floor().cast<long long>().min((1LL << kBits) - 1).max(0LL).matrix().eval();

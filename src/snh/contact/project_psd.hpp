@@ -1,7 +1,7 @@
 #pragma once
 // The nearest positive semi-definite matrix to a symmetric pair Hessian: H = Q Λ Qᵀ → Q max(Λ, 0) Qᵀ
 // (IPC projects each contact pair's Hessian this way before assembly, like snh's elastic Hessians with
-// PsdProjection::clamp, MATH.md §4; contact may not use the material layer, so the clamp lives here).
+// PsdProjection::clamp, docs/math.md §4; contact may not use the material layer, so the clamp lives here).
 // The symmetric part ½(H + Hᵀ) is projected; a matrix already PSD comes back as that symmetric part.
 #include "snh/contact/distance_core.hpp"
 

@@ -1,5 +1,5 @@
 #pragma once
-// Points embedded in a volume mesh (DESIGN.md embed/): each point stores a cell and the weights of that
+// Points embedded in a volume mesh (docs/design.md): each point stores a cell and the weights of that
 // cell's vertices at rest (trilinear in a lattice cube, barycentric in a tet), so that it follows the
 // deformed volume as x = Σ w_i x_i.
 #include <vector>

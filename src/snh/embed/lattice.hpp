@@ -1,5 +1,5 @@
 #pragma once
-// A hexahedral lattice embedding a closed surface (DESIGN.md embed/), as the paper's Figure 1: the cubes of
+// A hexahedral lattice embedding a closed surface (docs/design.md), as the paper's Figure 1: the cubes of
 // a regular grid that overlap the solid, i.e. every cube a surface triangle passes through (an exact
 // triangle-box overlap test) and every cube wholly inside (the winding number at its centre, asked once per
 // connected region of cubes the surface does not touch).

@@ -1,5 +1,5 @@
 #pragma once
-// Inside tests and volumes of closed triangle surfaces (DESIGN.md embed/): the generalized winding number
+// Inside tests and volumes of closed triangle surfaces (docs/design.md): the generalized winding number
 // (Jacobson, Kavan, Sorkine-Hornung 2013: the solid angles of the triangles seen from a point, over 4π),
 // which is 1 inside a closed outward surface, 0 outside, and degrades gracefully on imperfect ones.
 #include <Eigen/Core>

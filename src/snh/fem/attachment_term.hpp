@@ -1,5 +1,5 @@
 #pragma once
-// Soft attachments (DESIGN.md fem/): zero-rest-length springs pulling chosen vertices toward targets that
+// Soft attachments (docs/design.md): zero-rest-length springs pulling chosen vertices toward targets that
 // may move with time, E = ½ Σ_i k_i |x_i − t_i|². A soft bone binding is one (the flesh in a shell around
 // a bone's capsule pulled toward where the bone carries it); an animator's attachment is another. The
 // Hessian is k_i I on each vertex's own DOFs, so the term adds no coupling to the layout.

@@ -397,7 +397,7 @@ int MeshColliderTerm::active_pairs(const Eigen::VectorXd& x) const {
 
 double MeshColliderTerm::ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D, long long* tested) const {
   double t = 1.0;
-  // Boxes grown by d̂, as ContactTerm::max_step: a pair ending in touching is not lost to the boxes' rounding.
+  // Pairs within d̂ (boxes grown by d̂/2 each), as ContactTerm::max_step: a pair ending in touching is not lost to the boxes' rounding.
   const std::vector<Candidate> swept = candidates(V0, V0 + D, dhat_);
   if (tested) *tested += static_cast<long long>(swept.size());
   for (const Candidate& c : swept) {

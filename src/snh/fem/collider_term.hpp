@@ -39,8 +39,8 @@
 // two places in the shape's own frame (exact for a translation; for a rotation the chord of the arc). A
 // shape's sweep that is not clear gives the part that keeps a fifth: the shortened part is checked again
 // with its own poses, which lie off the first chord where the shape turns, and a part ending exactly at the
-// tenth would be found a hair short again and again (the fist with its bones' capsules split one step 200
-// times so, creeping towards the boundary).
+// tenth would be found a hair short again and again (a turning capsule then split one step hundreds of
+// times, creeping towards the boundary).
 //
 // Statistics (contact_term_base.hpp): a shape's active pairs are its points within d̂, a mesh's its
 // candidates within d̂.

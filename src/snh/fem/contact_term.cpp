@@ -317,7 +317,7 @@ double ContactTerm::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx
   if (!x.allFinite() || !dx.allFinite()) return 1.0;  // the line search rejects what follows
   const Eigen::Matrix3Xd V0 = positions(x), D = positions(dx);  // D = W dx: the points move linearly too
   const Eigen::Matrix3Xd V1 = V0 + D;
-  const contact::Candidates c = contact::broad_phase(V0, V1, local_F_, local_E_, dhat_);  // grown by d̂: contact_term.hpp
+  const contact::Candidates c = contact::broad_phase(V0, V1, local_F_, local_E_, dhat_);  // pairs within d̂: contact_term.hpp
   counters_.ccd_tests += static_cast<long long>(c.vertex_triangle.size() + c.edge_edge.size());
   double t = 1.0;
   for (const auto& [v, f] : c.vertex_triangle) {

@@ -34,9 +34,9 @@
 //      by vertex id into the DOF vector and the Hessian (per pair, PSD-projected when projection is asked)
 //      into the layout. No pair below ŝ: nothing is added at all (bit-identical to a problem without it).
 // stencil: each active pair's vertices coupled with each other (stencil_varies: the layout grows when new
-// pairs appear). max_step: the broad phase of the swept boxes (x to x + dx, grown by d̂: a pair left out
-// stays farther than d̂ apart over the whole step, while with boxes not grown a pair ending in touching
-// could be missed by the rounding of the boxes' bounds, the ball of tests/sim/test_contact_scenes.cpp) and
+// pairs appear). max_step: the broad phase of the swept boxes (x to x + dx, each grown by d̂/2, so a pair left
+// out stays farther than d̂ apart over the whole step, while with boxes not grown a pair ending in touching
+// could be missed by the rounding of the boxes' bounds, the ball of tests/setup/test_contact_scenes.cpp) and
 // additive CCD (contact/ccd.hpp) of every vertex–triangle and edge–edge candidate: the smallest t, in
 // (0, 1] for a separated x.
 //

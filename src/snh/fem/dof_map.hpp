@@ -1,5 +1,5 @@
 #pragma once
-// Which degrees of freedom Newton solves for (DESIGN.md fem/): every vertex has three DOFs (x y z, DOF
+// Which degrees of freedom Newton solves for (docs/design.md): every vertex has three DOFs (x y z, DOF
 // 3v + k); a DOF is free (an unknown) or kinematic (its value is prescribed: pins, bones). Free DOFs are
 // numbered in increasing DOF order; vectors "on the free DOFs" use that numbering.
 #include <cstdint>

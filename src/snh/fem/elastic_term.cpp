@@ -105,7 +105,7 @@ void add_hex_stiffness(const ElementRest<8, Q>& r, const std::array<std::array<M
 }
 
 /// F = X G (the element's deformation gradient at a point), summed over the nodes in order: inline, where
-/// Eigen's product of a 3×N by an N×3 matrix was a call per point (4.5 % of Figure 1's run).
+/// Eigen's product of a 3×N by an N×3 matrix was a function call per quadrature point.
 template <int N>
 inline Mat3 deformation_gradient(const Eigen::Matrix<double, 3, N>& X, const Eigen::Matrix<double, N, 3>& G) {
   Mat3 F;
@@ -129,8 +129,8 @@ double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix
   if (grad) grad->setZero();
   if (K) std::fill(K, K + packed_size<N>, 0.0);
   // The analytic Hessian of an energy of the invariants comes as its six slices straight from its formula,
-  // the same values as the 9x9 matrix scaled by w (tested), without building it (bench_assembly: the true
-  // Hessian's assembly 2.97 -> 2.47 us per hex).
+  // the same values as the 9x9 matrix scaled by w (tested), without building it (cheaper: bench_assembly,
+  // docs/results.md).
   constexpr bool sliced = has_hessian_slices<M>;
   const bool slices = sliced && K && p == PsdProjection::none;
   std::array<std::array<Mat3, 6>, Q> h;  // the points' slices (sliced Hessians)
@@ -438,15 +438,15 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
   // each element adds its terms straight into the gradient and the values without two threads touching the
   // same entry, and each entry receives its terms in group order, and within a piece in cell order, for any
   // thread count. Chunks of consecutive cells as pieces (a lattice's slabs) keep each thread's matrix rows and
-  // vertices together (Figure 1's Hessian, three pairs of runs in turn: 36-49 ms with three colours of
-  // 1024-cell chunks against 48-67 ms with eight colours of single cells).
-  // A stiffness costs 5-10x an energy and gradient per point (bench_assembly), so it goes parallel with
-  // an eighth of the points: tet res 20's colour groups (1 548 tets) ran on one thread.
+  // vertices together (fewer colours of chunks assemble Figure 1's Hessian faster than many colours of
+  // single cells: docs/results.md, "Assembly").
+  // A stiffness costs several times an energy and gradient per point (bench_assembly), so it goes parallel
+  // with an eighth of the points: otherwise the colour groups of mid-sized tet meshes ran on one thread.
   const Eigen::Index threshold = values ? parallel_threshold_ / 8 : parallel_threshold_;
   if (!gradient && !values) {
     // The energy alone adds into no vertex: the cells in their own order, not by colour groups whose cells lie
-    // apart (Figure 1's lattice: the guesses, five energies a step, 0.10-0.13 -> 0.09-0.10 s). Bit-identical:
-    // the same per-cell values, summed in the same order.
+    // apart (a lattice's guesses ask several energies a step; cells in order stream memory in order).
+    // Bit-identical: the same per-cell values, summed in the same order.
     for_each_run([&](const auto& m, const auto& rest, Eigen::Index begin, Eigen::Index end) {
       using R = typename std::decay_t<decltype(rest)>::value_type;
       Eigen::Matrix<double, 3, R::nodes>* const no_gradient = nullptr;

@@ -1,5 +1,5 @@
 #pragma once
-// The elastic energy of a mesh as a Term (DESIGN.md fem/): Σ_e Σ_q w_q ψ(F_q), its gradient, and its
+// The elastic energy of a mesh as a Term (docs/design.md): Σ_e Σ_q w_q ψ(F_q), its gradient, and its
 // (per-element PSD-projected) Hessian, assembled in parallel through a scatter map precomputed for each
 // Hessian layout (an element's stiffness is computed and scattered once per pair of DOFs: it is symmetric).
 // Elements are coloured, in chunks of consecutive cells where that needs few colours (a lattice's slabs) or
@@ -53,8 +53,8 @@ class ElasticTerm final : public Term {
   /// Each cell's rest volume (Σ_q weight).
   [[nodiscard]] Eigen::VectorXd rest_volumes() const;
   /// Cells whose rest data agree to a relative 2^-40 or better (a lattice's congruent cells, equal but for
-  /// the rounding of their coordinates) share one record (on: the default; Figure 1's 45 272 hexes keep
-  /// one record instead of 72 MB, which every energy, gradient and Hessian streamed). Off: one per cell.
+  /// the rounding of their coordinates) share one record (on: the default; a lattice then keeps one record
+  /// instead of one per cell, which every energy, gradient and Hessian would stream). Off: one per cell.
   void share_rest(bool on);
   /// The rest records kept.
   [[nodiscard]] int rest_records() const;
@@ -77,7 +77,7 @@ class ElasticTerm final : public Term {
 
   /// Loops over fewer quadrature points than this (a group of cells) run on one thread: for small meshes waking threads (and, when other processes compete for
   /// the cores, waiting at barriers) costs more than the work. Default 2048 (an eighth of it for loops that
-  /// assemble a Hessian, 5-10x the work per point); 0 makes every loop parallel.
+  /// assemble a Hessian, several times the work per point); 0 makes every loop parallel.
   void set_parallel_threshold(Eigen::Index t) { parallel_threshold_ = t; }
 
   /// det F and ψ at every quadrature point, in one pass: each element's minimum det F and mean energy

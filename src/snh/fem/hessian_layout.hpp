@@ -1,5 +1,5 @@
 #pragma once
-// The sparsity pattern of a symmetric matrix over numbered DOFs (DESIGN.md fem/): the lower triangle in
+// The sparsity pattern of a symmetric matrix over numbered DOFs (docs/design.md): the lower triangle in
 // compressed columns, every column starting with its diagonal entry (the form CHOLMOD takes), built from
 // stencils, groups of vertices whose DOFs are all coupled (an element's nodes, a contact pair's vertices).
 // Energy terms add their Hessian entries into values laid out this way (HessianValues); a term with a

@@ -56,7 +56,8 @@ double Problem::sum_terms(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, H
       hessian->matrix = layout_.pattern();
       hessian->layout = layout_.id();
     }
-    // Zeroed in parallel above a million entries (Figure 1's 6.4 million: 5 ms on one thread, per Hessian).
+    // Zeroed in parallel above a million entries: at Figure 1's size, zeroing on one thread is a visible share
+    // of every Hessian.
     double* v = hessian->matrix.valuePtr();
     const Eigen::Index n = hessian->matrix.nonZeros(), chunk = Eigen::Index{1} << 16;
 #pragma omp parallel for schedule(static) if (n >= (Eigen::Index{1} << 20))

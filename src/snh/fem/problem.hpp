@@ -1,5 +1,5 @@
 #pragma once
-// What Newton minimises (DESIGN.md fem/): a sum of energy terms over the free DOFs of a DofMap, the
+// What Newton minimises (docs/design.md): a sum of energy terms over the free DOFs of a DofMap, the
 // kinematic DOFs held at their values in x. The problem owns the Hessian layout over the free DOFs: the
 // union of the terms' stencils, built by the first evaluation that asks for a Hessian and rebuilt (each
 // term's bind() called again) when a term whose stencil varies couples vertices the layout does not;

@@ -1,5 +1,5 @@
 #pragma once
-// Rest-state precomputation (DESIGN.md fem/): per element and quadrature point, the gradients of the
+// Rest-state precomputation (docs/design.md): per element and quadrature point, the gradients of the
 // shape functions with respect to rest coordinates and the volume weight, so that at any deformed
 // state F = X_e G (X_e = 3 by N node positions) and ∫ψ dV = Σ_q w_q ψ(F_q).
 #include <array>

@@ -1,5 +1,5 @@
 #pragma once
-// An energy term of the problem Newton minimises (DESIGN.md fem/): elasticity, inertia and damping,
+// An energy term of the problem Newton minimises (docs/design.md): elasticity, inertia and damping,
 // attachment springs, contact barriers. Terms see every DOF (x is 3 #V: free and kinematic), add their
 // gradient to a full DOF vector and their Hessian entries to a shared layout (HessianValues), declare which
 // vertices their Hessian couples (stencil), may bound a Newton step (max_step: the largest safe fraction,

@@ -1,5 +1,5 @@
 #pragma once
-// Files appear whole or not at all (DESIGN.md): write to a temporary name beside the target, then rename.
+// Files appear whole or not at all (docs/design.md): write to a temporary name beside the target, then rename.
 #include <filesystem>
 #include <functional>
 #include <ostream>

@@ -1,5 +1,5 @@
 #pragma once
-// Gmsh .msh (DESIGN.md io/): read in versions 2.2 and 4.1, ASCII or binary (little-endian, data size 8),
+// Gmsh .msh (docs/design.md): read in versions 2.2 and 4.1, ASCII or binary (little-endian, data size 8),
 // with 4-node tetrahedra or 8-node hexahedra (points, lines, triangles and quadrangles are skipped);
 // written as 4.1 ASCII.
 #include <filesystem>

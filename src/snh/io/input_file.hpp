@@ -1,5 +1,5 @@
 #pragma once
-// Opening an input file (DESIGN.md io/): every reader (meshes, surfaces, scenes, checkpoints) checks what
+// Opening an input file (docs/design.md): every reader (meshes, surfaces, scenes, checkpoints) checks what
 // is at the path before it reads, so that a directory, a FIFO, a device such as /dev/zero or a file too
 // large to be one of ours fails at once with one line naming the file, instead of blocking, growing
 // without bound or failing deep inside a library.

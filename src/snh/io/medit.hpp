@@ -1,5 +1,5 @@
 #pragma once
-// MEDIT .mesh (DESIGN.md io/): MeshVersionFormatted 1 or 2, Dimension 3, Vertices and Tetrahedra or
+// MEDIT .mesh (docs/design.md): MeshVersionFormatted 1 or 2, Dimension 3, Vertices and Tetrahedra or
 // Hexahedra; read with the surface and other sections skipped, written as version 2.
 #include <filesystem>
 

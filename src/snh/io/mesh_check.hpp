@@ -1,5 +1,5 @@
 #pragma once
-// The checks every volume mesh read from a file passes (DESIGN.md io/): what a reader cannot see from
+// The checks every volume mesh read from a file passes (docs/design.md): what a reader cannot see from
 // one line alone (ranges, repeats, unused vertices, degenerate or inverted cells).
 #include <filesystem>
 

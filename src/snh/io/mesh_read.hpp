@@ -1,5 +1,5 @@
 #pragma once
-// Reading volume meshes (DESIGN.md io/) by extension: TetGen .node/.ele (io/tetgen), MEDIT .mesh
+// Reading volume meshes (docs/design.md) by extension: TetGen .node/.ele (io/tetgen), MEDIT .mesh
 // (io/medit), Gmsh .msh 2.2 and 4.1 (io/gmsh), VTK .vtu (io/vtu), and closed surfaces tetrahedralized
 // (io/surface_read), with tets or hexes; then checking them (io/mesh_check). Every problem is one line
 // naming the file and the line (or the element) at fault. Including this header brings MeshError,

@@ -1,5 +1,5 @@
 #pragma once
-// Writing volume meshes (DESIGN.md io/) by extension: Gmsh .msh 4.1 ASCII (io/gmsh), VTK .vtu (io/vtu)
+// Writing volume meshes (docs/design.md) by extension: Gmsh .msh 4.1 ASCII (io/gmsh), VTK .vtu (io/vtu)
 // and MEDIT .mesh (io/medit); each file written atomically. Including this header brings write_msh and
 // write_medit with it.
 #include <filesystem>

@@ -20,7 +20,7 @@ std::string obj_faces(const Eigen::Matrix3Xi& triangles) {
 void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, std::string_view faces) {
   write_atomically(path, [&](std::ostream& out) {
     // "v %.10g %.10g %.10g" per vertex by std::to_chars (the same characters as printf's, which fmt's
-    // "{:.10g}" also gives: tested; Figure 1's 53 143 vertices in 11 ms instead of 19 per frame).
+    // "{:.10g}" also gives: tested), without fmt's per-call formatting overhead on every coordinate.
     std::string buf;
     buf.reserve(static_cast<std::size_t>(positions.cols()) * 48);
     char line[3 * 32 + 4];

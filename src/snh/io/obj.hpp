@@ -1,5 +1,5 @@
 #pragma once
-// Wavefront OBJ frames in the paper programs' format (PAPER_CODE.md): `v x y z` for every vertex in
+// Wavefront OBJ frames in the paper programs' format (docs/paper-programs.md): `v x y z` for every vertex in
 // index order, then `f a b c` (1-based) for every boundary triangle.
 #include <filesystem>
 #include <string>

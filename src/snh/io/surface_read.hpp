@@ -1,5 +1,5 @@
 #pragma once
-// Surface meshes (DESIGN.md io/): OBJ, OFF, PLY (ASCII) and STL (ASCII and binary) triangle surfaces,
+// Surface meshes (docs/design.md): OBJ, OFF, PLY (ASCII) and STL (ASCII and binary) triangle surfaces,
 // read and checked, and turned into tetrahedra by Debian's `tetgen` program.
 #include <filesystem>
 

@@ -1,5 +1,5 @@
 #pragma once
-// TetGen's .node / .ele pair (DESIGN.md io/): linear tetrahedra, '#' comments, any first index.
+// TetGen's .node / .ele pair (docs/design.md): linear tetrahedra, '#' comments, any first index.
 #include <filesystem>
 
 #include "snh/io/mesh_file.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// USD ASCII stages (DESIGN.md io/): triangle meshes whose points are time-sampled per frame, written
+// USD ASCII stages (docs/design.md): triangle meshes whose points are time-sampled per frame, written
 // following the .usda grammar (a `#usda 1.0` layer with stage metadata, `def Xform` and `def Mesh` prims,
 // `point3f[] points.timeSamples`), which usdview, Blender and Houdini open.
 #include <filesystem>

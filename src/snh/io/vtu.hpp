@@ -1,5 +1,5 @@
 #pragma once
-// VTK XML unstructured grids (.vtu) and ParaView series (.pvd) (DESIGN.md io/): frames of a volume mesh
+// VTK XML unstructured grids (.vtu) and ParaView series (.pvd) (docs/design.md): frames of a volume mesh
 // written (binary: the arrays appended raw after the XML, full double precision), and .vtu meshes read
 // back with their data arrays (ASCII, inline base64, or appended raw or base64 data; uncompressed,
 // little-endian).

@@ -7,7 +7,7 @@ namespace snh {
 namespace {
 
 /// The SVD frame's basis of 9-vectors: columns 0..2 twist k = (u_b v_aᵀ − u_a v_bᵀ)/√2, 3..5 flip k
-/// (the same with +), 6..8 vec(u_k v_kᵀ), with (a, b) the two axes other than k (MATH.md §4).
+/// (the same with +), 6..8 vec(u_k v_kᵀ), with (a, b) the two axes other than k (docs/math.md §4).
 Mat9 frame_basis(const Svd3& svd) {
   const Mat3& U = svd.U;
   const Mat3& V = svd.V;
@@ -69,7 +69,8 @@ Mat9 projected_from_sigma(const Svd3& svd, const SigmaEigenvalues& s, PsdProject
   }
   const Eigen::Matrix<double, 9, 6> Wd = W * d.asDiagonal();
   const Eigen::Matrix<double, 9, 3> DA = D * Ap;
-  // Coefficient-based products: measured faster than Eigen's blocked GEMM at these sizes (9x6, 9x3).
+  // Coefficient-based products: at these small fixed sizes (9x6, 9x3) they beat Eigen's blocked GEMM, whose
+  // packing costs more than the arithmetic (bench_material).
   Mat9 H = Wd.lazyProduct(W.transpose());
   H.noalias() += DA.lazyProduct(D.transpose());
   return H;

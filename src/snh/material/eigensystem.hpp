@@ -1,5 +1,5 @@
 #pragma once
-// The 9x9 eigensystem of an isotropic energy's ∂P/∂F in the rotation-variant SVD frame (MATH.md §4).
+// The 9x9 eigensystem of an isotropic energy's ∂P/∂F in the rotation-variant SVD frame (docs/math.md §4).
 #include <array>
 #include <string_view>
 
@@ -28,7 +28,7 @@ struct Eigensystem9 {
 inline constexpr std::array<std::string_view, 9> kEigenLabels = {
     "twist_0", "twist_1", "twist_2", "flip_0", "flip_1", "flip_2", "scaling_0", "scaling_1", "scaling_2"};
 
-/// Builds the eigensystem from the SVD of F and the σ-frame eigenvalues (MATH.md §4):
+/// Builds the eigensystem from the SVD of F and the σ-frame eigenvalues (docs/math.md §4):
 /// twist k = (u_b v_aᵀ − u_a v_bᵀ)/√2, flip k = (u_b v_aᵀ + u_a v_bᵀ)/√2 with (a, b) the other two axes,
 /// scaling = U diag(e) Vᵀ for each eigenvector e of A.
 [[nodiscard]] Eigensystem9 assemble_eigensystem(const Svd3& svd, const SigmaEigenvalues& s);

@@ -1,6 +1,6 @@
 #pragma once
 // Energies written in the invariants I1 = tr S = Σσ, I2 = ‖F‖² = I_C, I3 = J, and the general
-// eigensystem of Smith, de Goes & Kim 2019 built from their derivatives (MATH.md §4).
+// eigensystem of Smith, de Goes & Kim 2019 built from their derivatives (docs/math.md §4).
 #include <array>
 #include <cmath>
 #include <limits>
@@ -18,10 +18,10 @@ struct InvariantDerivatives {
 };
 
 /// Twist denominators σ_i + σ_j smaller than this are replaced by ±this (only energies that use I1
-/// have that term; their Hessian is genuinely singular there, MATH.md §4).
+/// have that term; their Hessian is genuinely singular there, docs/math.md §4).
 inline constexpr double kTwistDenominatorFloor = 1e-10;
 
-/// The σ-frame eigenvalues of a Ψ(I1, I2, I3) at signed singular values σ (MATH.md §4):
+/// The σ-frame eigenvalues of a Ψ(I1, I2, I3) at signed singular values σ (docs/math.md §4):
 /// twist 2Ψ₁/(σ_i+σ_j) + 2Ψ₂ + σ_kΨ₃, flip 2Ψ₂ − σ_kΨ₃, and the scaling block A = ∇²_σ ψ̂.
 [[nodiscard]] inline SigmaEigenvalues invariant_sigma_eigenvalues(const Vec3& s,
                                                                   const InvariantDerivatives& d) {

@@ -1,5 +1,5 @@
 #pragma once
-// Material parameters: Lamé (μ, λ), Young's modulus / Poisson's ratio, and validation (MATH.md §2).
+// Material parameters: Lamé (μ, λ), Young's modulus / Poisson's ratio, and validation (docs/math.md §2).
 #include <stdexcept>
 #include <string>
 

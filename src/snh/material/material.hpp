@@ -13,7 +13,7 @@
 
 namespace snh {
 
-/// An energy whose Hessian's eigensystem comes from its signed singular values (MATH.md §4): ψ̂(σ), ∇ψ̂(σ)
+/// An energy whose Hessian's eigensystem comes from its signed singular values (docs/math.md §4): ψ̂(σ), ∇ψ̂(σ)
 /// and the σ-frame eigenvalues, assembled with the SVD's rotations.
 template <class M>
 concept SigmaEigensystem = requires(const M m, const Vec3& s) {
@@ -48,7 +48,7 @@ concept Material = requires(const M m, const Mat3& F, const Lame& p) {
 template <class M>
 concept IsotropicMaterial = Material<M> && SigmaEigensystem<M>;
 
-/// The 9x9 eigensystem of ∂P/∂F at the F whose SVD is given (MATH.md §4).
+/// The 9x9 eigensystem of ∂P/∂F at the F whose SVD is given (docs/math.md §4).
 template <Material M>
 [[nodiscard]] Eigensystem9 eigensystem(const M& m, const Svd3& svd) {
   if constexpr (IsotropicMaterial<M>) {
@@ -83,7 +83,7 @@ template <Material M>
   }
 }
 
-/// The PSD-projected ∂P/∂F (MATH.md §4). PsdProjection::none returns the analytic Hessian.
+/// The PSD-projected ∂P/∂F (docs/math.md §4). PsdProjection::none returns the analytic Hessian.
 /// Zero where the energy is undefined.
 template <Material M>
 [[nodiscard]] Mat9 projected_hessian(const M& m, const Mat3& F, PsdProjection p) {
@@ -97,7 +97,7 @@ template <Material M>
 
 /// ψ, P and the (projected) ∂P/∂F at one F, as the element loop needs them. P and H hold values only where
 /// point_terms() was asked for them (want_P, want_H), and are left unset otherwise: zeroing the 81 doubles of
-/// H for every point of every energy and gradient was a quarter of point_terms()'s time in Figure 1's run.
+/// H for every point of every energy and gradient evaluation was a large share of point_terms()'s time.
 struct PointTerms {
   double psi = 0.0;
   Mat3 P;

@@ -1,5 +1,5 @@
 #pragma once
-// Bonet & Wood Neo-Hookean (MATH.md §1): Ψ = μ/2 (I_C − 3) − μ log J + λ/2 (log J)². Undefined for J ≤ 0.
+// Bonet & Wood Neo-Hookean (docs/math.md §1): Ψ = μ/2 (I_C − 3) − μ log J + λ/2 (log J)². Undefined for J ≤ 0.
 #include <cmath>
 #include <string_view>
 

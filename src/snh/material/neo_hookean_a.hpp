@@ -1,5 +1,5 @@
 #pragma once
-// Neo-Hookean Ψ_A of the thesis ("Ogden 1997", MATH.md §1): Ψ = μ/2 (I_C − 3) − μ log J + λ/2 (J − 1)².
+// Neo-Hookean Ψ_A of the thesis ("Ogden 1997", docs/math.md §1): Ψ = μ/2 (I_C − 3) − μ log J + λ/2 (J − 1)².
 // Undefined for J ≤ 0.
 #include <cmath>
 #include <string_view>

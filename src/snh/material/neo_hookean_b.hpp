@@ -1,5 +1,5 @@
 #pragma once
-// Neo-Hookean Ψ_B of the thesis ("Bower 2009", MATH.md §1): Ψ = μ/2 (J^(−2/3) I_C − 3) + λ/2 (J − 1)².
+// Neo-Hookean Ψ_B of the thesis ("Bower 2009", docs/math.md §1): Ψ = μ/2 (J^(−2/3) I_C − 3) + λ/2 (J − 1)².
 // Undefined for J ≤ 0. Here λ plays the role of the bulk modulus: at small strain it matches linear
 // elasticity with λ_L = λ − 2μ/3.
 #include <cmath>

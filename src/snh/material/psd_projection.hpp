@@ -1,5 +1,5 @@
 #pragma once
-// How a Hessian's negative eigenvalues are treated before it is used as a Newton matrix (MATH.md §4).
+// How a Hessian's negative eigenvalues are treated before it is used as a Newton matrix (docs/math.md §4).
 #include <optional>
 #include <string_view>
 

@@ -1,5 +1,5 @@
 #pragma once
-// Ψ_D (MATH.md §1): Ψ = μ/2 (I_C − 3) + λ/2 (J − 1)². Defined everywhere but not rest stable:
+// Ψ_D (docs/math.md §1): Ψ = μ/2 (I_C − 3) + λ/2 (J − 1)². Defined everywhere but not rest stable:
 // P(I) = μI, so an unloaded body shrinks.
 #include <string_view>
 

@@ -1,5 +1,5 @@
 #pragma once
-// Ψ_E (MATH.md §1): Ψ = μ/2 (I_C − 3) − μ (J − 1) + λ/2 (J − 1)². Rest stable and defined everywhere;
+// Ψ_E (docs/math.md §1): Ψ = μ/2 (I_C − 3) − μ (J − 1) + λ/2 (J − 1)². Rest stable and defined everywhere;
 // equal to the production Stable Neo-Hookean (with λ the same) including the constant.
 #include <string_view>
 

@@ -1,6 +1,6 @@
 #pragma once
 // Every energy by name. AnyMaterial is a std::variant: the runtime choice is made once by std::visit,
-// and the code inside the visit is monomorphic (DESIGN.md: no virtual call per element).
+// and the code inside the visit is monomorphic (docs/design.md: no virtual call per element).
 #include <array>
 #include <stdexcept>
 #include <string>
@@ -38,7 +38,7 @@ class UnknownMaterial : public std::invalid_argument {
 /// The energy called `name` with parameters `p`.
 ///   name           one of material_names()
 ///   p              Lamé parameters; used as given, or, when reparametrize is true, taken as the
-///                  linear-elastic μ_L, λ_L and mapped by the energy's from_linear (MATH.md §2)
+///                  linear-elastic μ_L, λ_L and mapped by the energy's from_linear (docs/math.md §2)
 /// Throws UnknownMaterial or ParameterError with a one-line message.
 [[nodiscard]] AnyMaterial make_material(std::string_view name, const Lame& p, bool reparametrize = false);
 

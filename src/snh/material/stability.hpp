@@ -1,5 +1,5 @@
 #pragma once
-// Measures, for every energy, the paper's four stability properties (MATH.md §5): inversion,
+// Measures, for every energy, the paper's four stability properties (docs/math.md §5): inversion,
 // reflection, rest, and behaviour under collapse along F = sI.
 #include <string>
 #include <vector>

@@ -1,6 +1,6 @@
 #pragma once
-// Production Stable Neo-Hookean (MATH.md §1): Ψ = μ/2 (I_C − 3) + λ/2 (J − α)² − μ²/(2λ), α = 1 + μ/λ.
-// The constant makes Ψ(I) = 0; it equals psi_e exactly. Closed-form eigensystem: MATH.md §4.
+// Production Stable Neo-Hookean (docs/math.md §1): Ψ = μ/2 (I_C − 3) + λ/2 (J − α)² − μ²/(2λ), α = 1 + μ/λ.
+// The constant makes Ψ(I) = 0; it equals psi_e exactly. Closed-form eigensystem: docs/math.md §4.
 #include <string_view>
 
 #include "snh/material/invariant_energy.hpp"
@@ -8,7 +8,7 @@
 
 namespace snh {
 
-/// The closed-form σ-frame eigenvalues shared by both Stable Neo-Hookean forms (MATH.md §4):
+/// The closed-form σ-frame eigenvalues shared by both Stable Neo-Hookean forms (docs/math.md §4):
 /// twist k τ + λ(J−α)σ_k, flip k τ − λ(J−α)σ_k, A_ii = τ + cσ_i² + λσ_j²σ_k²,
 /// A_ij = cσ_iσ_j + λσ_k(2J − α). Production form: τ = μ, c = 0;
 /// log form: τ = μ(1 − 1/(I_C+1)), c = 2μ/(I_C+1)².
@@ -39,7 +39,7 @@ struct StableNeoHookean : InvariantEnergy<StableNeoHookean> {
     validate(p);
     if (!(p.lambda > 0.0)) throw ParameterError("stable_neo_hookean needs lambda > 0 (alpha = 1 + mu/lambda)");
   }
-  /// Lamé reparametrization (MATH.md §2): μ = μ_L, λ = λ_L + μ_L.
+  /// Lamé reparametrization (docs/math.md §2): μ = μ_L, λ = λ_L + μ_L.
   [[nodiscard]] static Lame from_linear(const Lame& l) { return {l.mu, l.lambda + l.mu}; }
   [[nodiscard]] Lame params() const { return {mu, lambda}; }
 
@@ -54,7 +54,7 @@ struct StableNeoHookean : InvariantEnergy<StableNeoHookean> {
     d.d33 = lambda;
     return d;
   }
-  /// Closed form (MATH.md §4): twist k μ + λ(J−α)σ_k, flip k μ − λ(J−α)σ_k,
+  /// Closed form (docs/math.md §4): twist k μ + λ(J−α)σ_k, flip k μ − λ(J−α)σ_k,
   /// A_ii = μ + λσ_j²σ_k², A_ij = λσ_k(2J − α).
   [[nodiscard]] SigmaEigenvalues sigma_eigenvalues(const Vec3& s) const {
     return snh_sigma_eigenvalues(s, mu, 0.0, lambda, alpha);

@@ -1,7 +1,7 @@
 #pragma once
-// The paper's Stable Neo-Hookean, Eq. 14 (MATH.md §1):
+// The paper's Stable Neo-Hookean, Eq. 14 (docs/math.md §1):
 // Ψ = μ/2 (I_C − 3) + λ/2 (J − α)² − μ/2 log(I_C + 1) − c, α = 1 + 3μ/(4λ), c makes Ψ(I) = 0.
-// Closed-form eigensystem: MATH.md §4.
+// Closed-form eigensystem: docs/math.md §4.
 #include <cmath>
 #include <string_view>
 
@@ -25,7 +25,7 @@ struct StableNeoHookeanLog : InvariantEnergy<StableNeoHookeanLog> {
     validate(p);
     if (!(p.lambda > 0.0)) throw ParameterError("stable_neo_hookean_log needs lambda > 0 (alpha = 1 + 3mu/(4lambda))");
   }
-  /// Lamé reparametrization (MATH.md §2): μ = 4/3 μ_L, λ = λ_L + 5/6 μ_L.
+  /// Lamé reparametrization (docs/math.md §2): μ = 4/3 μ_L, λ = λ_L + 5/6 μ_L.
   [[nodiscard]] static Lame from_linear(const Lame& l) { return {4.0 / 3.0 * l.mu, l.lambda + 5.0 / 6.0 * l.mu}; }
   [[nodiscard]] Lame params() const { return {mu, lambda}; }
 
@@ -42,7 +42,7 @@ struct StableNeoHookeanLog : InvariantEnergy<StableNeoHookeanLog> {
     d.d33 = lambda;
     return d;
   }
-  /// Closed form (MATH.md §4), τ = μ(1 − 1/(I_C+1)), c = 2μ/(I_C+1)²: twist k τ + λ(J−α)σ_k,
+  /// Closed form (docs/math.md §4), τ = μ(1 − 1/(I_C+1)), c = 2μ/(I_C+1)²: twist k τ + λ(J−α)σ_k,
   /// flip k τ − λ(J−α)σ_k, A_ii = τ + cσ_i² + λσ_j²σ_k², A_ij = cσ_iσ_j + λσ_k(2J − α).
   [[nodiscard]] SigmaEigenvalues sigma_eigenvalues(const Vec3& s) const {
     const double q = 1.0 / (s.squaredNorm() + 1.0);

@@ -1,6 +1,6 @@
 #pragma once
 // Central finite differences of functions of a 3x3 matrix, and the ε sweep used to check
-// analytic derivatives (DESIGN.md: every derivative is checked this way).
+// analytic derivatives (docs/design.md: every derivative is checked this way).
 #include <algorithm>
 #include <array>
 #include <cmath>

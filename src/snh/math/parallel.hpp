@@ -1,5 +1,5 @@
 #pragma once
-// Exceptions and OpenMP (DESIGN.md math/): an exception that leaves an OpenMP parallel region ends the
+// Exceptions and OpenMP (docs/design.md): an exception that leaves an OpenMP parallel region ends the
 // process (std::terminate), so a std::bad_alloc in an element loop aborted a run instead of reaching its
 // out-of-memory line. Every parallel loop runs its body through ParallelErrors::run and calls rethrow()
 // after the region: the exception of the lowest iteration that threw is rethrown there, the same for any

@@ -1,5 +1,5 @@
 #pragma once
-// Rotation-variant singular value decomposition of a 3x3 matrix (MATH.md §4).
+// Rotation-variant singular value decomposition of a 3x3 matrix (docs/math.md §4).
 #include "snh/math/types.hpp"
 
 namespace snh {
@@ -22,7 +22,7 @@ struct Svd3 {
 
 /// The same decomposition with the negative sign (when det F < 0) moved from σ2 to σ_k.
 /// Still a valid rotation-variant SVD of the same F (U is changed by a rotation of π about axis
-/// j ≠ k). Used to test that energies do not depend on where the reflection is carried (MATH.md §5.2).
+/// j ≠ k). Used to test that energies do not depend on where the reflection is carried (docs/math.md §5.2).
 ///   svd  a decomposition from rotation_variant_svd
 ///   k    0, 1 or 2: which singular value should carry the sign
 [[nodiscard]] Svd3 move_reflection(const Svd3& svd, int k);

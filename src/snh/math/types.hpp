@@ -1,5 +1,5 @@
 #pragma once
-// Fixed-size matrix types and the vec/cross-product helpers used throughout (MATH.md conventions:
+// Fixed-size matrix types and the vec/cross-product helpers used throughout (docs/math.md conventions:
 // column-major vec, F = [f0 f1 f2] by columns).
 #include <Eigen/Dense>
 
@@ -23,7 +23,7 @@ inline Mat3 cross_matrix(const Vec3& a) {
   return m;
 }
 
-/// ∂J/∂F for J = det F: the columns [f1×f2 | f2×f0 | f0×f1] (MATH.md §3).
+/// ∂J/∂F for J = det F: the columns [f1×f2 | f2×f0 | f0×f1] (docs/math.md §3).
 inline Mat3 det_gradient(const Mat3& F) {
   Mat3 g;
   g.col(0) = F.col(1).cross(F.col(2));
@@ -32,7 +32,7 @@ inline Mat3 det_gradient(const Mat3& F) {
   return g;
 }
 
-/// ∂²J/∂F² as a 9x9 matrix: [[0, −F̂2, F̂1], [F̂2, 0, −F̂0], [−F̂1, F̂0, 0]] (MATH.md §3).
+/// ∂²J/∂F² as a 9x9 matrix: [[0, −F̂2, F̂1], [F̂2, 0, −F̂0], [−F̂1, F̂0, 0]] (docs/math.md §3).
 inline Mat9 det_hessian(const Mat3& F) {
   Mat9 H = Mat9::Zero();
   const Mat3 f0 = cross_matrix(F.col(0)), f1 = cross_matrix(F.col(1)), f2 = cross_matrix(F.col(2));

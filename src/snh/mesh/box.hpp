@@ -1,5 +1,5 @@
 #pragma once
-// The paper's box meshes (PAPER_CODE.md): a (res+1)³ lattice on [−1, 1]³.
+// The paper's box meshes (docs/paper-programs.md): a (res+1)³ lattice on [−1, 1]³.
 #include "snh/mesh/volume_mesh.hpp"
 
 namespace snh {

@@ -9,7 +9,9 @@ double cell_volume(const VolumeMesh& m, Eigen::Index c) {
     D << X(1) - X(0), X(2) - X(0), X(3) - X(0);
     return D.determinant() / 6.0;
   }
-  Eigen::Matrix3d J;  // the Jacobian at the centre times 8
+  // Twice the Jacobian at the centre (on [−1, 1]³), so its determinant is 8 det J, the volume of a
+  // parallelepiped; for other hexes the volume at the centre, not the exact one (rest_state's 2×2×2 rule is).
+  Eigen::Matrix3d J;
   J.col(0) = 0.25 * (X(1) - X(0) + X(3) - X(2) + X(5) - X(4) + X(7) - X(6));
   J.col(1) = 0.25 * (X(2) - X(0) + X(3) - X(1) + X(6) - X(4) + X(7) - X(5));
   J.col(2) = 0.25 * (X(4) - X(0) + X(5) - X(1) + X(6) - X(2) + X(7) - X(3));

@@ -1,5 +1,5 @@
 #pragma once
-// A volume mesh of tet4 or hex8 cells (DESIGN.md mesh/). libigl-style: vertices 3 by #V, cells
+// A volume mesh of tet4 or hex8 cells (docs/design.md). libigl-style: vertices 3 by #V, cells
 // nodes-per-cell by #C (one column per cell).
 #include <string_view>
 
@@ -16,7 +16,7 @@ struct VolumeMesh {
   CellType type = CellType::tet4;
   Eigen::Matrix3Xd vertices;  ///< rest positions, 3 by #V
   Eigen::MatrixXi cells;      ///< vertex indices, nodes_per_cell(type) by #C
-  /// Hex8 corner order (PAPER_CODE.md): c0 = (i,j,k), c1 = c0 + x̂, c2 = c0 + ŷ, c3 = c0 + x̂ + ŷ,
+  /// Hex8 corner order (docs/paper-programs.md): c0 = (i,j,k), c1 = c0 + x̂, c2 = c0 + ŷ, c3 = c0 + x̂ + ŷ,
   /// c4..c7 = c0..c3 + ẑ. Tet4: any order with positive rest volume (det[x1−x0, x2−x0, x3−x0] > 0).
 
   [[nodiscard]] Eigen::Index vertex_count() const { return vertices.cols(); }

@@ -445,7 +445,7 @@ json run_data(const fs::path& dir, const json& stats) {
     meta.push_back({"ν = λ / (2(λ + μ))", fmt::format("{:.6g}", lambda / (2.0 * (lambda + mu)))});
   }
   if (stats.contains("reparametrize"))
-    meta.push_back({"parameters", stats.value("reparametrize", false) ? "linear (μ_L, λ_L), reparametrized (MATH.md §2)"
+    meta.push_back({"parameters", stats.value("reparametrize", false) ? "linear (μ_L, λ_L), reparametrized (docs/math.md §2)"
                                                                       : "used as given"});
   for (const Setting& m : kSolverAndTotals) meta_from(meta, stats, m.key, m.label, m.unit);
   d["meta"] = meta;

@@ -1,5 +1,5 @@
 #pragma once
-// The browser report of a run (DESIGN.md viewer/): DIR/index.html with the run's data beside it, a page
+// The browser report of a run (docs/design.md): DIR/index.html with the run's data beside it, a page
 // that opens from the file system (file://, no server) and shows the frames in 3D (three.js), the
 // per-step stats as plots (uPlot), the run's settings, and for the lab its tables and curves.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Animation clips (DESIGN.md rig/): glTF 2.0 channels (translation, rotation, scale of a joint; LINEAR,
+// Animation clips (docs/design.md): glTF 2.0 channels (translation, rotation, scale of a joint; LINEAR,
 // STEP or CUBICSPLINE between keys; rotations slerped), sampled into a pose; and the keyframed joint
 // rotations of a scene file, which become a clip.
 #include <string>

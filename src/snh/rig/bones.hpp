@@ -1,5 +1,5 @@
 #pragma once
-// Bones and the flesh they hold (DESIGN.md rig/): a bone is the segment from a joint to each of its child
+// Bones and the flesh they hold (docs/design.md): a bone is the segment from a joint to each of its child
 // joints (a leaf joint with no child is a point), moving rigidly with the joint; the volume vertices inside
 // a bone's capsule are bound to it and follow it exactly (hard constraints, as HOBAK binds them); those in a
 // shell around the capsule may be bound softly, by springs toward where the bone carries them.

@@ -1,5 +1,5 @@
 #pragma once
-// Rigged characters from glTF 2.0 files (DESIGN.md rig/), read by tinygltf (Debian's libtinygltf-dev):
+// Rigged characters from glTF 2.0 files (docs/design.md), read by tinygltf (Debian's libtinygltf-dev):
 // a skinned triangle mesh (.glb, or .gltf with external or embedded buffers), its skin (joints, inverse
 // bind matrices, four joint weights per vertex), the joints' hierarchy and rest transforms, and its
 // animation clips.

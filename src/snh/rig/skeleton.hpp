@@ -1,5 +1,5 @@
 #pragma once
-// A skeleton (DESIGN.md rig/): joints with a parent and a rest transform local to it, and forward
+// A skeleton (docs/design.md): joints with a parent and a rest transform local to it, and forward
 // kinematics from local poses to world transforms.
 #include <string>
 #include <string_view>

@@ -1,5 +1,5 @@
 #pragma once
-// Linear blend skinning (DESIGN.md rig/): each vertex moved by its joints' world · inverse-bind transforms,
+// Linear blend skinning (docs/design.md): each vertex moved by its joints' world · inverse-bind transforms,
 // blended by its weights. The comparison flesh simulation is measured against.
 #include <vector>
 

@@ -1,5 +1,5 @@
 #pragma once
-// A joint's local transform as glTF stores it (DESIGN.md rig/): translation, rotation, scale, composed as
+// A joint's local transform as glTF stores it (docs/design.md): translation, rotation, scale, composed as
 // T · R · S (glTF 2.0 §5.25 "node").
 #include <Eigen/Geometry>
 

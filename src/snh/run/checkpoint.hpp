@@ -1,5 +1,5 @@
 #pragma once
-// Checkpoints for --resume (DESIGN.md run/): after every completed step a run writes checkpoint.bin
+// Checkpoints for --resume (docs/design.md): after every completed step a run writes checkpoint.bin
 // (atomically) with the exact state needed to continue: the step, the positions and one auxiliary vector
 // (the previous solution, or the last two, for extrapolation; or the velocity), and a fingerprint of the settings that
 // determine the result, so that a resume with other settings is refused.

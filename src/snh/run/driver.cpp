@@ -106,8 +106,8 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
 
   // The run's progress on disk, what a report and a resume read: frames.pvd, stats.json and stats.csv,
   // and the checkpoint of the last converged frame. Each is a file replaced as a whole (a rename over the
-  // last one, which ext4 follows with a flush of the new file: about 0.5 ms each, and the stats grow with
-  // the run), so it is written after the first frame of this process, then once plan.progress_interval has
+  // last one, which ext4 follows with a flush of the new file, and the stats grow with the run), so it is
+  // written after the first frame of this process, then once plan.progress_interval has
   // passed since the last time, and whenever the run ends, however it ends (finish, the out-of-memory
   // path, and the guard below for any exception). A run killed outright loses at most that interval: its
   // later frames stay on disk and a resume from the checkpoint writes them again.

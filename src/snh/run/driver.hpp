@@ -1,6 +1,6 @@
 #pragma once
 // The one loop that runs a Simulation frame by frame and keeps its output directory trustworthy
-// (DESIGN.md run/): it locks the directory, clears a previous run's files (or, for --resume, checks the
+// (docs/design.md): it locks the directory, clears a previous run's files (or, for --resume, checks the
 // checkpoint, the kept frames and the history), writes stats.json with status "running" before any work,
 // then every frame (NNN.obj, NNN.vtu) and its stats record; the progress (frames.pvd, the stats so far and
 // the last converged frame's checkpoint) after the first completed frame, then at most every

@@ -1,5 +1,5 @@
 #pragma once
-// Stopping a long run cleanly (DESIGN.md run/): the first SIGINT (Ctrl-C) or SIGTERM sets a flag; the
+// Stopping a long run cleanly (docs/design.md): the first SIGINT (Ctrl-C) or SIGTERM sets a flag; the
 // runners check it between Newton iterations, abandon the step in progress, keep every completed frame
 // and write their stats, and the programs exit with 128 + the signal number. A second SIGINT or SIGTERM
 // ends the process at once, as the signal's default action would (exit status 128 + that signal), even

@@ -1,5 +1,5 @@
 #pragma once
-// What every run writes (DESIGN.md run/): frames as NNN.obj (the paper's format: lattice vertices and
+// What every run writes (docs/design.md): frames as NNN.obj (the paper's format: lattice vertices and
 // the boundary triangles) and NNN.vtu (binary) with a frames.pvd series for ParaView, each file written
 // atomically; and the process' peak memory for the stats.
 #include <filesystem>

@@ -1,5 +1,5 @@
 #pragma once
-// The output directory of a run holds one run (DESIGN.md run/): while a run writes there it holds an
+// The output directory of a run holds one run (docs/design.md): while a run writes there it holds an
 // exclusive lock (a second run into the same directory is refused at once); a new run first removes the
 // files a previous run of ours left (frames, stats, checkpoint, report), and nothing else; a resume checks
 // that the frames it keeps are still there.

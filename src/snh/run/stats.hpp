@@ -1,5 +1,5 @@
 #pragma once
-// What a run records per step (the stretch test) or frame (a scene), described once (DESIGN.md run/):
+// What a run records per step (the stretch test) or frame (a scene), described once (docs/design.md):
 // a RecordTable lists each record's fields with their JSON key, CSV format, label and plot, and drives
 // stats.json, stats.csv, the history read back by --resume, and the column list the report plots from
 // (stats.json's "schema"). A new field is one line in a table.

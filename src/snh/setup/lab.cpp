@@ -314,7 +314,7 @@ std::vector<StretchRow> lab_stretch(const LabOptions& o) {
       c.params = lame_from_youngs(1.0, nu);
       c.program = "snh lab";
       // Near incompressibility the symmetric state at 3.5x can be a saddle that projected Newton leaves only
-      // slowly (README, stretch test): allow more iterations than the paper's 50.
+      // slowly (docs/results.md, the stretch test): allow more iterations than the paper's 50.
       c.newton.max_iterations = 200;
       c.solver = "ldlt";  // as the scenes: no BLAS threads competing with the parallel runs
       row.dir = fmt::format("stretch/nu_{}/{}", nu, e);

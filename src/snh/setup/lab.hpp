@@ -1,11 +1,11 @@
 #pragma once
-// The stability lab (DESIGN.md setup/): the experiments that show, by simulation and for every energy
-// side by side, the paper's stability claims (MATH.md §5) and its Poisson's-ratio argument.
+// The stability lab (docs/design.md): the experiments that show, by simulation and for every energy
+// side by side, the paper's stability claims (docs/math.md §5) and its Poisson's-ratio argument.
 //   rest        a free cube starting at rest: does it stay at its rest volume?
 //   inversion   a fully inverted cube, and one with a few elements pushed through: does it recover?
 //   reflection  the inverted cube reflected in x, y or z: does the outcome depend on the axis?
 //   degeneracy  a cube crushed to a plane, a line, a point, and scaled below / above the trap size of
-//               production SNH (MATH.md §5), then released: does it recover, and how fast?
+//               production SNH (docs/math.md §5), then released: does it recover, and how fast?
 //   poisson     a bar under 0.1 % uniaxial strain with sliding ends: the measured Poisson's ratio
 //   stretch     the paper's stretch test to 3.5×: the volume ratio for ν from 0.3 to 0.495
 // Each simulation writes its frames and stats like any run, under OUT/<experiment>/<case>/<energy>.

@@ -1,5 +1,5 @@
 #pragma once
-// The paper's stretch test (PAPER_CODE.md): a [−1, 1]³ box whose y = −1 and y = +1 vertex layers are
+// The paper's stretch test (docs/paper-programs.md): a [−1, 1]³ box whose y = −1 and y = +1 vertex layers are
 // pulled apart in equal quasi-static steps (y → ∓(1 + (stretch − 1) s/steps), x and z held), one
 // Newton solve per step, an OBJ frame per step, and per-step statistics.
 #include <filesystem>
@@ -28,13 +28,14 @@ struct StretchConfig {
   int axis = 1;                           ///< the stretch axis (0 x, 1 y, 2 z): its extreme faces are pulled
   std::string material = "stable_neo_hookean";
   Lame params{1.0, 10.0};
-  bool reparametrize = false;             ///< params are linear μ_L, λ_L (MATH.md §2)
+  bool reparametrize = false;             ///< params are linear μ_L, λ_L (docs/math.md §2)
   int steps = 25;
   double stretch = 3.5;                   ///< final length / rest length along y
   std::filesystem::path out = "output";
   std::string solver = "auto";               ///< a linear_solvers() name ("auto": by size)
   bool reuse_factor = true;               ///< direct solvers: precondition with the last factor (linear_solver.hpp)
-  /// Inexact Newton's forcing 0.01 (NewtonOptions::forcing): measured fewer Newton iterations here than 0.1.
+  /// Inexact Newton's forcing 0.01 (NewtonOptions::forcing): here a Newton iteration costs more than a CG
+  /// one, and the tighter forcing takes fewer Newton iterations (docs/results.md).
   NewtonOptions newton = [] {
     NewtonOptions o;
     o.forcing = 0.01;

@@ -1,5 +1,5 @@
 #pragma once
-// Time stepping (DESIGN.md sim/): implicit (backward) Euler on positions as the minimisation of an
+// Time stepping (docs/design.md): implicit (backward) Euler on positions as the minimisation of an
 // incremental potential, and quasi-static steps with external forces, both solved by projected Newton.
 //
 // Backward Euler with step h, lumped masses m, gravity g and Rayleigh-style damping D = αM + βK:

@@ -1,5 +1,5 @@
 #pragma once
-// Kinematic vertices (DESIGN.md sim/): sets of vertices whose held coordinates follow targets given by a
+// Kinematic vertices (docs/design.md): sets of vertices whose held coordinates follow targets given by a
 // provider, a function of time. Scripted motion (scene pins) is one provider; the stretch test's pulled
 // layers another; bones (a rig's skinned capsules) are the next. The simulation only asks a provider
 // where its vertices are at time t.

@@ -1,5 +1,5 @@
 #pragma once
-// A stepping simulation (DESIGN.md sim/), with no files: a mesh with its materials, kinematic sets whose
+// A stepping simulation (docs/design.md), with no files: a mesh with its materials, kinematic sets whose
 // targets come from providers, and an integrator, solved by projected Newton on a Problem of energy terms
 // (elasticity, then inertia, damping and gravity). step(t) makes one solve to time t; advance() a frame
 // of equal substeps. Frames, stats and checkpoints are the driver's (driver.hpp).
@@ -49,8 +49,8 @@ struct SimulationSetup {
   /// state and t; kinematic targets are placed on it afterwards.
   std::function<Eigen::VectorXd(const Eigen::VectorXd& x, double t)> fallback_guess;
   /// Quasi-static guesses after the first: 1, the linear extrapolation from the last two solutions; 2, also
-  /// the quadratic one from the last three, taken where its energy is lower (scenes and flesh: on the hand's
-  /// fist 118 Newton and 1 098 CG iterations over 20 frames against 135 and 1 564).
+  /// the quadratic one from the last three, taken where its energy is lower (scenes and flesh: fewer Newton
+  /// and CG iterations on the hand's fist; docs/results.md).
   int extrapolation = 1;
   /// Quasi-static, optional: an affine frame per vertex (3 by 4, x ↦ A x + b) that carries the solution
   /// along at time t (flesh: the model's joints' motions from rest, blended per vertex with skin weights).

@@ -1,5 +1,5 @@
 #pragma once
-// Preconditioned conjugate gradients on a symmetric matrix stored as its lower triangle (DESIGN.md solve/),
+// Preconditioned conjugate gradients on a symmetric matrix stored as its lower triangle (docs/design.md),
 // written out (rather than Eigen's) to detect non-positive curvature pᵀAp ≤ 0, which proves that the
 // matrix is not positive definite: Newton then falls back to the projected Hessian. The preconditioner is
 // an interface so that a direct factor (factor reuse), Jacobi, and later multigrid plug in the same way.

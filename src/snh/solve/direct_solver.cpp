@@ -50,8 +50,9 @@ constexpr std::size_t kBlasBuffer = std::size_t{128} << 20;
 /// supernodal factor (xsize values), its largest update workspace (maxcsize), the copy of A that CHOLMOD
 /// factors (the upper triangle: a lower one is transposed first), 16 MiB for the rest of its workspace and
 /// the allocator, and OpenBLAS's buffer. Only reserved, never touched, and released at once; false where a
-/// factorization would run out of memory, or hang inside OpenBLAS. (Without the copy and the 16 MiB, hex
-/// res 20's run hung under ulimit -v between 556 and 580 MB: the factor had been allocated, the buffer failed.)
+/// factorization would run out of memory, or hang inside OpenBLAS. (Without the copy and the 16 MiB, a run
+/// under a tight ulimit -v passed the check and then hung: the factor had been allocated, OpenBLAS's buffer
+/// failed, and OpenBLAS retries that allocation forever.)
 bool room_for_first_factorization(const cholmod_factor* L, const SparseLower& A) {
   if (!L || !L->is_super || L->x) return true;  // analysed only: the first factorization still allocates
   const double copy = 12.0 * static_cast<double>(A.nonZeros()) + 8.0 * static_cast<double>(A.cols() + 1);
@@ -65,9 +66,8 @@ bool room_for_first_factorization(const cholmod_factor* L, const SparseLower& A)
 }
 
 /// Below this many flops for a factorization (CHOLMOD's estimate after its analysis) the BLAS runs on one
-/// thread. Measured with hexcli (2-core Intel Xeon VM): at res 10 (2.8e8 flops) OpenBLAS's second thread
-/// cost 0.4 s of sys time waiting (sched_yield) for 0.47-0.59 s of wall time, and one thread took 1.8x less
-/// CPU; at res 20 (1.1e10 flops) two threads were faster on an idle machine (6.5 against 8.6 s).
+/// thread: on small factorizations OpenBLAS's second thread spends more time waiting (sched_yield) than it
+/// saves, while large ones are faster on two (hexcli at res 10 and 20: docs/results.md, "Assembly").
 constexpr double kThreadedBlasFlops = 3e9;
 
 /// CHOLMOD and LDLᵀ share the symbolic-reuse and shift logic.

@@ -1,5 +1,5 @@
 #pragma once
-// Direct solvers for the Newton step (DESIGN.md solve/): CHOLMOD's supernodal LLᵀ and Eigen's simplicial
+// Direct solvers for the Newton step (docs/design.md): CHOLMOD's supernodal LLᵀ and Eigen's simplicial
 // LDLᵀ, with the symbolic analysis reused while the pattern is unchanged and a doubling diagonal shift for
 // a matrix that is not positive definite; and factor reuse, which preconditions conjugate gradients on
 // later matrices with the last factor (linear_solver.hpp). Made through the registry in linear_solver.hpp.

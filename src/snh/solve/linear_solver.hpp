@@ -1,5 +1,5 @@
 #pragma once
-// Sparse symmetric positive (semi-)definite solvers for the Newton step (DESIGN.md solve/), chosen by name
+// Sparse symmetric positive (semi-)definite solvers for the Newton step (docs/design.md), chosen by name
 // from a registry (linear_solvers()):
 //   cholmod  CHOLMOD supernodal Cholesky (default; symbolic analysis reused while the pattern is unchanged)
 //   ldlt     Eigen's simplicial LDLᵀ
@@ -84,12 +84,12 @@ class LinearSolver {
 };
 
 /// The diagonal shifts a solver tries when A (lower triangle) is not positive definite: σ doubling from
-/// 1e-10 of A's largest diagonal entry up to twice its Gershgorin bound (twice the largest absolute row
-/// sum), beyond which A + σI is positive definite, so only a non-finite A makes every try fail. Calls
+/// 1e-10 of A's largest diagonal entry up to four times its largest absolute row sum (the Gershgorin bound,
+/// with room), beyond which A + σI is positive definite, so only a non-finite A makes every try fail. Calls
 /// attempt(σ) for each in turn and returns the first σ for which it returns true; NaN when none does.
 [[nodiscard]] double search_diagonal_shift(const SparseLower& A, const std::function<bool(double)>& attempt);
 
-/// "auto": the direct solver below this many free DOFs, multigrid from it (README "How a step is solved").
+/// "auto": the direct solver below this many free DOFs, multigrid from it (docs/solvers.md, "Linear solvers").
 inline constexpr Eigen::Index kAutoIterativeFrom = 20000;
 /// The registry name "auto" stands for: cholmod below kAutoIterativeFrom free DOFs, else mg on a hexahedral
 /// lattice and amg on any other mesh.

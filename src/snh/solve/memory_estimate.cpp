@@ -15,27 +15,24 @@ namespace {
 
 constexpr double kMiB = 1024.0 * 1024.0;
 
-// Calibration (README "Memory"): peak resident set and peak address space of `snh stretch` at
-// resolutions 5-30, tets and hexes, CHOLMOD and PCG, 2 threads; each coefficient rounded up.
+// Calibration: peak resident set and peak address space of `snh stretch` at resolutions 5-30, tets and
+// hexes, CHOLMOD and PCG, 2 threads (the measurements: docs/results.md, "Memory"); each coefficient rounded up.
 constexpr double kBaseResident = 16.0 * kMiB;     // the program, its libraries, a tiny mesh
 constexpr double kPerVertex = 7.0 * 1024.0;       // positions, DOF vectors, the PCG matrix, frames, stats (bytes)
 constexpr double kPerCellNodePair = 30.0;         // per cell and (node, node) pair: the scatter map (6 ints per pair)
 constexpr double kFactorPerN43 = 260.0;           // CHOLMOD's L and workspace, bytes per n^{4/3}
-// Address space reserved beyond the resident set (VmPeak minus the peak resident set, `snh stretch` on this
-// VM; README "Memory"): 47 MiB with PCG on one CPU (taskset -c 0); each further CPU adds 137 MiB, an
-// OpenBLAS worker thread, which reserves its 128 MiB buffer and an 8 MiB stack when the library starts,
-// with PCG too (184-190 MiB on two CPUs, with 1 or 2 OpenMP threads); a direct solver adds 150 MiB, the
-// main thread's OpenBLAS buffer in the factorization (197 MiB on one CPU, 330-334 on two). Rounded up.
-// (Before, 120 MiB + 50 MiB per thread for PCG: 2.9 times the measurement on one CPU, and below what
-// OpenBLAS reserves from four CPUs on.)
+// Address space reserved beyond the resident set (VmPeak minus the peak resident set of `snh stretch`,
+// measured on one and two CPUs: docs/results.md, "Memory"): a fixed part; per CPU after the first, an
+// OpenBLAS worker thread, which reserves its 128 MiB buffer and an 8 MiB stack when the library starts, with
+// PCG too; with a direct solver, the main thread's OpenBLAS buffer in the factorization. Rounded up.
 constexpr double kReservedFixed = 60.0 * kMiB;
 constexpr double kReservedPerExtraThread = 150.0 * kMiB;
 constexpr double kReservedDirect = 170.0 * kMiB;
 
 // Multigrid (mg): the Newton matrix in 3×3 nodal blocks, both triangles (27 blocks of 72 bytes per
-// lattice vertex), and the coarse levels (an eighth more each); measured 58 MiB over PCG at hex res 30.
-// Algebraic multigrid (amg) holds the same blocks (15 per vertex on tets) and its prolongator (about 16
-// blocks per vertex); measured 39 MiB over PCG at tet res 30, so the same allowance covers it.
+// lattice vertex), and the coarse levels (an eighth more each). Algebraic multigrid (amg) holds the same
+// blocks (15 per vertex on tets) and its prolongator (about 16 blocks per vertex): less than mg's in the
+// measurements (docs/results.md, "Multigrid"), so the same allowance covers it.
 constexpr double kMultigridPerVertex = 3.0 * 1024.0;
 
 bool is_direct(std::string_view solver) { return solver != "pcg" && solver != "mg" && solver != "amg"; }

@@ -2,7 +2,7 @@
 // How much memory a run needs, estimated before it starts, and what this process may use (issue 13).
 //
 // The model (calibrated by the peak resident set and peak address space of `snh stretch` runs at
-// resolutions 5 to 30 on a 2-core VM; the README's "Memory" paragraph has the figures):
+// resolutions 5 to 30 on a 2-core VM; docs/results.md, "Memory", has the figures):
 //   resident  = base + per_vertex · #V + per_cell · #C (nodes_per_cell² scaled) + 8 · 2 · nnz(H)
 //               + for a direct solver, the factor: fill · n^{4/3} nonzeros of L (n = 3 #V, the 3D
 //                 nested-dissection growth) at 8 bytes each, times the factorization's workspace ratio

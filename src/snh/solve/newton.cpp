@@ -27,8 +27,8 @@ bool step_is_small(const Eigen::VectorXd& d, const Eigen::VectorXd& x, const Eig
 
 /// An inexact solver's Newton iteration that follows a step within this many times the step rule's bound
 /// solves with the matrix it already holds (a chord step) instead of assembling and preparing a new one.
-/// Figure 1 (20 frames): 10 gave 12 chord steps and 669 CG iterations, 30 gave 18 and 653 with the same 86
-/// Newton iterations (1.21 and 1.27 s per step against 1.31 and 1.46 run in turn), 100 gave 27 and 793 in 97.
+/// 30: of 10, 30 and 100 on Figure 1, the fewest CG iterations with no more Newton iterations, and the
+/// fastest steps (docs/results.md, "Newton"); 100 let poor chord steps cost extra Newton iterations.
 constexpr double kChordSteps = 30.0;
 
 /// The Newton direction d at x (gradient g) from a freshly assembled matrix: the true Hessian when it is
@@ -87,7 +87,7 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     report.energy = E;
     report.residual = std::numeric_limits<double>::infinity();
     // +inf: an element with J <= 0 under an energy undefined there; NaN: an overflow, which the supported
-    // ranges of parameters and coordinates (README) keep out; saying J <= 0 for it misled.
+    // ranges of parameters and coordinates (docs/cli.md, docs/scenes.md) keep out; saying J <= 0 for it misled.
     report.failure = std::isnan(E) ? "the energy is not a number at the starting state (an overflow: parameters or "
                                      "coordinates beyond the supported range)"
                                    : "the starting state is outside the energy's domain (an element has J <= 0)";
@@ -126,9 +126,9 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     const double enough = std::max(linear_enough, eta * r);
     // A chord step (an inexact solver, after a step within kChordSteps of the step rule): the matrix and
     // preconditioner of the last iteration serve again, sparing an assembly and a V-cycle set-up where a
-    // Newton step is about to show convergence (measured on Figure 1: the last of four iterations, whose
-    // step is 40x below the rule, spent a tenth of a second of its 0.3 s on them, the rest on CG). Its step is tested and
-    // taken as any other; the next iteration refreshes the matrix.
+    // Newton step is about to show convergence (on Figure 1 the last iteration of a step, far below the rule,
+    // spent a good share of its time on them). Its step is tested and taken as any other; the next iteration
+    // refreshes the matrix.
     bool have_step = false;
     if (chord_next) {
       t = Clock::now();

@@ -1,5 +1,5 @@
 #pragma once
-// Conjugate gradients with a Jacobi preconditioner as a linear solver (DESIGN.md solve/), named "pcg".
+// Conjugate gradients with a Jacobi preconditioner as a linear solver (docs/design.md), named "pcg".
 #include <memory>
 
 #include "snh/solve/linear_solver.hpp"
