@@ -41,14 +41,10 @@ bool triangle_overlaps_cube(const std::array<Eigen::Vector3d, 3>& v, double e) {
   return !separates(edge[0].cross(v[2] - v[0]));
 }
 
-}  // namespace
-
-Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution) {
-  if (resolution < 1) throw std::invalid_argument(fmt::format("lattice resolution must be >= 1, got {}", resolution));
-  if (F.cols() == 0) throw std::invalid_argument("lattice of a surface with no triangles");
-  check_triangles(V, F);
-
-  // The bounding box of the vertices the triangles use.
+/// The grid: `resolution` cubes along the longest side of the bounding box of the vertices the triangles use,
+/// with kPad of a cube to spare at either end; the other sides get as many cubes as cover them with at least
+/// that margin. The grid is centred on the box. Its cells are not chosen yet.
+Lattice empty_grid(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution) {
   Eigen::Vector3d lo = V.col(F(0, 0)), hi = lo;
   for (Eigen::Index f = 0; f < F.cols(); ++f)
     for (int a = 0; a < 3; ++a) {
@@ -60,9 +56,6 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
   if (!(longest > 0.0) || !std::isfinite(longest))
     throw std::invalid_argument(
         fmt::format("lattice of a surface with no extent (every vertex at ({}, {}, {}))", lo.x(), lo.y(), lo.z()));
-
-  // `resolution` cubes along the longest side with kPad of a cube to spare at either end; the other sides
-  // get as many cubes as cover them with at least that margin. The grid is centred on the box.
   Lattice L;
   L.spacing = longest / (resolution - 2.0 * kPad);
   double cubes = 1.0;
@@ -76,12 +69,14 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
     L.dims[a] = static_cast<int>(n);
     L.origin[a] = lo[a] - 0.5 * (n * L.spacing - extent[a]);
   }
-  const Eigen::Vector3i& dims = L.dims;
-  const std::int64_t cube_count = std::int64_t{dims.x()} * dims.y() * dims.z();
-  const auto n_cubes = static_cast<std::size_t>(cube_count);
+  return L;
+}
 
-  // (a) Cubes a triangle overlaps, in cube units (L.grid_coordinates, as embed_in_lattice), each cube grown
-  // by δ: 1e-9 of its edge, more for grids so long that rounding of the coordinates could exceed that.
+/// The cubes a triangle overlaps (1), in cube units (L.grid_coordinates, as embed_in_lattice), each cube grown
+/// by δ: 1e-9 of its edge, more for grids so long that rounding of the coordinates could exceed that.
+std::vector<unsigned char> touched_cubes(const Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F) {
+  const Eigen::Vector3i& dims = L.dims;
+  const auto n_cubes = static_cast<std::size_t>(std::int64_t{dims.x()} * dims.y() * dims.z());
   const double delta = 1e-9 + 16.0 * std::numeric_limits<double>::epsilon() * dims.maxCoeff();
   Eigen::Matrix3Xd Q(3, V.cols());
   for (Eigen::Index v = 0; v < V.cols(); ++v) Q.col(v) = L.grid_coordinates(V.col(v));
@@ -117,32 +112,37 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
     });
   }
   overlap_errors.rethrow();
+  return touched;
+}
 
-  // (b) Untouched cubes, grouped by face neighbours into regions the surface does not cross; each region is
-  // inside or outside as a whole (the winding number is constant off the surface), asked at its first cube.
+/// Whether each untouched cube is inside: untouched cubes, grouped by face neighbours into regions the surface
+/// does not cross; each region is inside or outside as a whole (the winding number is constant off the
+/// surface), asked at its first cube. Touched cubes come back 0.
+std::vector<unsigned char> inside_cubes(const Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F,
+                                        const std::vector<unsigned char>& touched) {
+  const Eigen::Vector3i& dims = L.dims;
+  const std::size_t n_cubes = touched.size();
   std::vector<int> region(n_cubes, -1);
   std::vector<int> seed;  // each region's first cube in grid order
-  {
-    std::vector<int> stack;
-    for (std::size_t c0 = 0; c0 < n_cubes; ++c0) {
-      if (touched[c0] || region[c0] >= 0) continue;
-      const int r = static_cast<int>(seed.size());
-      seed.push_back(static_cast<int>(c0));
-      region[c0] = r;
-      stack.assign(1, static_cast<int>(c0));
-      while (!stack.empty()) {
-        const int c = stack.back();
-        stack.pop_back();
-        const int i = c % dims.x(), j = (c / dims.x()) % dims.y(), k = c / (dims.x() * dims.y());
-        const std::array<std::array<int, 3>, 6> next = {
-            {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}}};
-        for (const auto& n : next) {
-          if (n[0] < 0 || n[1] < 0 || n[2] < 0 || n[0] >= dims.x() || n[1] >= dims.y() || n[2] >= dims.z()) continue;
-          const int m = L.cube_index(n[0], n[1], n[2]);
-          if (touched[static_cast<std::size_t>(m)] || region[static_cast<std::size_t>(m)] >= 0) continue;
-          region[static_cast<std::size_t>(m)] = r;
-          stack.push_back(m);
-        }
+  std::vector<int> stack;
+  for (std::size_t c0 = 0; c0 < n_cubes; ++c0) {
+    if (touched[c0] || region[c0] >= 0) continue;
+    const int r = static_cast<int>(seed.size());
+    seed.push_back(static_cast<int>(c0));
+    region[c0] = r;
+    stack.assign(1, static_cast<int>(c0));
+    while (!stack.empty()) {
+      const int c = stack.back();
+      stack.pop_back();
+      const int i = c % dims.x(), j = (c / dims.x()) % dims.y(), k = c / (dims.x() * dims.y());
+      const std::array<std::array<int, 3>, 6> next = {
+          {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}}};
+      for (const auto& n : next) {
+        if (n[0] < 0 || n[1] < 0 || n[2] < 0 || n[0] >= dims.x() || n[1] >= dims.y() || n[2] >= dims.z()) continue;
+        const int m = L.cube_index(n[0], n[1], n[2]);
+        if (touched[static_cast<std::size_t>(m)] || region[static_cast<std::size_t>(m)] >= 0) continue;
+        region[static_cast<std::size_t>(m)] = r;
+        stack.push_back(m);
       }
     }
   }
@@ -159,12 +159,20 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
     });
   }
   errors.rethrow();
+  std::vector<unsigned char> out(n_cubes, 0);
+  for (std::size_t c = 0; c < n_cubes; ++c)
+    if (!touched[c]) out[c] = inside[static_cast<std::size_t>(region[c])];
+  return out;
+}
 
-  // The hex mesh of the kept cubes: cells in grid order, and the grid nodes they use, numbered in grid order.
+/// The hex mesh of the kept cubes: cells in grid order, and the grid nodes they use, numbered in grid order.
+void build_cells(Lattice& L, const std::vector<unsigned char>& keep) {
+  const Eigen::Vector3i& dims = L.dims;
+  const std::size_t n_cubes = keep.size();
   L.cell_at.assign(n_cubes, -1);
   int cells = 0;
   for (std::size_t c = 0; c < n_cubes; ++c)
-    if (touched[c] || inside[static_cast<std::size_t>(region[c])]) L.cell_at[c] = cells++;
+    if (keep[c]) L.cell_at[c] = cells++;
   const Eigen::Vector3i nd = dims + Eigen::Vector3i::Ones();
   const auto node_index = [&](int i, int j, int k) {
     return static_cast<std::size_t>(i) + static_cast<std::size_t>(nd.x()) * (static_cast<std::size_t>(j) +
@@ -193,6 +201,20 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
   for (std::size_t c = 0; c < n_cubes; ++c)
     if (const int cell = L.cell_at[c]; cell >= 0)
       for (int a = 0; a < 8; ++a) L.mesh.cells(a, cell) = node[corner(static_cast<int>(c), a)];
+}
+
+}  // namespace
+
+Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution) {
+  if (resolution < 1) throw std::invalid_argument(fmt::format("lattice resolution must be >= 1, got {}", resolution));
+  if (F.cols() == 0) throw std::invalid_argument("lattice of a surface with no triangles");
+  check_triangles(V, F);
+  Lattice L = empty_grid(V, F, resolution);
+  // Every cube a triangle meets (exact separating-axis tests), and every cube wholly inside.
+  std::vector<unsigned char> keep = touched_cubes(L, V, F);
+  const std::vector<unsigned char> inside = inside_cubes(L, V, F, keep);
+  for (std::size_t c = 0; c < keep.size(); ++c) keep[c] = keep[c] || inside[c];
+  build_cells(L, keep);
   return L;
 }
 

@@ -217,6 +217,103 @@ class RenderSurface {
   Range bounds_[3];
 };
 
+/// The report's view of a mesh: its boundary triangles over the surface's vertices and cells, numbered in
+/// order of first use, with the rest positions and pinned flags of those vertices.
+struct ReportSurface {
+  Eigen::Index triangle_count = 0;
+  std::vector<std::uint32_t> tri, tri_cell;  ///< 3 surface vertices and the surface cell per triangle
+  std::vector<int> vertices, cells;          ///< the mesh's vertex and cell of each surface one
+  std::vector<float> rest_xyz;
+  std::vector<std::uint8_t> pinned;
+  int pinned_count = 0;                      ///< over the whole mesh
+};
+
+ReportSurface report_surface(const VolumeMesh& rest, const VtuData& first) {
+  const Eigen::Index nv = rest.vertex_count(), nc = rest.cell_count();
+  std::vector<int> triangle_cell;
+  const Eigen::Matrix3Xi triangles = boundary_triangles(rest, &triangle_cell);
+  ReportSurface s;
+  s.triangle_count = triangles.cols();
+  // `local` maps a mesh index to its surface index, −1 until used; `used` lists the mesh indices in surface order.
+  std::vector<int> vertex_local(nv, -1), cell_local(nc, -1);
+  auto number = [](int index, std::vector<int>& local, std::vector<int>& used) {
+    if (local[index] < 0) {
+      local[index] = static_cast<int>(used.size());
+      used.push_back(index);
+    }
+    return static_cast<std::uint32_t>(local[index]);
+  };
+  s.tri.resize(3 * triangles.cols());
+  s.tri_cell.resize(triangles.cols());
+  for (Eigen::Index t = 0; t < triangles.cols(); ++t) {
+    for (int a = 0; a < 3; ++a) s.tri[3 * t + a] = number(triangles(a, t), vertex_local, s.vertices);
+    s.tri_cell[t] = number(triangle_cell[t], cell_local, s.cells);
+  }
+  const std::size_t ns = s.vertices.size();
+  s.rest_xyz.resize(3 * ns);
+  s.pinned.assign(ns, 0);
+  const auto pin_it = first.point_data.find("pinned");
+  const bool has_pins = pin_it != first.point_data.end() && pin_it->second.size() == static_cast<std::size_t>(nv);
+  if (has_pins)
+    for (double p : pin_it->second) s.pinned_count += p != 0.0;
+  for (std::size_t k = 0; k < ns; ++k) {
+    for (int a = 0; a < 3; ++a) s.rest_xyz[3 * k + a] = static_cast<float>(rest.vertices(a, s.vertices[k]));
+    if (has_pins) s.pinned[k] = pin_it->second[s.vertices[k]] != 0.0;
+  }
+  return s;
+}
+
+/// A field the view colours by, with its range over every frame.
+struct Field {
+  std::string name, label, per, colormap;
+  Range range;
+};
+
+/// The cell fields written by FrameWriter (older runs may lack psi), then the displacement magnitude.
+std::vector<Field> report_fields(const VtuData& first) {
+  std::vector<Field> fields;
+  if (first.cell_data.count("J")) fields.push_back({"J", "volume change J (smallest det F per element)", "cell", "diverging", {}});
+  if (first.cell_data.count("psi")) fields.push_back({"psi", "energy density ψ (mean per element)", "cell", "sequential", {}});
+  fields.push_back({"displacement", "displacement |x − X|", "vertex", "sequential", {}});
+  return fields;
+}
+
+/// One frame's surface positions and field values (the fields' ranges and the bounds grown by it).
+json frame_values(const VtuData& data, const fs::path& file, const VolumeMesh& rest, const ReportSurface& surface,
+                  std::vector<Field>& fields, Eigen::Vector3d& lo, Eigen::Vector3d& hi) {
+  const Eigen::Index nv = rest.vertex_count(), nc = rest.cell_count();
+  const VolumeMesh& m = data.mesh.mesh;
+  if (m.vertex_count() != nv || m.cell_count() != nc)
+    throw ReportError(fmt::format("{}: {} points and {} cells, but frame 0 has {} and {}", file.string(), m.vertex_count(),
+                                  m.cell_count(), nv, nc));
+  json frame_json;
+  const std::size_t ns = surface.vertices.size();
+  std::vector<float> xyz(3 * ns);
+  for (std::size_t k = 0; k < ns; ++k) {
+    const Eigen::Vector3d p = m.vertices.col(surface.vertices[k]);
+    for (int a = 0; a < 3; ++a) xyz[3 * k + a] = static_cast<float>(p[a]);
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  frame_json["x"] = encode(xyz);
+  for (Field& f : fields) {
+    std::vector<float> values;
+    if (f.per == "cell") {
+      const auto it = data.cell_data.find(f.name);
+      if (it == data.cell_data.end() || it->second.size() != static_cast<std::size_t>(nc))
+        throw ReportError(fmt::format("{}: no cell field {} with {} values, as frame 0 has", file.string(), f.name, nc));
+      for (double v : it->second) f.range.add(v);
+      for (int c : surface.cells) values.push_back(static_cast<float>(it->second[c]));
+    } else {
+      const Eigen::VectorXd d = (m.vertices - rest.vertices).colwise().norm();
+      for (Eigen::Index v = 0; v < nv; ++v) f.range.add(d[v]);
+      for (int v : surface.vertices) values.push_back(static_cast<float>(d[v]));
+    }
+    frame_json[f.name] = encode(values);
+  }
+  return frame_json;
+}
+
 /// The 3D part of a run's report: reads the .vtu frames listed in frames.pvd, writes report/frames/NNN.js
 /// (surface positions and fields of each frame, and a flesh run's render surface) and returns the "mesh"
 /// object of data.js; `render` is set to the "render" object of a flesh run (surface/000.obj there), else null.
@@ -246,81 +343,15 @@ json write_frames(const fs::path& dir, const std::string& frame_word, json& rend
   // Rest positions: frame 0's points less its displacement (frame 0 may start deformed).
   if (const auto it = first.point_data.find("displacement"); it != first.point_data.end() && it->second.size() == static_cast<std::size_t>(3 * nv))
     rest.vertices -= Eigen::Map<const Eigen::Matrix3Xd>(it->second.data(), 3, nv);
-  std::vector<int> triangle_cell;
-  const Eigen::Matrix3Xi triangles = boundary_triangles(rest, &triangle_cell);
-
-  // The surface: its vertices and cells, numbered in order of first use (`local` maps a mesh index to
-  // its surface index, −1 until used; `used` lists the mesh indices in surface order).
-  std::vector<int> vertex_local(nv, -1), cell_local(nc, -1), surface_vertices, surface_cells;
-  auto number = [](int index, std::vector<int>& local, std::vector<int>& used) {
-    if (local[index] < 0) {
-      local[index] = static_cast<int>(used.size());
-      used.push_back(index);
-    }
-    return static_cast<std::uint32_t>(local[index]);
-  };
-  std::vector<std::uint32_t> tri(3 * triangles.cols()), tri_cell(triangles.cols());
-  for (Eigen::Index t = 0; t < triangles.cols(); ++t) {
-    for (int a = 0; a < 3; ++a) tri[3 * t + a] = number(triangles(a, t), vertex_local, surface_vertices);
-    tri_cell[t] = number(triangle_cell[t], cell_local, surface_cells);
-  }
-  const std::size_t ns = surface_vertices.size(), ms = surface_cells.size();
-  std::vector<float> rest_xyz(3 * ns);
-  std::vector<std::uint8_t> pinned(ns, 0);
-  const auto pin_it = first.point_data.find("pinned");
-  const bool has_pins = pin_it != first.point_data.end() && pin_it->second.size() == static_cast<std::size_t>(nv);
-  int pinned_count = 0;
-  if (has_pins)
-    for (double p : pin_it->second) pinned_count += p != 0.0;
-  for (std::size_t k = 0; k < ns; ++k) {
-    for (int a = 0; a < 3; ++a) rest_xyz[3 * k + a] = static_cast<float>(rest.vertices(a, surface_vertices[k]));
-    if (has_pins) pinned[k] = pin_it->second[surface_vertices[k]] != 0.0;
-  }
-
-  // Cell fields written by FrameWriter (older runs may lack psi), then the displacement magnitude.
-  struct Field {
-    std::string name, label, per, colormap;
-    Range range;
-  };
-  std::vector<Field> fields;
-  if (first.cell_data.count("J")) fields.push_back({"J", "volume change J (smallest det F per element)", "cell", "diverging", {}});
-  if (first.cell_data.count("psi")) fields.push_back({"psi", "energy density ψ (mean per element)", "cell", "sequential", {}});
-  fields.push_back({"displacement", "displacement |x − X|", "vertex", "sequential", {}});
+  const ReportSurface surface = report_surface(rest, first);
+  std::vector<Field> fields = report_fields(first);
 
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   json frames = json::array();
   for (std::size_t i = 0; i < pvd.size(); ++i) {
     const VtuData data = i == 0 ? std::move(first) : read_frame(i);
-    const fs::path file = dir / pvd[i].second;
-    const VolumeMesh& m = data.mesh.mesh;
-    if (m.vertex_count() != nv || m.cell_count() != nc)
-      throw ReportError(fmt::format("{}: {} points and {} cells, but frame 0 has {} and {}", file.string(), m.vertex_count(),
-                                    m.cell_count(), nv, nc));
-    json frame_json;
-    std::vector<float> xyz(3 * ns);
-    for (std::size_t k = 0; k < ns; ++k) {
-      const Eigen::Vector3d p = m.vertices.col(surface_vertices[k]);
-      for (int a = 0; a < 3; ++a) xyz[3 * k + a] = static_cast<float>(p[a]);
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-    frame_json["x"] = encode(xyz);
+    json frame_json = frame_values(data, dir / pvd[i].second, rest, surface, fields, lo, hi);
     if (render_surface) frame_json["render"] = render_surface->frame(i, pvd[i].second);
-    for (Field& f : fields) {
-      std::vector<float> values;
-      if (f.per == "cell") {
-        const auto it = data.cell_data.find(f.name);
-        if (it == data.cell_data.end() || it->second.size() != static_cast<std::size_t>(nc))
-          throw ReportError(fmt::format("{}: no cell field {} with {} values, as frame 0 has", file.string(), f.name, nc));
-        for (double v : it->second) f.range.add(v);
-        for (int c : surface_cells) values.push_back(static_cast<float>(it->second[c]));
-      } else {
-        const Eigen::VectorXd d = (m.vertices - rest.vertices).colwise().norm();
-        for (Eigen::Index v = 0; v < nv; ++v) f.range.add(d[v]);
-        for (int v : surface_vertices) values.push_back(static_cast<float>(d[v]));
-      }
-      frame_json[f.name] = encode(values);
-    }
     const std::string src = fmt::format("report/frames/{:03d}.js", i);
     write_atomically(dir / src, [&](std::ostream& o) { o << "snhReportFrame(" << i << ", " << frame_json.dump() << ");\n"; });
     frames.push_back({{"index", i}, {"time", pvd[i].first}, {"label", fmt::format("{} {}", frame_word, i)}, {"src", src}});
@@ -342,15 +373,15 @@ json write_frames(const fs::path& dir, const std::string& frame_word, json& rend
   return {{"element", rest.type == CellType::tet4 ? "tet" : "hex"},
           {"vertex_count", nv},
           {"cell_count", nc},
-          {"pinned_count", pinned_count},
+          {"pinned_count", surface.pinned_count},
           {"surface",
-           {{"vertex_count", ns},
-            {"cell_count", ms},
-            {"triangle_count", triangles.cols()},
-            {"triangles", encode(tri)},
-            {"triangle_cells", encode(tri_cell)},
-            {"rest", encode(rest_xyz)},
-            {"pinned", encode(pinned)}}},
+           {{"vertex_count", surface.vertices.size()},
+            {"cell_count", surface.cells.size()},
+            {"triangle_count", surface.triangle_count},
+            {"triangles", encode(surface.tri)},
+            {"triangle_cells", encode(surface.tri_cell)},
+            {"rest", encode(surface.rest_xyz)},
+            {"pinned", encode(surface.pinned)}}},
           {"bounds", {{"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}}},
           {"fields", field_list},
           {"default_field", fields.front().name},

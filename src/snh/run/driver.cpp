@@ -61,186 +61,185 @@ bool finite_record(const StepRecord& r) {
   return true;
 }
 
-}  // namespace
-
-RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log) {
-  const auto t_start = Clock::now();
-  const RecordTable& table = *plan.table;
-  const std::string word = table.index;  // "step" or "frame"
-  RunResult result;
-  const std::shared_ptr<RunDirectoryLock> lock = plan.lock ? plan.lock : std::make_shared<RunDirectoryLock>(plan.out);
-
-  // A resume is checked before any work: the checkpoint (intact, these settings, this mesh), the frames it
-  // keeps and their history. A fresh run starts from an empty directory of ours.
-  // A run whose memory estimate exceeds what this process may use is refused before any work.
-  const ProblemSize size = problem_size(sim.mesh());
-  const std::string solver(sim.solver().name());  // what "auto" chose
-  check_memory(size, solver, fmt::format("{} mesh", to_string(sim.mesh().type)));
-
-  std::optional<Checkpoint> resume_from;
-  if (plan.resume) {
-    resume_from = checkpoint_for_resume(plan.out, plan.fingerprint, sim.x().size());
-    if (resume_from->step > plan.frames)
-      throw std::invalid_argument(fmt::format("cannot resume: the checkpoint in {} is after {} {}, beyond the {} of this run",
-                                              plan.out.string(), word, resume_from->step, plan.frames));
-    check_kept_frames(plan.out, resume_from->step, plan.write_vtu);
-    for (const json& j : history_for_resume(plan.out, table.records, resume_from->step + (table.has_initial ? 1 : 0)))
-      result.records.push_back(from_json(table, j));
-  } else {
-    (void)clear_previous_run(plan.out, *lock);
-  }
-  write_stats(plan, result, "running");
-
-  if (plan.header) plan.header(log);
-  log.flush();
-  FrameWriter frames(plan.out, sim.mesh(), plan.write_vtu, sim.kinematic_vertices());
-  int first = 1;
-  if (resume_from) {
-    sim.restore({.x = resume_from->x, .aux = resume_from->aux, .time = resume_from->time,
-                 .steps = resume_from->step * plan.substeps});
-    frames.adopt_written(resume_from->step, [&](int i) { return i * plan.frame_duration; });
-    first = resume_from->step + 1;
-    log << fmt::format("resuming after {} {} (checkpoint in {})\n", word, resume_from->step, plan.out.string());
-    log.flush();
-  }
-
-  // The run's progress on disk, what a report and a resume read: frames.pvd, stats.json and stats.csv,
-  // and the checkpoint of the last converged frame. Each is a file replaced as a whole (a rename over the
-  // last one, which ext4 follows with a flush of the new file, and the stats grow with the run), so it is
-  // written after the first frame of this process, then once plan.progress_interval has
-  // passed since the last time, and whenever the run ends, however it ends (finish, the out-of-memory
-  // path, and the guard below for any exception). A run killed outright loses at most that interval: its
-  // later frames stay on disk and a resume from the checkpoint writes them again.
-  std::optional<Checkpoint> pending;  // the last converged frame's, not yet on disk
-  bool unsaved = false;               // frames or records since the progress was last written
-  auto last_progress = Clock::now();
-  auto write_progress = [&](const std::string& status, const json* extra) {
-    frames.write_series();
-    write_stats(plan, result, status, extra);
-    if (pending) write_checkpoint(plan.out, *pending);
-    pending.reset();
-    unsaved = false;
-    last_progress = Clock::now();
-  };
-  // However the run leaves by an exception (a frame that cannot be written, out of memory, a solver's
-  // error), the progress not yet on disk is written first, as far as it can be.
-  struct WriteOnException {
-    std::function<void()> write;
-    int uncaught = std::uncaught_exceptions();
-    ~WriteOnException() {
-      if (std::uncaught_exceptions() > uncaught) try {
-          write();
-        } catch (const std::exception&) {  // the exception on its way matters more
-        }
-    }
-  } write_on_exception{[&] {
-    if (unsaved) write_progress("running", nullptr);
-  }};
-  auto frame_failure = [&](int index, const char* what) {
-    return fmt::format("{} {}: {} ({}stats.json and checkpoint.bin are kept: --resume continues once the output can be "
-                       "written)",
-                       word, index, what, index > 0 ? fmt::format("frames 000 to {:03d}, ", index - 1) : "");
-  };
-  auto write_frame = [&](int index, const ElasticTerm::Deformation& d) {
-    try {
-      frames.write(index, index * plan.frame_duration, sim.x(), d);
-      unsaved = true;
-      if (plan.write_frame) plan.write_frame(index, index * plan.frame_duration, sim.x());
-    } catch (const WriteError& e) {
-      throw WriteError(frame_failure(index, e.what()));
-    } catch (const OutputRefused& e) {  // something that is not a regular file where a frame goes
-      throw OutputRefused(frame_failure(index, e.what()));
-    }
-  };
-  auto finish = [&](const std::string& status) {
-    result.total_seconds = since(t_start);
-    result.peak_memory_mib = peak_memory_mib();
-    json extra = json::object();
-    if (plan.finish) plan.finish(extra);
-    write_progress(status, &extra);
-    if (plan.summary) log << plan.summary(result) << "\n";
-    log.flush();
-    return result;
-  };
-
-  if (!resume_from) {
-    const auto t0 = Clock::now();
-    const ElasticTerm::Deformation d = sim.elastic().deformation(sim.x());
-    write_frame(0, d);
-    if (table.has_initial) {
-      StepRecord r0;
-      record_deformation(d, sim.rest_volume(), r0);
-      if (plan.fill) plan.fill(r0, nullptr);
-      if (!std::isfinite(sim.elastic().energy(sim.x()))) {
-        Eigen::Index worst = 0;
-        d.min_J.minCoeff(&worst);
-        r0.converged = false;
-        r0.failure = fmt::format("the initial state is outside the domain of {} ({} element(s) with J <= 0; min J = {:.4g})",
-                                 name_of(sim.elastic().material(worst)), r0.inverted, r0.min_J);
-        result.all_converged = false;
-        result.failure = r0.failure;
+/// Adds the run's progress not yet on disk when an exception leaves the scope it guards (a frame that cannot
+/// be written, out of memory, a solver's error), as far as it can be written.
+struct WriteOnException {
+  std::function<void()> write;
+  int uncaught = std::uncaught_exceptions();
+  ~WriteOnException() {
+    if (std::uncaught_exceptions() > uncaught) try {
+        write();
+      } catch (const std::exception&) {  // the exception on its way matters more
       }
-      r0.wall_seconds = since(t0);
-      result.records.push_back(r0);
-      if (plan.line) log << plan.line(r0) << "\n";
-      log.flush();
-      if (!result.all_converged) return finish("stopped");
+  }
+};
+
+/// One run of a plan (run_simulation): what its stages share.
+class RunLoop {
+ public:
+  RunLoop(Simulation& sim, const RunPlan& plan, std::ostream& log)
+      : sim_(sim),
+        plan_(plan),
+        log_(log),
+        table_(*plan.table),
+        word_(table_.index),
+        lock_(plan.lock ? plan.lock : std::make_shared<RunDirectoryLock>(plan.out)),
+        size_(problem_size(sim.mesh())),
+        solver_(sim.solver().name()) {}
+
+  RunResult run() {
+    prepare();
+    const WriteOnException guard{[this] {
+      if (unsaved_) write_progress("running", nullptr);
+    }};
+    if (!resume_from_ && !initial_frame()) return finish("stopped");
+    for (int frame = first_; frame <= plan_.frames; ++frame) {
+      if (stop_requested()) return interrupted();
+      const Outcome o = step(frame);
+      if (o == Outcome::interrupted) return interrupted();
+      if (o == Outcome::stopped) return finish("stopped");
+    }
+    return finish("finished");
+  }
+
+ private:
+  enum class Outcome { next, stopped, interrupted };
+
+  /// Before any work: the memory estimate (a run that cannot fit is refused), a resume's checks (the
+  /// checkpoint intact, for these settings and this mesh; the frames it keeps and their history) or, for a
+  /// fresh run, the directory cleared of a previous run of ours; then the stats say "running", the header,
+  /// and a resumed state restored.
+  void prepare() {
+    check_memory(size_, solver_, fmt::format("{} mesh", to_string(sim_.mesh().type)));
+    if (plan_.resume) {
+      resume_from_ = checkpoint_for_resume(plan_.out, plan_.fingerprint, sim_.x().size());
+      if (resume_from_->step > plan_.frames)
+        throw std::invalid_argument(fmt::format("cannot resume: the checkpoint in {} is after {} {}, beyond the {} of this run",
+                                                plan_.out.string(), word_, resume_from_->step, plan_.frames));
+      check_kept_frames(plan_.out, resume_from_->step, plan_.write_vtu);
+      for (const json& j : history_for_resume(plan_.out, table_.records, resume_from_->step + (table_.has_initial ? 1 : 0)))
+        result_.records.push_back(from_json(table_, j));
+    } else {
+      (void)clear_previous_run(plan_.out, *lock_);
+    }
+    write_stats(plan_, result_, "running");
+    if (plan_.header) plan_.header(log_);
+    log_.flush();
+    frames_.emplace(plan_.out, sim_.mesh(), plan_.write_vtu, sim_.kinematic_vertices());
+    if (resume_from_) {
+      sim_.restore({.x = resume_from_->x, .aux = resume_from_->aux, .time = resume_from_->time,
+                    .steps = resume_from_->step * plan_.substeps});
+      frames_->adopt_written(resume_from_->step, [&](int i) { return i * plan_.frame_duration; });
+      first_ = resume_from_->step + 1;
+      log_ << fmt::format("resuming after {} {} (checkpoint in {})\n", word_, resume_from_->step, plan_.out.string());
+      log_.flush();
     }
   }
 
-  const NewtonOptions& base = sim.setup().newton;
-  bool stopped = false;
-  for (int frame = first; frame <= plan.frames; ++frame) {
-    if (stop_requested()) {
-      stopped = true;
-      break;
-    }
-    const auto t_frame = Clock::now();
-    int substep = 1;
-    NewtonOptions newton = base;
-    newton.should_stop = [] { return stop_requested(); };
-    if (plan.live_progress && plan.live)
-      newton.on_iteration = [&](int it, double r) {
-        if (base.on_iteration) base.on_iteration(it, r);
-        log << "\r\x1b[2K" << plan.live(frame, substep, it, r);
-        log.flush();
-      };
-    // Out of memory (the linear solver's allocation failed, or any other): the stats say so, the frames
-    // and the checkpoint so far are kept, and the run ends with one OutOfMemoryError naming the estimate.
-    auto out_of_memory = [&](const std::string& what) {
-      if (plan.live_progress && plan.live) log << "\r\x1b[2K";
-      log.flush();
-      std::string message = out_of_memory_message(fmt::format("{} {} ({})", word, frame, what), size, solver);
-      if (frame > 1) message += fmt::format("; frames 000 to {:03d} and checkpoint.bin are kept", frame - 1);
-      result.all_converged = false;
-      result.failure = message;
-      result.total_seconds = since(t_start);
-      result.peak_memory_mib = peak_memory_mib();
-      try {
-        write_progress("stopped", nullptr);
-      } catch (const std::exception&) {  // the message matters more than the stats
-      }
-      throw OutOfMemoryError(message);
+  // The run's progress on disk, what a report and a resume read: frames.pvd, stats.json and stats.csv, and
+  // the checkpoint of the last converged frame. Each is a file replaced as a whole (a rename over the last
+  // one, which ext4 follows with a flush of the new file, and the stats grow with the run), so it is written
+  // after the first frame of this process, then once plan.progress_interval has passed since the last time,
+  // and whenever the run ends, however it ends (finish, the out-of-memory path, and the guard in run() for
+  // any exception). A run killed outright loses at most that interval: its later frames stay on disk and a
+  // resume from the checkpoint writes them again.
+  void write_progress(const std::string& status, const json* extra) {
+    frames_->write_series();
+    write_stats(plan_, result_, status, extra);
+    if (pending_) write_checkpoint(plan_.out, *pending_);
+    pending_.reset();
+    unsaved_ = false;
+    last_progress_ = Clock::now();
+  }
+
+  /// Frame `index`'s files (NNN.obj, NNN.vtu, and the plan's own); a failure names the frame and what is kept.
+  void write_frame(int index, const ElasticTerm::Deformation& d) {
+    const auto failure = [&](const char* what) {
+      return fmt::format("{} {}: {} ({}stats.json and checkpoint.bin are kept: --resume continues once the output can be "
+                         "written)",
+                         word_, index, what, index > 0 ? fmt::format("frames 000 to {:03d}, ", index - 1) : "");
     };
-    const SimulationState before = sim.state();
-    StepReport rep;
     try {
-      rep = sim.advance((frame - 1) * plan.frame_duration, plan.substep, plan.substeps, &newton,
-                        [&](int k) { substep = k; });
-    } catch (const OutOfMemoryError& e) {
-      out_of_memory(e.what());
-    } catch (const std::bad_alloc&) {
-      out_of_memory("an allocation failed");
+      frames_->write(index, index * plan_.frame_duration, sim_.x(), d);
+      unsaved_ = true;
+      if (plan_.write_frame) plan_.write_frame(index, index * plan_.frame_duration, sim_.x());
+    } catch (const WriteError& e) {
+      throw WriteError(failure(e.what()));
+    } catch (const OutputRefused& e) {  // something that is not a regular file where a frame goes
+      throw OutputRefused(failure(e.what()));
     }
-    if (plan.live_progress && plan.live) log << "\r\x1b[2K";
-    if (rep.interrupted) {  // the frame is abandoned: the state is the last completed frame's
-      stopped = true;
-      break;
+  }
+
+  RunResult finish(const std::string& status) {
+    result_.total_seconds = since(t_start_);
+    result_.peak_memory_mib = peak_memory_mib();
+    json extra = json::object();
+    if (plan_.finish) plan_.finish(extra);
+    write_progress(status, &extra);
+    if (plan_.summary) log_ << plan_.summary(result_) << "\n";
+    log_.flush();
+    return result_;
+  }
+
+  RunResult interrupted() {
+    result_.interrupted_by = stop_signal();
+    result_.all_converged = false;
+    result_.failure = fmt::format("interrupted by signal {} after {} {}", result_.interrupted_by, word_,
+                                  result_.records.empty() ? 0 : result_.records.back().index);
+    return finish("interrupted");
+  }
+
+  /// Frame 0, the initial state (a fresh run): its files, and its record where the table has one. False when
+  /// the initial state is outside an energy's domain (the run stops there).
+  bool initial_frame() {
+    const auto t0 = Clock::now();
+    const ElasticTerm::Deformation d = sim_.elastic().deformation(sim_.x());
+    write_frame(0, d);
+    if (!table_.has_initial) return true;
+    StepRecord r0;
+    record_deformation(d, sim_.rest_volume(), r0);
+    if (plan_.fill) plan_.fill(r0, nullptr);
+    if (!std::isfinite(sim_.elastic().energy(sim_.x()))) {
+      Eigen::Index worst = 0;
+      d.min_J.minCoeff(&worst);
+      r0.converged = false;
+      r0.failure = fmt::format("the initial state is outside the domain of {} ({} element(s) with J <= 0; min J = {:.4g})",
+                               name_of(sim_.elastic().material(worst)), r0.inverted, r0.min_J);
+      result_.all_converged = false;
+      result_.failure = r0.failure;
     }
+    r0.wall_seconds = since(t0);
+    result_.records.push_back(r0);
+    if (plan_.line) log_ << plan_.line(r0) << "\n";
+    log_.flush();
+    return result_.all_converged;
+  }
+
+  /// Out of memory (the linear solver's allocation failed, or any other) in frame `frame`: the stats say so,
+  /// the frames and the checkpoint so far are kept, and the run ends with one OutOfMemoryError naming the
+  /// estimate.
+  [[noreturn]] void out_of_memory(int frame, const std::string& what) {
+    if (plan_.live_progress && plan_.live) log_ << "\r\x1b[2K";
+    log_.flush();
+    std::string message = out_of_memory_message(fmt::format("{} {} ({})", word_, frame, what), size_, solver_);
+    if (frame > 1) message += fmt::format("; frames 000 to {:03d} and checkpoint.bin are kept", frame - 1);
+    result_.all_converged = false;
+    result_.failure = message;
+    result_.total_seconds = since(t_start_);
+    result_.peak_memory_mib = peak_memory_mib();
+    try {
+      write_progress("stopped", nullptr);
+    } catch (const std::exception&) {  // the message matters more than the stats
+    }
+    throw OutOfMemoryError(message);
+  }
+
+  /// The record of a frame from its solve's report.
+  StepRecord record_of(int frame, const StepReport& rep) const {
     StepRecord r;
     r.index = frame;
-    r.time = frame * plan.frame_duration;
-    r.substeps = plan.substeps;
+    r.time = frame * plan_.frame_duration;
+    r.substeps = plan_.substeps;
     r.converged = rep.converged;
     r.newton_iterations = rep.newton.iterations;
     r.line_search_steps = rep.newton.line_search_steps;
@@ -252,45 +251,88 @@ RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log
     r.assembly_seconds = rep.newton.assembly_seconds;
     r.solve_seconds = rep.newton.solve_seconds;
     r.residuals = rep.newton.residuals;
-    if (!rep.converged) r.failure = plan.failure ? plan.failure(rep) : rep.failure;
-    const ElasticTerm::Deformation d = sim.elastic().deformation(sim.x());
-    record_deformation(d, sim.rest_volume(), r);
-    if (plan.fill) plan.fill(r, &rep);
+    if (!rep.converged) r.failure = plan_.failure ? plan_.failure(rep) : rep.failure;
+    return r;
+  }
+
+  /// Frame `frame`: its substeps solved, its record, its files, and the checkpoint after it (on disk at the
+  /// next progress write).
+  Outcome step(int frame) {
+    const auto t_frame = Clock::now();
+    int substep = 1;
+    const NewtonOptions& base = sim_.setup().newton;
+    NewtonOptions newton = base;
+    newton.should_stop = [] { return stop_requested(); };
+    if (plan_.live_progress && plan_.live)
+      newton.on_iteration = [&](int it, double r) {
+        if (base.on_iteration) base.on_iteration(it, r);
+        log_ << "\r\x1b[2K" << plan_.live(frame, substep, it, r);
+        log_.flush();
+      };
+    const SimulationState before = sim_.state();
+    StepReport rep;
+    try {
+      rep = sim_.advance((frame - 1) * plan_.frame_duration, plan_.substep, plan_.substeps, &newton, [&](int k) { substep = k; });
+    } catch (const OutOfMemoryError& e) {
+      out_of_memory(frame, e.what());
+    } catch (const std::bad_alloc&) {
+      out_of_memory(frame, "an allocation failed");
+    }
+    if (plan_.live_progress && plan_.live) log_ << "\r\x1b[2K";
+    if (rep.interrupted) return Outcome::interrupted;  // the frame is abandoned: the state is the last completed frame's
+    StepRecord r = record_of(frame, rep);
+    const ElasticTerm::Deformation d = sim_.elastic().deformation(sim_.x());
+    record_deformation(d, sim_.rest_volume(), r);
+    if (plan_.fill) plan_.fill(r, &rep);
     // No NaN or Inf reaches a frame, the records or the screen: a state (or its energies, residual, volume)
     // that is not finite ends the run at the last completed frame, whose files and checkpoint stay.
-    const SimulationState after = sim.state();
+    const SimulationState after = sim_.state();
     if (!after.x.allFinite() || !after.aux.allFinite() || !finite_record(r)) {
-      sim.restore(before);
-      result.all_converged = false;
-      result.failure = fmt::format("{} {}: the state is not finite (NaN or Inf) after t = {:g}; stopped, {}s 000 to {:03d} kept",
-                                   word, frame, r.time, word, frame - 1);
-      return finish("stopped");
+      sim_.restore(before);
+      result_.all_converged = false;
+      result_.failure = fmt::format("{} {}: the state is not finite (NaN or Inf) after t = {:g}; stopped, {}s 000 to {:03d} kept",
+                                    word_, frame, r.time, word_, frame - 1);
+      return Outcome::stopped;
     }
     write_frame(frame, d);
     r.wall_seconds = since(t_frame);
-    result.records.push_back(r);
-    if (plan.line) log << plan.line(r) << "\n";
-    log.flush();
+    result_.records.push_back(r);
+    if (plan_.line) log_ << plan_.line(r) << "\n";
+    log_.flush();
     if (!r.converged) {
-      result.all_converged = false;
-      result.failure = fmt::format("{} {}, {}", word, frame, r.failure);
-      return finish("stopped");
+      result_.all_converged = false;
+      result_.failure = fmt::format("{} {}, {}", word_, frame, r.failure);
+      return Outcome::stopped;
     }
     // Everything needed to resume after this frame: the stats so far and the exact state.
-    result.total_seconds = since(t_start);
-    SimulationState s = sim.state();
-    pending = Checkpoint{.fingerprint = plan.fingerprint, .step = frame, .time = r.time, .x = std::move(s.x), .aux = std::move(s.aux)};
-    unsaved = true;
-    if (frame == first || since(last_progress) >= plan.progress_interval) write_progress("running", nullptr);
+    result_.total_seconds = since(t_start_);
+    SimulationState s = sim_.state();
+    pending_ = Checkpoint{.fingerprint = plan_.fingerprint, .step = frame, .time = r.time, .x = std::move(s.x), .aux = std::move(s.aux)};
+    unsaved_ = true;
+    if (frame == first_ || since(last_progress_) >= plan_.progress_interval) write_progress("running", nullptr);
+    return Outcome::next;
   }
-  if (stopped) {
-    result.interrupted_by = stop_signal();
-    result.all_converged = false;
-    result.failure = fmt::format("interrupted by signal {} after {} {}", result.interrupted_by, word,
-                                 result.records.empty() ? 0 : result.records.back().index);
-    return finish("interrupted");
-  }
-  return finish("finished");
-}
+
+  const Clock::time_point t_start_ = Clock::now();
+  Simulation& sim_;
+  const RunPlan& plan_;
+  std::ostream& log_;
+  const RecordTable& table_;
+  const std::string word_;  // "step" or "frame"
+  const std::shared_ptr<RunDirectoryLock> lock_;
+  const ProblemSize size_;
+  const std::string solver_;  // what "auto" chose
+  RunResult result_;
+  std::optional<Checkpoint> resume_from_;
+  std::optional<FrameWriter> frames_;
+  int first_ = 1;
+  std::optional<Checkpoint> pending_;  // the last converged frame's, not yet on disk
+  bool unsaved_ = false;               // frames or records since the progress was last written
+  Clock::time_point last_progress_ = Clock::now();
+};
+
+}  // namespace
+
+RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log) { return RunLoop(sim, plan, log).run(); }
 
 }  // namespace snh

@@ -24,12 +24,17 @@
 
 namespace snh {
 
-struct RunResult {
-  std::vector<StepRecord> records;  ///< with the initial state's first where the table has one
+/// How a run ended, as every kind of run reports it (RunResult; a scene's and the stretch test's results).
+struct RunOutcome {
   bool all_converged = true;
-  std::string failure;              ///< why the run stopped early (empty when it ran to the end)
-  int interrupted_by = 0;           ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
-  double total_seconds = 0.0, peak_memory_mib = 0.0;
+  std::string failure;     ///< why the run stopped early (empty when it ran to the end)
+  int interrupted_by = 0;  ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
+  double total_seconds = 0.0;
+  double peak_memory_mib = 0.0;  ///< peak resident memory of the process (VmHWM)
+};
+
+struct RunResult : RunOutcome {
+  std::vector<StepRecord> records;  ///< with the initial state's first where the table has one
 };
 
 struct RunPlan {

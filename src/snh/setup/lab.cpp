@@ -359,132 +359,173 @@ json lab_psi_along_sI(const Lame& p, const std::vector<std::string>& energies) {
   return out;
 }
 
-LabReport run_lab(const LabOptions& o) {
-  const auto t_start = std::chrono::steady_clock::now();
-  ensure_writable_directory(o.out);
-  const std::vector<std::string> energies = energies_of(o);
-  const std::vector<LabRun> rest = lab_rest(o), inversion = lab_inversion(o), reflection = lab_reflection(o),
-                            degeneracy = lab_degeneracy(o);
-  const std::vector<PoissonRow> poisson = lab_poisson(o);
-  const std::vector<StretchRow> stretch = lab_stretch(o);
-  const double trap = lab_trap_size();
+namespace {
 
-  LabReport rep;
-  json& j = rep.json;
+/// Every experiment's results.
+struct LabResults {
+  std::vector<std::string> energies;
+  std::vector<LabRun> rest, inversion, reflection, degeneracy;
+  std::vector<PoissonRow> poisson;
+  std::vector<StretchRow> stretch;
+  double trap = 0.0;
+};
+
+/// lab.json's results (before its tables).
+json results_json(const LabResults& lab, const LabOptions& o) {
+  json j;
   j["quick"] = o.quick;
-  j["energies"] = energies;
-  j["trap_size"] = trap;
+  j["energies"] = lab.energies;
+  j["trap_size"] = lab.trap;
   auto runs_json = [](const std::vector<LabRun>& runs) {
     json a = json::array();
     for (const LabRun& r : runs) a.push_back(to_json(r));
     return a;
   };
-  j["rest"] = runs_json(rest);
-  j["inversion"] = runs_json(inversion);
-  j["reflection"] = runs_json(reflection);
-  j["degeneracy"] = runs_json(degeneracy);
+  j["rest"] = runs_json(lab.rest);
+  j["inversion"] = runs_json(lab.inversion);
+  j["reflection"] = runs_json(lab.reflection);
+  j["degeneracy"] = runs_json(lab.degeneracy);
   json pj = json::array();
-  for (const PoissonRow& r : poisson)
+  for (const PoissonRow& r : lab.poisson)
     pj.push_back({{"energy", r.energy}, {"nu", r.nu}, {"reparametrize", r.reparametrize}, {"ran", r.ran},
                   {"expected", r.expected}, {"measured", std::isfinite(r.measured) ? json(r.measured) : json(nullptr)},
                   {"failure", r.failure}, {"dir", r.dir}});
   j["poisson"] = pj;
   json sj = json::array();
-  for (const StretchRow& r : stretch)
+  for (const StretchRow& r : lab.stretch)
     sj.push_back({{"energy", r.energy}, {"nu", r.nu}, {"reparametrized", r.reparametrized}, {"converged", r.converged},
                   {"volume_ratio", std::isfinite(r.volume_ratio) ? json(r.volume_ratio) : json(nullptr)},
                   {"failure", r.failure}, {"dir", r.dir}});
   j["stretch"] = sj;
-  j["psi_along_sI"] = lab_psi_along_sI({1.0, 10.0}, energies);
+  j["psi_along_sI"] = lab_psi_along_sI({1.0, 10.0}, lab.energies);
+  return j;
+}
 
+/// The lab's table 1. Rest.
+LabTable rest_table(const LabResults& lab) {
+  LabTable t;
+  t.title = "1. Rest: a free cube starting at rest (mu 1, lambda 4: nu 0.4); volume ratio after settling";
+  t.columns = {{"energy", 24}, {"volume", 10}, {"", 0}};
+  for (const LabRun& r : lab.rest)
+    t.rows.push_back({r.energy, volume_cell(r),
+                      !r.converged || !r.defined_at_start ? ""
+                      : std::abs(r.final_volume - 1.0) <= 1e-3
+                          ? "stays at rest"
+                          : fmt::format("drifts (s = {:.3f} per axis)", std::cbrt(r.final_volume))});
+  return t;
+}
+
+/// The lab's table 2. Inversion.
+LabTable inversion_table(const LabResults& lab) {
+  LabTable t;
+  t.title = "2. Inversion (mu 1, lambda 10): volume ratio at the end; recovered = within 1 % of rest, nothing inverted";
+  t.columns = {{"energy", 24}, {"reflected cube", 20}, {"", 12}, {"pushed through", 20}, {"", 12}};
+  for (const std::string& e : lab.energies) {
+    const LabRun *a = find(lab.inversion, "reflected", e), *b = find(lab.inversion, "pushed_through", e);
+    t.rows.push_back({e, volume_cell(*a), a->recovered() ? "recovered" : "no", volume_cell(*b),
+                      b->recovered() ? "recovered" : "no"});
+  }
+  return t;
+}
+
+/// The lab's table 3. Reflection.
+LabTable reflection_table(const LabResults& lab) {
+  LabTable t;
+  t.title = "3. Reflection: the inverted cube reflected in x, y or z (same perturbation); final volume ratios";
+  t.columns = {{"energy", 24}, {"x", 20}, {"y", 20}, {"z", 20}, {"spread", 16}};
+  for (const std::string& e : lab.energies) {
+    const LabRun *x = find(lab.reflection, "reflect_x", e), *y = find(lab.reflection, "reflect_y", e),
+                 *z = find(lab.reflection, "reflect_z", e);
+    std::string spread = "-";
+    if (x->converged != y->converged || y->converged != z->converged) spread = "axis-dependent";
+    if (x->converged && y->converged && z->converged && x->defined_at_start) {
+      const double lo = std::min({x->final_volume, y->final_volume, z->final_volume});
+      const double hi = std::max({x->final_volume, y->final_volume, z->final_volume});
+      spread = fmt::format("{:.1e}", hi - lo);
+    }
+    t.rows.push_back({e, volume_cell(*x), volume_cell(*y), volume_cell(*z), spread});
+  }
+  return t;
+}
+
+/// The lab's table 4. Degeneracy.
+LabTable degeneracy_table(const LabResults& lab) {
+  LabTable t;
+  t.title = fmt::format("4. Degeneracy: crushed, then released (perturbation 1e-3); time to 99 % volume, or the volume at "
+                        "the end (trap size s = {:.4f}: below = {:.4f}, above = {:.4f})",
+                        lab.trap, 0.5 * lab.trap, 2.0 * lab.trap);
+  t.columns = {{"energy", 24}, {"plane", 16}, {"line", 16}, {"point", 16}, {"below trap", 16}, {"above trap", 16}};
+  for (const std::string& e : lab.energies) {
+    std::vector<std::string> row = {e};
+    for (const char* c : {"plane", "line", "point", "below_trap", "above_trap"}) {
+      const LabRun* r = find(lab.degeneracy, c, e);
+      row.push_back(!r->defined_at_start ? "undefined"
+                    : !r->converged      ? "Newton failed"
+                    : std::isfinite(r->recovery_time) ? fmt::format("{:.2f} s", r->recovery_time)
+                                                      : fmt::format("end {:.3f}", r->final_volume));
+    }
+    t.rows.push_back(row);
+  }
+  return t;
+}
+
+/// The lab's table 5. Poisson's ratio.
+LabTable poisson_table(const LabResults& lab) {
+  LabTable t;
+  t.title = "5. Poisson's ratio: a bar under 0.1 % strain with sliding ends; measured nu (expected = nu, E = 1; "
+            "- where the energy has no reparametrization or is not stress-free at rest)";
+  t.columns = {{"energy", 24}};
+  for (double nu : {0.3, 0.4, 0.45, 0.49}) {
+    t.columns.push_back({fmt::format("{} given", nu), 14});
+    t.columns.push_back({"reparam.", 14});
+  }
+  for (const std::string& e : lab.energies) {
+    std::vector<std::string> row = {e};
+    for (const PoissonRow& r : lab.poisson)
+      if (r.energy == e) row.push_back(!r.ran ? "-" : std::isfinite(r.measured) ? fmt::format("{:.4f}", r.measured) : "failed");
+    t.rows.push_back(row);
+  }
+  return t;
+}
+
+/// The lab's table 6. Large stretch.
+LabTable stretch_test_table(const LabResults& lab) {
+  LabTable t;
+  t.title = "6. Large stretch: the paper's stretch test (hexes) to 3.5x; volume ratio at the end (E = 1, reparametrized "
+            "where the energy has a reparametrization, * where not)";
+  t.columns = {{"energy", 24}};
+  for (double nu : {0.3, 0.4, 0.45, 0.49, 0.495}) t.columns.push_back({fmt::format("nu {}", nu), 12});
+  for (const std::string& e : lab.energies) {
+    std::vector<std::string> row = {e};
+    for (const StretchRow& r : lab.stretch)
+      if (r.energy == e)
+        row.push_back(r.converged ? fmt::format("{:.4f}{}", r.volume_ratio, r.reparametrized ? "" : "*") : "failed");
+    t.rows.push_back(row);
+  }
+  return t;
+}
+
+}  // namespace
+
+LabReport run_lab(const LabOptions& o) {
+  const auto t_start = std::chrono::steady_clock::now();
+  ensure_writable_directory(o.out);
+  LabResults lab;
+  lab.energies = energies_of(o);
+  lab.rest = lab_rest(o);
+  lab.inversion = lab_inversion(o);
+  lab.reflection = lab_reflection(o);
+  lab.degeneracy = lab_degeneracy(o);
+  lab.poisson = lab_poisson(o);
+  lab.stretch = lab_stretch(o);
+  lab.trap = lab_trap_size();
+
+  LabReport rep;
+  json& j = rep.json;
+  j = results_json(lab, o);
   // The tables: one structure, printed as text and stored in lab.json for the report.
-  std::vector<LabTable> tables;
-  {
-    LabTable& t = tables.emplace_back();
-    t.title = "1. Rest: a free cube starting at rest (mu 1, lambda 4: nu 0.4); volume ratio after settling";
-    t.columns = {{"energy", 24}, {"volume", 10}, {"", 0}};
-    for (const LabRun& r : rest)
-      t.rows.push_back({r.energy, volume_cell(r),
-                        !r.converged || !r.defined_at_start ? ""
-                        : std::abs(r.final_volume - 1.0) <= 1e-3
-                            ? "stays at rest"
-                            : fmt::format("drifts (s = {:.3f} per axis)", std::cbrt(r.final_volume))});
-  }
-  {
-    LabTable& t = tables.emplace_back();
-    t.title = "2. Inversion (mu 1, lambda 10): volume ratio at the end; recovered = within 1 % of rest, nothing inverted";
-    t.columns = {{"energy", 24}, {"reflected cube", 20}, {"", 12}, {"pushed through", 20}, {"", 12}};
-    for (const std::string& e : energies) {
-      const LabRun *a = find(inversion, "reflected", e), *b = find(inversion, "pushed_through", e);
-      t.rows.push_back({e, volume_cell(*a), a->recovered() ? "recovered" : "no", volume_cell(*b),
-                        b->recovered() ? "recovered" : "no"});
-    }
-  }
-  {
-    LabTable& t = tables.emplace_back();
-    t.title = "3. Reflection: the inverted cube reflected in x, y or z (same perturbation); final volume ratios";
-    t.columns = {{"energy", 24}, {"x", 20}, {"y", 20}, {"z", 20}, {"spread", 16}};
-    for (const std::string& e : energies) {
-      const LabRun *x = find(reflection, "reflect_x", e), *y = find(reflection, "reflect_y", e),
-                   *z = find(reflection, "reflect_z", e);
-      std::string spread = "-";
-      if (x->converged != y->converged || y->converged != z->converged) spread = "axis-dependent";
-      if (x->converged && y->converged && z->converged && x->defined_at_start) {
-        const double lo = std::min({x->final_volume, y->final_volume, z->final_volume});
-        const double hi = std::max({x->final_volume, y->final_volume, z->final_volume});
-        spread = fmt::format("{:.1e}", hi - lo);
-      }
-      t.rows.push_back({e, volume_cell(*x), volume_cell(*y), volume_cell(*z), spread});
-    }
-  }
-  {
-    LabTable& t = tables.emplace_back();
-    t.title = fmt::format("4. Degeneracy: crushed, then released (perturbation 1e-3); time to 99 % volume, or the volume at "
-                          "the end (trap size s = {:.4f}: below = {:.4f}, above = {:.4f})",
-                          trap, 0.5 * trap, 2.0 * trap);
-    t.columns = {{"energy", 24}, {"plane", 16}, {"line", 16}, {"point", 16}, {"below trap", 16}, {"above trap", 16}};
-    for (const std::string& e : energies) {
-      std::vector<std::string> row = {e};
-      for (const char* c : {"plane", "line", "point", "below_trap", "above_trap"}) {
-        const LabRun* r = find(degeneracy, c, e);
-        row.push_back(!r->defined_at_start ? "undefined"
-                      : !r->converged      ? "Newton failed"
-                      : std::isfinite(r->recovery_time) ? fmt::format("{:.2f} s", r->recovery_time)
-                                                        : fmt::format("end {:.3f}", r->final_volume));
-      }
-      t.rows.push_back(row);
-    }
-  }
-  {
-    LabTable& t = tables.emplace_back();
-    t.title = "5. Poisson's ratio: a bar under 0.1 % strain with sliding ends; measured nu (expected = nu, E = 1; "
-              "- where the energy has no reparametrization or is not stress-free at rest)";
-    t.columns = {{"energy", 24}};
-    for (double nu : {0.3, 0.4, 0.45, 0.49}) {
-      t.columns.push_back({fmt::format("{} given", nu), 14});
-      t.columns.push_back({"reparam.", 14});
-    }
-    for (const std::string& e : energies) {
-      std::vector<std::string> row = {e};
-      for (const PoissonRow& r : poisson)
-        if (r.energy == e) row.push_back(!r.ran ? "-" : std::isfinite(r.measured) ? fmt::format("{:.4f}", r.measured) : "failed");
-      t.rows.push_back(row);
-    }
-  }
-  {
-    LabTable& t = tables.emplace_back();
-    t.title = "6. Large stretch: the paper's stretch test (hexes) to 3.5x; volume ratio at the end (E = 1, reparametrized "
-              "where the energy has a reparametrization, * where not)";
-    t.columns = {{"energy", 24}};
-    for (double nu : {0.3, 0.4, 0.45, 0.49, 0.495}) t.columns.push_back({fmt::format("nu {}", nu), 12});
-    for (const std::string& e : energies) {
-      std::vector<std::string> row = {e};
-      for (const StretchRow& r : stretch)
-        if (r.energy == e)
-          row.push_back(r.converged ? fmt::format("{:.4f}{}", r.volume_ratio, r.reparametrized ? "" : "*") : "failed");
-      t.rows.push_back(row);
-    }
-  }
+  const std::vector<LabTable> tables = {rest_table(lab),       inversion_table(lab), reflection_table(lab),
+                                        degeneracy_table(lab), poisson_table(lab),   stretch_test_table(lab)};
   json tj = json::array();
   for (const LabTable& t : tables) {
     rep.text += (rep.text.empty() ? "" : "\n") + t.text();

@@ -187,12 +187,8 @@ SceneResult run_scene(const BuiltScene& b, std::ostream& log) {
     return result;
   }
   RunResult run = run_simulation(sim, plan, log);
+  static_cast<RunOutcome&>(result) = run;
   result.frames = std::move(run.records);
-  result.all_converged = run.all_converged;
-  result.failure = std::move(run.failure);
-  result.interrupted_by = run.interrupted_by;
-  result.total_seconds = run.total_seconds;
-  result.peak_memory_mib = run.peak_memory_mib;
   result.final_positions = sim.x();
   return result;
 }

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include "snh/run/driver.hpp"
 #include "snh/run/stats.hpp"
 #include "snh/setup/scene_build.hpp"
 
@@ -16,12 +17,8 @@ namespace snh {
 
 using FrameStats = StepRecord;
 
-struct SceneResult {
+struct SceneResult : RunOutcome {
   std::vector<FrameStats> frames;  ///< frame 0 is the initial state
-  bool all_converged = true;
-  std::string failure;             ///< why the run stopped early (empty when it ran to the end)
-  int interrupted_by = 0;          ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
-  double total_seconds = 0.0, peak_memory_mib = 0.0;
   CellType element = CellType::hex8;
   Eigen::Index vertices = 0, cells = 0;
   Eigen::VectorXd final_positions;

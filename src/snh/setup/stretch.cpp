@@ -1,15 +1,13 @@
 #include "snh/setup/stretch.hpp"
 
-#include "snh/solve/memory_estimate.hpp"
-
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "snh/material/printable.hpp"
-#include <nlohmann/json.hpp>
 
 #include "snh/fem/quality.hpp"
 #include "snh/io/atomic_file.hpp"
@@ -69,23 +67,33 @@ void validate(const StretchConfig& c) {
     throw WriteError(fmt::format("output directory {} exists and is not a directory", c.out.string()));
 }
 
-StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
-  validate(c);
-  int reoriented = 0;
+namespace {
+
+/// The test's mesh (the box, or the mesh file read and checked) and the two extreme layers along the axis
+/// (the box's j = 0 and j = res layers), all three coordinates held, moving apart symmetrically about the
+/// centre.
+struct StretchSetup {
   VolumeMesh mesh;
+  int reoriented = 0;
+  int axis = 1;
+  double centre = 0.0, eps = 0.0;  ///< the layers' centre along the axis; the tolerance of "on a layer"
+  SimulationSetup simulation;
+};
+
+StretchSetup stretch_setup(const StretchConfig& c) {
+  StretchSetup out;
+  VolumeMesh& mesh = out.mesh;
   if (c.mesh_file.empty()) {
     mesh = c.element == CellType::tet4 ? box_tets(c.resolution, c.tet_split) : box_hexes(c.resolution);
   } else {
     MeshFile file = read_mesh(c.mesh_file);
     mesh = std::move(file.mesh);
-    reoriented = file.reoriented;
+    out.reoriented = file.reoriented;
   }
-
-  // Kinematic vertices: the two extreme layers along the axis (the box's j = 0 and j = res layers), all
-  // three coordinates; they move apart symmetrically about the centre.
-  const int a = c.axis;
+  const int a = out.axis = c.axis;
   const double lo_a = mesh.vertices.row(a).minCoeff(), hi_a = mesh.vertices.row(a).maxCoeff();
-  const double centre = 0.5 * (lo_a + hi_a), half0 = 0.5 * (hi_a - lo_a), eps = 1e-9 * std::max(hi_a - lo_a, 1e-300);
+  const double centre = out.centre = 0.5 * (lo_a + hi_a), half0 = 0.5 * (hi_a - lo_a);
+  const double eps = out.eps = 1e-9 * std::max(hi_a - lo_a, 1e-300);
   if (!(half0 > 0.0)) throw std::invalid_argument("the mesh is flat along the stretch axis");
   KinematicSet layers;
   layers.name = "the pulled layers";
@@ -96,7 +104,7 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   const auto stretch = std::make_shared<AxisStretch>(mesh.vertices(Eigen::all, layers.vertices), a, centre, c.stretch, c.steps);
   layers.provider = stretch;
 
-  SimulationSetup setup;
+  SimulationSetup& setup = out.simulation;
   setup.mesh = mesh;
   setup.materials = {make_material(c.material, c.params, c.reparametrize)};
   setup.integrator = Integrator::quasi_static;
@@ -118,14 +126,11 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
     for (Eigen::Index v = 0; v < g.size() / 3; ++v) g[3 * v + a] = centre + (g[3 * v + a] - centre) * ratio;
     return g;
   };
-  Simulation sim(std::move(setup));
+  return out;
+}
 
-  StretchResult result;
-  result.element = mesh.type;
-  result.vertices = mesh.vertex_count();
-  result.cells = mesh.cell_count();
-  const char* cells = mesh.type == CellType::tet4 ? "tets" : "cubes";
-
+/// stats.json's description of the run.
+nlohmann::json stretch_settings(const StretchConfig& c, const VolumeMesh& mesh, const Simulation& sim) {
   nlohmann::json settings;
   settings["program"] = c.program;
   if (!c.command_line.empty()) settings["command_line"] = c.command_line;
@@ -140,12 +145,46 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   settings["stretch"] = c.stretch;
   settings["solver"] = std::string(sim.solver().name());  // what "auto" chose
   settings["reuse_factor"] = c.reuse_factor;
-  settings["axis"] = std::string(1, char('x' + a));
+  settings["axis"] = std::string(1, char('x' + c.axis));
   if (c.element == CellType::tet4) settings["tet_split"] = c.tet_split == TetSplit::paper ? "paper" : "mirrored";
   settings["tolerance"] = c.newton.tolerance;
-  settings["vertices"] = result.vertices;
-  settings["cells"] = result.cells;
+  settings["vertices"] = mesh.vertex_count();
+  settings["cells"] = mesh.cell_count();
+  return settings;
+}
 
+/// The width of the middle cross-section at x: the layer at the largest rest coordinate along the axis not
+/// above the centre (the box's lattice layer j = res/2), measured along the first other axis; NaN where
+/// that layer is a single vertex (a width of 0 "of rest 0", as on an unstructured mesh) or the pinned end
+/// layer. Sets the result's middle widths; returns the width for stats.json (null where NaN).
+nlohmann::json measure_middle(const StretchSetup& st, const Eigen::VectorXd& x, StretchResult& result) {
+  const VolumeMesh& mesh = st.mesh;
+  const int a = st.axis;
+  const double eps = st.eps;
+  double layer = -std::numeric_limits<double>::infinity();
+  for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
+    if (mesh.vertices(a, v) <= st.centre + eps) layer = std::max(layer, mesh.vertices(a, v));
+  const int across = a == 0 ? 1 : 0;
+  double lo = 1e300, hi = -1e300, rest_lo = 1e300, rest_hi = -1e300, bottom = 1e300;
+  for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) {
+    bottom = std::min(bottom, mesh.vertices(a, v));
+    if (std::abs(mesh.vertices(a, v) - layer) <= eps) {
+      lo = std::min(lo, x[3 * v + across]);
+      hi = std::max(hi, x[3 * v + across]);
+      rest_lo = std::min(rest_lo, mesh.vertices(across, v));
+      rest_hi = std::max(rest_hi, mesh.vertices(across, v));
+    }
+  }
+  const bool meaningful = rest_hi - rest_lo > eps && layer > bottom + eps;
+  result.middle_width = meaningful ? hi - lo : std::numeric_limits<double>::quiet_NaN();
+  result.middle_rest_width = meaningful ? rest_hi - rest_lo : std::numeric_limits<double>::quiet_NaN();
+  return meaningful ? nlohmann::json(result.middle_width) : nlohmann::json(nullptr);
+}
+
+/// The driver's plan for the test: its steps, the fingerprint a resume must match, the log's header, lines
+/// and summary, and the middle width at the end (into `result`).
+RunPlan stretch_plan(const StretchConfig& c, const StretchSetup& st, const Simulation& sim, StretchResult& result) {
+  const VolumeMesh& mesh = st.mesh;
   RunPlan plan;
   plan.out = c.out;
   plan.lock = c.lock;
@@ -155,52 +194,29 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
   plan.progress_interval = c.progress_interval;
   plan.resume = c.resume;
   plan.fingerprint = fingerprint(c);
-  plan.settings = std::move(settings);
+  plan.settings = stretch_settings(c, mesh, sim);
   plan.live_progress = c.live_progress;
-  plan.header = [&](std::ostream& o) {
+  plan.header = [&c, &st, &sim](std::ostream& o) {
+    const VolumeMesh& m = st.mesh;
     o << fmt::format("{}: {}, material {}, mu {:g}, lambda {:g}{}\n", c.program,
                      c.mesh_file.empty() ? fmt::format("resolution {}", c.resolution) : "mesh " + c.mesh_file.string(),
                      c.material, c.params.mu, c.params.lambda, c.reparametrize ? " (linear, reparametrized)" : "");
-    if (reoriented) o << fmt::format("warning: {} inverted cell(s) of the mesh re-oriented\n", reoriented);
-    o << fmt::format("{} vertices, {} {}, {} steps to a {:g}x stretch along {}, solver {}, output {}\n", mesh.vertex_count(),
-                     mesh.cell_count(), cells, c.steps, c.stretch, char('x' + a),
+    if (st.reoriented) o << fmt::format("warning: {} inverted cell(s) of the mesh re-oriented\n", st.reoriented);
+    o << fmt::format("{} vertices, {} {}, {} steps to a {:g}x stretch along {}, solver {}, output {}\n", m.vertex_count(),
+                     m.cell_count(), m.type == CellType::tet4 ? "tets" : "cubes", c.steps, c.stretch, char('x' + c.axis),
                      c.solver == "auto" ? fmt::format("{} (auto)", sim.solver().name()) : c.solver, c.out.string());
-    o << "mesh: " << describe(mesh_quality(sim.elastic().mesh(), sim.elastic().rest()), mesh.type) << "\n";
+    o << "mesh: " << describe(mesh_quality(sim.elastic().mesh(), sim.elastic().rest()), m.type) << "\n";
   };
-  plan.line = [&](const StepRecord& s) {
+  plan.line = [steps = c.steps](const StepRecord& s) {
     return fmt::format("step {:>3}/{}: {} Newton iterations, |f| = {:.2e}, energy {:.8g}, volume {:.4f}, min J {:.4f}, {:.3f} s{}",
-                       s.index, c.steps, s.newton_iterations, s.residual, s.energy, s.volume_ratio, s.min_J, s.wall_seconds,
+                       s.index, steps, s.newton_iterations, s.residual, s.energy, s.volume_ratio, s.min_J, s.wall_seconds,
                        s.converged ? "" : "  NOT CONVERGED: " + s.failure);
   };
-  plan.live = [&](int step, int, int it, double r) {
-    return fmt::format("step {:>3}/{}: Newton iteration {}, |f| = {:.2e} ...", step, c.steps, it, r);
+  plan.live = [steps = c.steps](int step, int, int it, double r) {
+    return fmt::format("step {:>3}/{}: Newton iteration {}, |f| = {:.2e} ...", step, steps, it, r);
   };
-  // Middle cross-section: the layer at the largest rest coordinate along the axis not above the centre
-  // (the box's lattice layer j = res/2), measured along the first other axis.
-  plan.finish = [&](nlohmann::json& stats) {
-    double layer = -std::numeric_limits<double>::infinity();
-    for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
-      if (mesh.vertices(a, v) <= centre + eps) layer = std::max(layer, mesh.vertices(a, v));
-    const int across = a == 0 ? 1 : 0;
-    const Eigen::VectorXd& x = sim.x();
-    double lo = 1e300, hi = -1e300, rest_lo = 1e300, rest_hi = -1e300, bottom = 1e300;
-    for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) {
-      bottom = std::min(bottom, mesh.vertices(a, v));
-      if (std::abs(mesh.vertices(a, v) - layer) <= eps) {
-        lo = std::min(lo, x[3 * v + across]);
-        hi = std::max(hi, x[3 * v + across]);
-        rest_lo = std::min(rest_lo, mesh.vertices(across, v));
-        rest_hi = std::max(rest_hi, mesh.vertices(across, v));
-      }
-    }
-    // A mesh whose layer nearest the middle is a single vertex (a width of 0 "of rest 0", as on an
-    // unstructured mesh) or is the pinned end layer has no middle cross-section: NaN, "n/a", null.
-    const bool meaningful = rest_hi - rest_lo > eps && layer > bottom + eps;
-    result.middle_width = meaningful ? hi - lo : std::numeric_limits<double>::quiet_NaN();
-    result.middle_rest_width = meaningful ? rest_hi - rest_lo : std::numeric_limits<double>::quiet_NaN();
-    stats["middle_width"] = meaningful ? nlohmann::json(result.middle_width) : nlohmann::json(nullptr);
-  };
-  plan.summary = [&](const RunResult& r) {
+  plan.finish = [&st, &sim, &result](nlohmann::json& stats) { stats["middle_width"] = measure_middle(st, sim.x(), result); };
+  plan.summary = [&c, &result](const RunResult& r) {
     std::string out;
     if (r.interrupted_by)
       out = fmt::format("INTERRUPTED by signal {} after step {}: frames 000 to {:03d} and the stats are kept\n",
@@ -214,17 +230,26 @@ StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
                              r.all_converged    ? "converged every step"
                              : r.interrupted_by ? "STOPPED: interrupted"
                                                 : "STOPPED: a step did not converge",
-                             r.total_seconds, r.peak_memory_mib, middle,
-                             c.write_vtu ? ", NNN.vtu, frames.pvd" : "", c.out.string());
+                             r.total_seconds, r.peak_memory_mib, middle, c.write_vtu ? ", NNN.vtu, frames.pvd" : "",
+                             c.out.string());
   };
+  return plan;
+}
 
+}  // namespace
+
+StretchResult run_stretch(const StretchConfig& c, std::ostream& log) {
+  validate(c);
+  StretchSetup st = stretch_setup(c);
+  Simulation sim(std::move(st.simulation));
+  StretchResult result;
+  result.element = st.mesh.type;
+  result.vertices = st.mesh.vertex_count();
+  result.cells = st.mesh.cell_count();
+  const RunPlan plan = stretch_plan(c, st, sim, result);
   RunResult run = run_simulation(sim, plan, log);
+  static_cast<RunOutcome&>(result) = run;
   result.steps = std::move(run.records);
-  result.all_converged = run.all_converged;
-  result.interrupted_by = run.interrupted_by;
-  result.total_seconds = run.total_seconds;
-  result.peak_memory_mib = run.peak_memory_mib;
-  result.failure = std::move(run.failure);
   return result;
 }
 

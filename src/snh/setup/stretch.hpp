@@ -13,6 +13,7 @@
 #include "snh/mesh/volume_mesh.hpp"
 #include "snh/solve/linear_solver.hpp"
 #include "snh/sim/kinematics.hpp"
+#include "snh/run/driver.hpp"
 #include "snh/run/run_directory.hpp"
 #include "snh/run/stats.hpp"
 #include "snh/solve/newton.hpp"
@@ -72,20 +73,15 @@ class AxisStretch final : public KinematicProvider {
   int steps_;
 };
 
-struct StretchResult {
+struct StretchResult : RunOutcome {
   std::vector<StepStats> steps;
-  bool all_converged = true;
-  int interrupted_by = 0;     ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
-  double total_seconds = 0.0;
   /// At the last step, the extent along the first other axis (x, or y when stretching along x) of the
   /// vertex layer nearest the middle (the largest rest coordinate along the axis not above the centre);
   /// NaN (stats.json null, "n/a") when that layer is one vertex wide or is the pinned end layer.
   double middle_width = 0.0;
-  double peak_memory_mib = 0.0;  ///< peak resident memory of the process (VmHWM)
   double middle_rest_width = 0.0;  ///< the same extent at rest
   CellType element = CellType::tet4;
   Eigen::Index vertices = 0, cells = 0;
-  std::string failure;           ///< why the run stopped early (empty when it ran to the end)
 };
 
 /// Checks the configuration (material, parameters, numbers, output directory) without running anything.
