@@ -69,6 +69,53 @@ void newton_direction(Problem& problem, const Eigen::VectorXd& x, const Eigen::V
   report.solve_seconds += seconds_since(t);
 }
 
+/// The iterate a backtracking line search accepted along d, with its energy and gradient.
+struct LineSearch {
+  bool accepted = false;
+  double alpha = 0.0, energy = 0.0;
+  Eigen::VectorXd x, gradient;
+};
+
+/// Backtracking (Armijo) from the largest step every term allows: x + α d for α halved until the energy falls
+/// enough, or the full step where the energy is within rounding of E but the residual r falls. A failure
+/// (no step allowed, no decrease) is set in the report; its time and halvings are counted there.
+LineSearch line_search(Problem& problem, const Eigen::VectorXd& x, const Eigen::VectorXd& d, double E, double slope, double r,
+                       const NewtonOptions& options, NewtonReport& report) {
+  const auto t = Clock::now();
+  LineSearch ls;
+  double alpha = std::min(1.0, problem.max_step(x, d));
+  if (!(alpha > 0.0)) {
+    report.failure = fmt::format("no step is allowed at Newton iteration {} (the step bound is {:g})", report.iterations, alpha);
+    report.assembly_seconds += seconds_since(t);
+    return ls;
+  }
+  for (int h = 0; h <= options.max_halvings; ++h) {
+    ls.x = x;
+    problem.dofs().scatter_add_free(d, alpha, ls.x);
+    ls.energy = problem.evaluate(ls.x, ls.gradient, nullptr, options.projection);  // the gradient for the next iterate
+    if (std::isfinite(ls.energy) && ls.energy <= E + 1e-4 * alpha * slope) {
+      ls.accepted = true;
+      break;
+    }
+    // Within rounding of E: accept the full step if it reduces the residual.
+    if (h == 0 && std::isfinite(ls.energy) && std::abs(ls.energy - E) <= 1e-12 * std::max(1.0, std::abs(E))) {
+      if (ls.gradient.norm() < r) {
+        ls.accepted = true;
+        break;
+      }
+    }
+    alpha *= 0.5;
+    ++report.line_search_steps;
+  }
+  report.assembly_seconds += seconds_since(t);
+  ls.alpha = alpha;
+  if (!ls.accepted)
+    report.failure = fmt::format("line search failed at Newton iteration {} (|g| = {:.3e}): no decrease of the energy "
+                                 "along the Newton direction",
+                                 report.iterations, r);
+  return ls;
+}
+
 NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolver& solver,
                                const NewtonOptions& options) {
   NewtonReport report;
@@ -150,46 +197,13 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
       return report;
     }
 
-    t = Clock::now();
-    Eigen::VectorXd trial = x, g_trial;
-    // The line search starts at the largest step every term allows.
-    double alpha = std::min(1.0, problem.max_step(x, d)), E_trial = 0.0;
-    if (!(alpha > 0.0)) {
-      report.failure = fmt::format("no step is allowed at Newton iteration {} (the step bound is {:g})", report.iterations, alpha);
-      report.assembly_seconds += seconds_since(t);
-      return report;
-    }
-    bool accepted = false;
-    for (int h = 0; h <= options.max_halvings; ++h) {
-      trial = x;
-      problem.dofs().scatter_add_free(d, alpha, trial);
-      E_trial = problem.evaluate(trial, g_trial, nullptr, options.projection);  // the gradient for the next iterate
-      if (std::isfinite(E_trial) && E_trial <= E + 1e-4 * alpha * slope) {
-        accepted = true;
-        break;
-      }
-      // Within rounding of E: accept the full step if it reduces the residual.
-      if (h == 0 && std::isfinite(E_trial) && std::abs(E_trial - E) <= 1e-12 * std::max(1.0, std::abs(E))) {
-        if (g_trial.norm() < r) {
-          accepted = true;
-          break;
-        }
-      }
-      alpha *= 0.5;
-      ++report.line_search_steps;
-    }
-    report.assembly_seconds += seconds_since(t);
-    if (!accepted) {
-      report.failure = fmt::format("line search failed at Newton iteration {} (|g| = {:.3e}): no decrease of the energy "
-                                   "along the Newton direction",
-                                   report.iterations, r);
-      return report;
-    }
-    chord_next = !chord && solver.inexact() && step_is_small(alpha * d, x, x0, options, kChordSteps);
-    x = trial;
+    LineSearch ls = line_search(problem, x, d, E, slope, r, options, report);
+    if (!ls.accepted) return report;
+    chord_next = !chord && solver.inexact() && step_is_small(ls.alpha * d, x, x0, options, kChordSteps);
+    x = std::move(ls.x);
     problem.on_accepted(x);
-    E = E_trial;
-    g = std::move(g_trial);
+    E = ls.energy;
+    g = std::move(ls.gradient);
   }
 }
 
