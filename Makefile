@@ -2,11 +2,12 @@
 #   make demo   installs what is missing, builds, and runs the main job (the thesis' tetcli example), the bunny scene and the hand fist,
 #               each with its browser report (index.html)
 #   make test   installs what is missing, builds, and runs every test
+#   make docs   installs what is missing and builds the documentation site (docs/, mkdocs.yml) into build/site
 PRESET ?= release
 JOBS   ?= $(shell nproc)
 BUILD  := build/$(PRESET)
 
-.PHONY: all deps configure build demo test bench clean
+.PHONY: all deps configure build demo test bench docs clean
 
 all: build
 
@@ -35,6 +36,11 @@ test: build
 
 bench: build
 	$(BUILD)/bench/bench_material --benchmark_min_time=0.2
+
+# Strict: a broken link, or a page missing from the nav, fails the build.
+docs: deps
+	mkdocs build --strict --config-file mkdocs.yml --site-dir build/site
+	@echo "docs: open $(CURDIR)/build/site/index.html in a browser"
 
 clean:
 	rm -rf build
