@@ -18,12 +18,17 @@ if ! command -v "$MKDOCS" > /dev/null; then
   exit 77
 fi
 
-# (1) The site, strict, into a temporary directory. mkdocs prints WARNING lines for what strict mode
-# turns into a failure; any such line fails here too (Python's DeprecationWarnings from its libraries
-# are logged as INFO and are not ours).
+# (1) The site, strict, into a temporary directory. mkdocs prints WARNING lines (coloured, even into a
+# file) for what strict mode turns into a failure; any such line fails here too (Python's
+# DeprecationWarnings from its libraries are logged as INFO and are not ours).
 if (cd "$SRC" && "$MKDOCS" build --strict --config-file mkdocs.yml --site-dir "$work/site") > "$work/mkdocs.log" 2>&1; then ok
 else bad "mkdocs build --strict failed: $(grep -E 'WARNING|ERROR|Error' "$work/mkdocs.log" | head -5)"; fi
-if grep -qE '^(WARNING|ERROR)' "$work/mkdocs.log"; then bad "mkdocs warned: $(grep -E '^(WARNING|ERROR)' "$work/mkdocs.log" | head -5)"; else ok; fi
+if grep -qE '(WARNING|ERROR) +-' "$work/mkdocs.log"; then bad "mkdocs warned: $(grep -E '(WARNING|ERROR) +-' "$work/mkdocs.log" | head -5)"; else ok; fi
+# Every page of docs/ is in the nav, and every page of the nav is in docs/ (mkdocs 1.4 only mentions a
+# page left out of the nav, as INFO).
+nav="$(grep -oE '^ *- [^:]+: *[^ ]+\.md *$' "$SRC/mkdocs.yml" | sed -E 's/.*: *//; s/ *$//' | sort)"
+pages="$(cd "$SRC/docs" && find . -name '*.md' | sed 's#^\./##' | sort)"
+[ "$nav" = "$pages" ] && ok || bad "mkdocs.yml's nav and docs/ differ: $(diff <(echo "$nav") <(echo "$pages") | grep '^[<>]' | tr '\n' ' ')"
 [ -f "$work/site/index.html" ] && ok || bad "the site has no index.html"
 # Anchors: mkdocs 1.4 checks that a linked page exists, not the #fragment; every href="PAGE.html#id" (or
 # "#id") of a page must name an id of its target page.
