@@ -180,8 +180,9 @@ BuiltScene build_scene(const Scene& s) {
   // The pins must select something on the body and hold each coordinate once; contact needs a separated start.
   b.x0 = initial_positions(s, mesh);
   check_coordinates(s, mesh, b.x0);
-  (void)scene::as_scene_error([&] { return kinematic_dof_flags(scene_kinematics(s, *b.body, b.x0), mesh.vertex_count()); });
-  check_shared_pins(s, b.end_time, scene_kinematics(s, *b.body, b.x0));
+  const std::vector<KinematicSet> sets = scene::as_scene_error([&] { return scene_kinematics(s, *b.body, b.x0); });
+  (void)scene::as_scene_error([&] { return kinematic_dof_flags(sets, mesh.vertex_count()); });
+  check_shared_pins(s, b.end_time, sets);
   if (s.contact.enabled)
     check_contact_start(b.scene.contact, contact_surface_of(*b.body), mesh.vertices, b.x0, b.contact.dhat, file);
   return b;
