@@ -2,7 +2,6 @@
 // What every contact term shares (self-contact, planes and shapes, mesh colliders): counters of what it did
 // (wall time, step bounds asked, primitives tested), and its statistics at a state (active pairs, the
 // smallest distance), reported through the Term interface (Term::report_contact) once per frame.
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -26,8 +25,6 @@ class ContactTermBase : public Term {
   /// The smallest distance at x (asked for the statistics only where there are active pairs, whose smallest
   /// distance it then is).
   [[nodiscard]] virtual double min_distance(const Eigen::VectorXd& x) const = 0;
-  [[nodiscard]] const ContactCounters& counters() const { return counters_; }
-  void reset_counters() { counters_ = {}; }
 
   [[nodiscard]] bool reports_contact() const final { return true; }
   void report_contact(const Eigen::VectorXd& x, ContactStatistics& into) final {
@@ -37,7 +34,7 @@ class ContactTermBase : public Term {
     into.ccd_calls += counters_.ccd_calls;
     into.ccd_tests += counters_.ccd_tests;
     into.seconds += counters_.seconds;
-    reset_counters();
+    counters_ = {};
   }
 
  protected:

@@ -108,7 +108,7 @@ void flesh_time(const Scene& s, const Flesh& flesh, double& end_time, int& frame
   const double duration = flesh.clip.duration();
   if (!s.time.end_time && duration > 0.0) end_time = duration;
   if (s.time.frames) return;
-  const double fps = s.flesh ? s.flesh->fps : FleshSpec{}.fps;
+  const double fps = s.flesh->fps;  // a flesh body comes from the scene's flesh section
   const double n = std::max(1.0, std::round(end_time * fps));
   if (!(n <= TimeSpec::max_frames))
     throw SceneError(fmt::format("{}: end_time: {:g} s at {:g} frames per second makes {:.3g} frames; at most {} can run",
