@@ -48,7 +48,7 @@ VARYING = {"wall_seconds", "assembly_seconds", "solve_seconds", "contact_seconds
            "scene", "mesh_file", "model"}
 CSV_VARYING = {"wall_seconds", "assembly_seconds", "solve_seconds", "contact_seconds"}
 # Compared only on a machine like the recording one: counts that a last-bit difference may change.
-COUNTS = {"newton_iterations", "line_search_steps", "linear_iterations", "factorizations", "true_hessian_steps",
+COUNTS = {"newton_iterations", "newton_step", "line_search_steps", "linear_iterations", "factorizations", "true_hessian_steps",
           "residual", "residual_history", "ccd_calls", "ccd_tests"}
 NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 RTOL = 1e-5

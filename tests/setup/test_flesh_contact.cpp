@@ -40,6 +40,7 @@ struct FistRun {
   /// The smallest distance outside a bone's capsule, at any frame, of the skin points its collider acts on
   /// (bone_collider_points; negative: inside).
   double capsule_clearance = INFINITY;
+  int frames_written = 0;
 };
 
 /// The fist (36 frames to t = 3) at the scene's lattice resolution 24, with or without self-contact (and
@@ -63,7 +64,10 @@ FistRun run_fist(bool self_contact, const fs::path& out) {
   const double dhat = self_contact ? run.stats.at("contact").at("dhat").get<double>() : flesh_contact_dhat(flesh);
   const std::vector<std::vector<int>> colliding = bone_collider_points(flesh, dhat);
   const int frames = j.at("frames").get<int>();
-  for (int f = 0; f <= frames; ++f) {
+  // The frames that converged (a failed last frame is written too, at its partial state: issue 32).
+  for (int f = 0; f <= frames && fs::exists(out / "surface" / fmt::format("{:03d}.obj", f)); ++f) {
+    if (!run.stats.at("frames").at(static_cast<std::size_t>(f)).at("converged").get<bool>()) break;
+    ++run.frames_written;
     const SurfaceMesh s = read_surface(out / "surface" / fmt::format("{:03d}.obj", f));
     Eigen::Matrix3Xd P(3, m.surface_vertices.cols());
     for (std::size_t v = 0; v < m.weld.size(); ++v) P.col(m.weld[v]) = s.vertices.col(static_cast<Eigen::Index>(v));
@@ -75,7 +79,7 @@ FistRun run_fist(bool self_contact, const fs::path& out) {
     const std::vector<Eigen::Affine3d> world = joint_world(flesh, j.at("end_time").get<double>() * f / frames);
     for (std::size_t b = 0; b < flesh.bones.size(); ++b) {
       const Bone& bone = flesh.bones[b];
-      const Eigen::Affine3d motion = world[static_cast<std::size_t>(bone.joint)] * flesh.rest_world[static_cast<std::size_t>(bone.joint)].inverse();
+      const Eigen::Affine3d motion = world[static_cast<std::size_t>(bone.joint)] * flesh.bind_world[static_cast<std::size_t>(bone.joint)].inverse();
       for (const int i : colliding[b])
         run.capsule_clearance =
             std::min(run.capsule_clearance, segment_distance(motion * bone.a, motion * bone.b, P.col(i)) - bone.radius);
@@ -98,11 +102,17 @@ TEST_F(FleshContact, TheFistWithSelfContactAndBonesNeverIntersectsItselfOrEnters
   const FistRun without = run_fist(false, dir_ / "without");
   const FistRun with = run_fist(true, dir_ / "with");
   EXPECT_TRUE(without.result.all_converged) << without.log;
-  EXPECT_TRUE(with.result.all_converged) << with.log;
+  EXPECT_EQ(without.frames_written, 37);
+  // With the bones' capsules the closing fist converges to frame 23. At frame 24 (t = 2, the fingers closed
+  // onto the palm's capsules) Newton stalls with ‖g‖ about 50 times the tolerance: the old step rule called
+  // that converged; the run now stops there and says so (docs/flesh.md, "What is not there yet").
+  EXPECT_GE(with.frames_written, 24) << with.log;  // frames 0 to 23
+  if (!with.result.all_converged) EXPECT_NE(with.result.failure.find("no convergence"), std::string::npos) << with.result.failure;
   EXPECT_GT(without.frames_intersecting, 0);  // the fingers pass into the palm and each other
   EXPECT_EQ(with.frames_intersecting, 0) << "first at frame " << with.first_intersecting;
   std::cout << "fist: without contact " << without.frames_intersecting << " of 37 frames intersect (first "
-            << without.first_intersecting << ")\n";
+            << without.first_intersecting << "); with contact and bones " << with.frames_written << " frames converged, none intersecting"
+            << (with.result.all_converged ? "" : " (stopped: " + with.result.failure + ")") << "\n";
   // The bones' capsules: no skin point they act on is inside one at any frame (without contact some are).
   EXPECT_GT(with.capsule_clearance, 0.0);
   EXPECT_LT(without.capsule_clearance, 0.0);

@@ -294,11 +294,12 @@ TEST(StatsTables, OneDescriptionDrivesJsonCsvAndResume) {
   }
   EXPECT_TRUE(to_json(scene_table(), r)["elastic_energy"].is_null()) << "non-finite numbers are written as null";
   EXPECT_TRUE(std::isnan(from_json(scene_table(), to_json(scene_table(), r)).elastic_energy));
-  // The columns these files have (the scenes' assembly and solve times added after wall_seconds, issue 15).
+  // The columns these files have (the scenes' assembly and solve times added after wall_seconds, issue 15; the
+  // last complete Newton step after the residual, issue 31).
   EXPECT_EQ(csv_header(stretch_table()), "step,converged,newton_iterations,line_search_steps,linear_iterations,factorizations,"
                                          "residual,energy,wall_seconds,assembly_seconds,solve_seconds,min_J,inverted,volume_ratio");
   EXPECT_EQ(csv_header(scene_table()), "frame,time,substeps,converged,newton_iterations,line_search_steps,linear_iterations,"
-                                       "factorizations,residual,elastic_energy,kinetic_energy,gravity_energy,total_energy,"
+                                       "factorizations,residual,newton_step,elastic_energy,kinetic_energy,gravity_energy,total_energy,"
                                        "volume_ratio,min_J,inverted,wall_seconds,assembly_seconds,solve_seconds");
   EXPECT_EQ(csv_row(stretch_table(), r), "3,0,7,0,0,0,1.500000e-04,2.25,0.000000,0.000000,0.000000,-0.5,2,1");
 }

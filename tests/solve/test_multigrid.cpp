@@ -366,12 +366,12 @@ TEST_P(TruncatedNewton, UnfoldsAnInvertedBoxToTheDirectSolversAnswer) {
   EXPECT_LT((x[1] - x[0]).cwiseAbs().maxCoeff(), 1e-6);
 }
 
-// Chord steps: a box pulled up by a tenth of its height and let go converges by the step rule; an inexact
-// solver's last iteration, after a step within 30 times the rule, reuses the matrix it holds, and the
+// Chord steps: a box pulled up by a tenth of its height and let go; an inexact
+// solver's iteration after a step within 30 times the step rule reuses the matrix it holds, and the
 // answer is the direct solver's (which never takes a chord step) to the step tolerance.
 class ChordStep : public testing::TestWithParam<const char*> {};
 
-TEST_P(ChordStep, EndsAnInexactSolveWithoutANewMatrixAndTheSameAnswer) {
+TEST_P(ChordStep, SparesANewMatrixAndKeepsTheAnswer) {
   const std::string name = GetParam();
   const VolumeMesh mesh = name == "mg" ? box_hexes(10) : box_tets(6);
   const std::vector<std::uint8_t> kinematic = pins(mesh);
@@ -380,11 +380,14 @@ TEST_P(ChordStep, EndsAnInexactSolveWithoutANewMatrixAndTheSameAnswer) {
   for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v)
     if (!kinematic[3 * v + 1]) x0[3 * v + 1] = lo + 1.1 * (x0[3 * v + 1] - lo);
   const double step = 1e-6;  // both solvers take a step within 30 times this one before the last
+  // The step rule ends a solve only where ‖g‖ is within 10 times the tolerance (newton.hpp) and never on a
+  // chord step: with a tight force tolerance the solve goes on past the small steps that call for chord steps.
   NewtonReport report[2];
   Eigen::VectorXd x[2] = {x0, x0};
   for (int k = 0; k < 2; ++k) {
-    report[k] = box_newton(mesh, kinematic, k == 0 ? "cholmod" : name, {.tolerance = 1e-14, .step_tolerance = step}, x[k]);
-    ASSERT_TRUE(report[k].converged && report[k].converged_by_step) << report[k].failure;
+    report[k] = box_newton(mesh, kinematic, k == 0 ? "cholmod" : name, {.tolerance = 1e-12, .step_tolerance = step}, x[k]);
+    ASSERT_TRUE(report[k].converged) << report[k].failure;
+    EXPECT_LE(report[k].residual, 10.0 * 1e-12);
   }
   EXPECT_EQ(report[0].chord_steps, 0) << "a direct solver assembles every Newton matrix";
   EXPECT_GE(report[1].chord_steps, 1);

@@ -247,6 +247,7 @@ class RunLoop {
     r.factorizations = rep.newton.factorizations;
     r.true_hessian_steps = rep.newton.true_hessian_steps;
     r.residual = rep.newton.residual;
+    r.newton_step = rep.newton.last_step;
     r.energy = rep.newton.energy;
     r.assembly_seconds = rep.newton.assembly_seconds;
     r.solve_seconds = rep.newton.solve_seconds;

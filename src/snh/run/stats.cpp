@@ -73,6 +73,7 @@ const RecordTable& scene_table() {
                  {"linear_iterations", &R::linear_iterations, "{}"},
                  {"factorizations", &R::factorizations, "{}"},
                  {"residual", &R::residual, "{:.6e}", "residual", "residual"},
+                 {"newton_step", &R::newton_step, "{:.6e}"},
                  {"elastic_energy", &R::elastic_energy, "{:.12g}", "elastic", "energy"},
                  {"kinetic_energy", &R::kinetic_energy, "{:.12g}", "kinetic", "energy"},
                  {"gravity_energy", &R::gravity_energy, "{:.12g}", "gravity", "energy"},

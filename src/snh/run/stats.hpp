@@ -21,6 +21,9 @@ struct StepRecord {
   int newton_iterations = 0, line_search_steps = 0, linear_iterations = 0, factorizations = 0;
   int true_hessian_steps = 0;   ///< Newton iterations that used the unprojected Hessian
   double residual = 0.0;        ///< final ‖g‖ (the largest of the substeps)
+  /// ‖d‖∞ of the last complete Newton direction (the largest of the substeps): how far the solve still was
+  /// from its answer (NewtonReport::last_step)
+  double newton_step = 0.0;
   double energy = 0.0;          ///< the minimised energy at the end (stretch: elastic)
   double elastic_energy = 0.0, kinetic_energy = 0.0, gravity_energy = 0.0;
   double total_energy = 0.0;    ///< elastic + kinetic + gravity

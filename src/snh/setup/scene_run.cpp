@@ -117,6 +117,14 @@ void add_contact_statistics(Simulation& sim, RunPlan& plan) {
 
 /// The driver's plan for a scene: its frames and substeps, the fingerprint a resume must match, and the log's
 /// header and lines; a flesh's output and contact statistics added where the scene has them.
+/// A frame's inverted elements, said on its progress line; a converged frame holding any is warned of (its
+/// equilibrium has flesh turned inside out: a bone through the skin, a joint bent past what the cells allow).
+std::string inverted_note(const StepRecord& f) {
+  if (f.inverted == 0) return "";
+  return fmt::format(", {} inverted element{}{}", f.inverted, f.inverted == 1 ? "" : "s",
+                     f.converged ? " (warning: converged with flesh turned inside out)" : "");
+}
+
 RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
   const Scene& s = b.scene;
   RunPlan plan;
@@ -148,9 +156,9 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
       return fmt::format("frame {:>3}/{}: t = {:.4g}, volume {:.4f}, min J {:.4f}{}", 0, frames, 0.0, f.volume_ratio, f.min_J,
                          f.failure.empty() ? "" : "  " + f.failure);
     return fmt::format("frame {:>3}/{}: t = {:.4g}, {} Newton iterations, |g| = {:.2e}, energy {:.8g} (kinetic {:.4g}), "
-                       "volume {:.4f}, min J {:.4f}, {:.3f} s{}",
+                       "volume {:.4f}, min J {:.4f}, {:.3f} s{}{}",
                        f.index, frames, f.time, f.newton_iterations, f.residual, f.total_energy, f.kinetic_energy, f.volume_ratio,
-                       f.min_J, f.wall_seconds, f.converged ? "" : "  NOT CONVERGED: " + f.failure);
+                       f.min_J, f.wall_seconds, inverted_note(f), f.converged ? "" : "  NOT CONVERGED: " + f.failure);
   };
   plan.live = [frames, substeps](int frame, int sub, int it, double r) {
     return fmt::format("frame {:>3}/{}: substep {}/{}, Newton iteration {}, |g| = {:.2e} ...", frame, frames, sub, substeps, it, r);

@@ -112,6 +112,7 @@ void accumulate(NewtonReport& sum, const NewtonReport& r) {
   sum.truncated_steps += r.truncated_steps;
   sum.chord_steps += r.chord_steps;
   sum.residual = std::max(sum.residual, r.residual);
+  sum.last_step = std::max(sum.last_step, r.last_step);
   sum.energy = r.energy;
   sum.assembly_seconds += r.assembly_seconds;
   sum.solve_seconds += r.solve_seconds;

@@ -25,6 +25,14 @@ bool step_is_small(const Eigen::VectorXd& d, const Eigen::VectorXd& x, const Eig
   return step <= scale * std::max(o.relative_step_tolerance * (x - x0).lpNorm<Eigen::Infinity>(), rounding);
 }
 
+/// The step rules end Newton only where ‖g‖ is within this factor of the tolerance (NewtonOptions).
+constexpr double kStepRuleResidual = 10.0;
+
+/// d below the rounding of x's coordinates: a step that cannot change x.
+bool below_rounding(const Eigen::VectorXd& d, const Eigen::VectorXd& x) {
+  return d.lpNorm<Eigen::Infinity>() <= 64.0 * std::numeric_limits<double>::epsilon() * x.lpNorm<Eigen::Infinity>();
+}
+
 /// An inexact solver's Newton iteration that follows a step within this many times the step rule's bound
 /// solves with the matrix it already holds (a chord step) instead of assembling and preparing a new one.
 /// 30: of 10, 30 and 100 on Figure 1, the fewest CG iterations with no more Newton iterations, and the
@@ -187,12 +195,21 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     }
     const bool chord = have_step;
     if (!have_step) newton_direction(problem, x, g, H, solver, options, enough, report, d);
+    // Complete: solved afresh from this iterate's Hessian, neither truncated at negative curvature nor
+    // replaced by steepest descent. Only such a direction's length says how far the answer is.
+    bool complete = !chord && !solver.last_truncated();
     double slope = g.dot(d);
     if (!d.allFinite() || !(slope < 0.0)) {  // not a descent direction: fall back to steepest descent
       d = -g;
       slope = -g.squaredNorm();
+      complete = false;
     }
-    if (step_is_small(d, x, x0, options)) {
+    if (complete) report.last_step = d.lpNorm<Eigen::Infinity>();
+    // The step rules end the solve only on a complete direction, and only where the force residual is
+    // within kStepRuleResidual of the tolerance (or the step is below the coordinates' rounding, where ‖g‖
+    // cannot fall further): a short step from a stiff Hessian says nothing about the forces left.
+    if (complete && step_is_small(d, x, x0, options) &&
+        (!(options.tolerance > 0.0) || r <= kStepRuleResidual * options.tolerance || below_rounding(d, x))) {
       report.converged = report.converged_by_step = true;
       return report;
     }

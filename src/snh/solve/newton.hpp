@@ -16,7 +16,11 @@
 // > 0) Newton also stops when the Newton step's largest entry is below step_tolerance (the criterion of
 // IPC and PolyFEM: scale-aware where an absolute ‖g‖ is not), or (relative_step_tolerance > 0) below
 // that fraction of how far the solve has moved x, or below the coordinates' rounding. A step rule stops
-// before taking that last step. Each line-search trial evaluates the energy and the gradient, so the
+// before taking that last step, and only on a complete direction (solved afresh from the iterate's Hessian:
+// not a chord step, not truncated at negative curvature, not the steepest-descent fallback) and where ‖g‖
+// is within 10 times the tolerance (or the step is below the rounding, where ‖g‖ cannot fall further);
+// otherwise the step is taken and Newton goes on. So a solve that says `converged` has ‖g‖ below 10 times
+// the tolerance, or could not lower it in this arithmetic (docs/solvers.md, "When a solve has converged"). Each line-search trial evaluates the energy and the gradient, so the
 // accepted trial's serve the next iteration; the Hessian is assembled only once the convergence test has
 // failed (one per Newton step; none for a converged start).
 #include <functional>
@@ -66,6 +70,9 @@ struct NewtonReport {
   /// Iterations that solved with the last iteration's matrix (chord steps: an inexact solver, after a step
   /// within 30 times the step rule's bound), sparing an assembly and a preconditioner set-up.
   int chord_steps = 0;
+  /// ‖d‖∞ of the last complete Newton direction (solved afresh, not truncated, not steepest descent): how far
+  /// the solve was from its answer when it stopped (0 when it took none).
+  double last_step = 0.0;
   double residual = 0.0;          ///< final ‖g‖
   double energy = 0.0;            ///< final energy
   std::vector<double> residuals;  ///< ‖g‖ at the start of each iteration and at the end
