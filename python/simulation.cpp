@@ -234,12 +234,15 @@ class PySimulation {
   std::vector<int> scatter_;
 };
 
-/// A scene from a path or from a dict (its JSON text; relative paths then resolve against the working directory).
-Scene scene_of(const pyb::handle& obj) {
+/// A scene from a path (its relative paths resolve against the file's directory) or from a dict (its JSON
+/// text; its relative paths resolve against base_dir, by default the working directory).
+Scene scene_of(const pyb::handle& obj, const std::optional<std::filesystem::path>& base_dir) {
   if (pyb::isinstance<pyb::dict>(obj)) {
     const std::string text = pyb::module_::import("json").attr("dumps")(obj).cast<std::string>();
-    return parse_scene(read_scene_json(text, "scene"), "scene");
+    const std::filesystem::path source = base_dir ? *base_dir / "scene" : std::filesystem::path("scene");
+    return parse_scene(read_scene_json(text, source.string()), source);
   }
+  require(!base_dir, "base_dir is for a scene given as a dict: a scene file's paths resolve against its own directory");
   return load_scene(obj.cast<std::filesystem::path>());
 }
 
@@ -277,9 +280,10 @@ SceneResult run_interruptibly(const BuiltScene& scene, std::ostream& log) {
   return result;
 }
 
-pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesystem::path> out, bool force, bool resume,
-                       bool report, bool quiet, int threads, bool check) {
-  Scene parsed = scene_of(scene_obj);
+pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesystem::path> base_dir,
+                       std::optional<std::filesystem::path> out, bool force, bool resume, bool report, bool quiet, int threads,
+                       bool check) {
+  Scene parsed = scene_of(scene_obj, base_dir);
   if (out) {
     require(!out->empty(), "out must not be empty");
     parsed.output.dir = *out;
@@ -312,6 +316,17 @@ pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesyst
   d["total_seconds"] = r.total_seconds;
   d["element"] = std::string(to_string(r.element));
   d["final_positions"] = positions_array(r.final_positions);
+  d["final_surface"] = pyb::none();
+  d["surface_triangles"] = pyb::none();
+  if (const Flesh* flesh = built.body->flesh.get(); flesh && r.final_positions.size() > 0) {
+    // The character's skin, as the OBJ and USD frames hold it: the render surface embedded in the volume.
+    const Eigen::Matrix3Xd skin = flesh_surface(*flesh, r.final_positions);
+    d["final_surface"] = positions_array(Eigen::Map<const Eigen::VectorXd>(skin.data(), skin.size()));
+    const Eigen::Matrix3Xi& t = flesh->model.triangles;
+    pyb::array_t<std::int32_t> tri({static_cast<pyb::ssize_t>(t.cols()), pyb::ssize_t{3}});
+    std::copy(t.data(), t.data() + t.size(), tri.mutable_data());
+    d["surface_triangles"] = tri;
+  }
   d["report"] = pyb::none();
 #ifdef SNH_PYTHON_REPORT
   // As snh run: a report that cannot be written is a warning; the run's own results stay.
@@ -382,11 +397,13 @@ void add_simulation(pyb::module_& m) {
            "d2E/dx2 at x over every DOF (3 v + axis), symmetric: a scipy.sparse CSR matrix, or (indptr, indices, data) "
            "without SciPy. projection: none (the true Hessian), clamp or abs per element.");
 
-  m.def("run_scene", &run_scene_py, "scene"_a, pyb::kw_only(), "out"_a = pyb::none(), "force"_a = false,
+  m.def("run_scene", &run_scene_py, "scene"_a, pyb::kw_only(), "base_dir"_a = pyb::none(), "out"_a = pyb::none(), "force"_a = false,
         "resume"_a = false, "report"_a = true, "quiet"_a = false, "threads"_a = 0, "check"_a = true,
         "Runs a scene (a file path, or a dict with the file's keys: a flesh scene is snh flesh) as snh run does, into out "
-        "(default: the scene's output.dir): frames, stats.json, stats.csv, checkpoint and the report. Returns a dict "
-        "(out, frames, all_converged, failure, total_seconds, element, final_positions, report). ValueError for a bad "
+        "(default: the scene's output.dir): frames, stats.json, stats.csv, checkpoint and the report. A dict's relative "
+        "paths resolve against base_dir (default: the working directory), a file's against its directory. Returns a dict "
+        "(out, frames, all_converged, failure, total_seconds, element, final_positions: the volume's vertices, and for a "
+        "flesh scene final_surface and surface_triangles: the character's skin; report). ValueError for a bad "
         "scene, RuntimeError when a frame fails (check=False: returned in the dict), KeyboardInterrupt on Ctrl-C (the "
         "frames so far kept).");
 }

@@ -314,3 +314,27 @@ def test_flesh_scene_from_a_dict(tmp_path):
     assert r["all_converged"] and r["frames"] == 3 and r["element"] == "hex8"
     assert (tmp_path / "hand" / "flesh.usda").exists() and (tmp_path / "hand" / "002.obj").exists()
     assert np.isfinite(r["final_positions"]).all()
+    # The skin at the last frame, as the OBJ frames hold it (model order, 10 significant digits there).
+    skin = r["final_surface"]
+    assert skin.shape == (1360, 3) and r["surface_triangles"].shape == (2314, 3)
+    obj = np.array(read_obj_vertices(tmp_path / "hand" / "surface" / "002.obj"), dtype=float)
+    np.testing.assert_allclose(skin, obj, rtol=1e-9, atol=1e-12)
+
+
+def test_a_dicts_paths_resolve_against_base_dir(tmp_path, monkeypatch):
+    import json
+    from conftest import SOURCE
+    scene = json.loads((SOURCE / "scenes/hand_fist.json").read_text())
+    scene["flesh"].update(model="hand/left.glb", resolution=6)  # relative: to base_dir, not the working directory
+    scene.update(end_time=0.1, frames=1)
+    scene.pop("output", None)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ValueError, match="hand/left.glb"):
+        snh.run_scene(scene, out=tmp_path / "cwd", quiet=True, report=False)
+    r = snh.run_scene(scene, base_dir=SOURCE / "data", out=tmp_path / "based", quiet=True, report=False)
+    assert r["all_converged"] and r["final_surface"] is not None
+    # A volume scene has no skin; a scene file's paths are its folder's, so base_dir is refused for one.
+    assert snh.run_scene({"mesh": {"box": {"element": "hex", "res": 2}}, "frames": 1}, out=tmp_path / "box", quiet=True,
+                         report=False)["final_surface"] is None
+    with pytest.raises(ValueError, match="base_dir"):
+        snh.run_scene(str(SOURCE / "scenes/hand_fist.json"), base_dir=tmp_path, out=tmp_path / "f", quiet=True)

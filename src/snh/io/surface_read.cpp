@@ -316,7 +316,9 @@ MeshFile tetrahedralize(const SurfaceMesh& surface, const fs::path& source, doub
                                 source.string(), last.empty() ? "" : ": " + last));
   }
   MeshFile m = read_mesh_file(node);
-  check_mesh(m, source);
+  // The cells' lines are lines of tetgen's temporary .ele file, not of `source`: the messages name cells only.
+  m.cell_lines.clear();
+  check_mesh(m, source.string() + " (tetrahedralized by tetgen)");
   return m;
 }
 
