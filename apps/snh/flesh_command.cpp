@@ -36,7 +36,8 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
       "lattice or tets, binds the volume vertices inside each bone's capsule to the bone, plays the model's animation "
       "clip and solves the rest of the flesh (quasi-static by default, stable_neo_hookean, nu = 0.488). Writes the render "
       "surface per frame (surface/NNN.obj) beside the same surface posed by linear blend skinning (lbs/NNN.obj), the "
-      "volume (NNN.vtu, frames.pvd), flesh.usda, stats.json and the report. A model without a clip runs from a scene "
+      "volume (NNN.vtu, frames.pvd), flesh.usda, the point caches flesh.pc2 and lbs.pc2 (Blender's Mesh Cache modifier reads them), "
+      "stats.json and the report. A model without a clip runs from a scene "
       "file instead (snh run, with keyframes: see scenes/hand_fist.json). Exit code 0 when every frame converged, 1 "
       "when the run stopped early, 2 for bad input.");
   cmd->add_option("model", o->model, "Rigged model (.glb, or .gltf with external or embedded buffers)")->required();

@@ -23,6 +23,12 @@ struct LimbOptions {
   double blend = 0.2;           ///< half-width of the skinning blend at the elbow
   double degrees = 90.0;
   bool caps = true;             ///< false: the cylinder's ends stay open (not a solid)
+  /// An armature node above the shoulder, scaling by this and turning by armature_degrees about x, that the
+  /// skin's inverse bind matrices leave out (as FBX conversions do): the rest pose puts the skin elsewhere.
+  double armature_scale = 1.0, armature_degrees = 0.0;
+  /// The elbow's rest rotation about z (the skin is bound straight): a rest pose that is not the bind pose.
+  double rest_elbow_degrees = 0.0;
+  double duration = 1.0;        ///< the clip's length in seconds
 };
 
 inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions& o = {}) {
@@ -59,7 +65,8 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
     ibm.insert(ibm.end(), m, m + 16);
   }
   const double half = 0.5 * o.degrees * std::numbers::pi / 180.0;
-  const std::vector<float> times{0.0f, 1.0f}, rotations{0, 0, 0, 1, 0, 0, float(std::sin(half)), float(std::cos(half))};
+  const std::vector<float> times{0.0f, float(o.duration)},
+      rotations{0, 0, 0, 1, 0, 0, float(std::sin(half)), float(std::cos(half))};
 
   std::string bin;
   nlohmann::json views = nlohmann::json::array(), accessors = nlohmann::json::array();
@@ -81,17 +88,27 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
   const int a_ibm = add(ibm.data(), ibm.size() * 4, 5126, 3, "MAT4", 0);
   const int a_t = add(times.data(), times.size() * 4, 5126, 2, "SCALAR", 0);
   accessors[a_t]["min"] = {0.0};
-  accessors[a_t]["max"] = {1.0};
+  accessors[a_t]["max"] = {float(o.duration)};
   const int a_r = add(rotations.data(), rotations.size() * 4, 5126, 2, "VEC4", 0);
 
   nlohmann::json g;
   g["asset"] = {{"version", "2.0"}};
   g["scene"] = 0;
-  g["scenes"] = nlohmann::json::array({nlohmann::json{{"nodes", {0, 1}}}});
+  const bool armature = o.armature_scale != 1.0 || o.armature_degrees != 0.0;
+  g["scenes"] = nlohmann::json::array({nlohmann::json{{"nodes", {0, armature ? 4 : 1}}}});
   g["nodes"] = nlohmann::json::array({nlohmann::json{{"name", "limb"}, {"mesh", 0}, {"skin", 0}},
                                       nlohmann::json{{"name", "shoulder"}, {"children", {2}}},
                                       nlohmann::json{{"name", "elbow"}, {"translation", {1.0, 0.0, 0.0}}, {"children", {3}}},
                                       nlohmann::json{{"name", "tip"}, {"translation", {1.0, 0.0, 0.0}}}});
+  if (o.rest_elbow_degrees != 0.0) {
+    const double r = 0.5 * o.rest_elbow_degrees * std::numbers::pi / 180.0;
+    g["nodes"][2]["rotation"] = {0.0, 0.0, std::sin(r), std::cos(r)};
+  }
+  if (armature) {
+    const double a = 0.5 * o.armature_degrees * std::numbers::pi / 180.0;
+    g["nodes"].push_back({{"name", "armature"}, {"children", {1}}, {"rotation", {std::sin(a), 0.0, 0.0, std::cos(a)}},
+                          {"scale", {o.armature_scale, o.armature_scale, o.armature_scale}}, {"translation", {5.0, -3.0, 2.0}}});
+  }
   nlohmann::json primitive = {{"attributes", {{"POSITION", a_pos}, {"JOINTS_0", a_joints}, {"WEIGHTS_0", a_weights}}},
                                {"indices", a_idx}};
   g["meshes"] = nlohmann::json::array({nlohmann::json{{"primitives", nlohmann::json::array({primitive})}}});

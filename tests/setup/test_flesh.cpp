@@ -109,7 +109,7 @@ TEST_F(FleshLimb, BentElbowKeepsTheFleshVolumeWhereSkinningLosesIt) {
   double worst = 0.0;
   for (std::size_t i = 0; i < f.binding.vertex.size(); ++i) {
     const int v = f.binding.vertex[i], j = f.bones[f.binding.bone[i]].joint;
-    const Eigen::Vector3d expected = world[j] * (f.rest_world[j].inverse() * f.volume.vertices.col(v));
+    const Eigen::Vector3d expected = world[j] * (f.bind_world[j].inverse() * f.volume.vertices.col(v));
     worst = std::max(worst, (r.final_positions.segment<3>(3 * v) - expected).norm());
   }
   EXPECT_LT(worst, 1e-12);
@@ -176,7 +176,7 @@ TEST_F(FleshLimb, SoftBindingPullsTheShellTowardItsBonesAndStiffensWithItsStiffn
     double sum = 0.0, weights = 0.0;
     for (std::size_t i = 0; i < f.soft.vertex.size(); ++i) {
       const int v = f.soft.vertex[i], j = f.bones[f.soft.bone[i]].joint;
-      const Eigen::Vector3d carried = world[j] * (f.rest_world[j].inverse() * f.volume.vertices.col(v));
+      const Eigen::Vector3d carried = world[j] * (f.bind_world[j].inverse() * f.volume.vertices.col(v));
       sum += f.soft.weight[i] * (x.segment<3>(3 * v) - carried).norm();
       weights += f.soft.weight[i];
     }

@@ -57,8 +57,8 @@ void write_usda(const std::filesystem::path& path, const std::string& root, cons
 
   Out o;
   put(o, "#usda 1.0\n(\n    defaultPrim = \"{}\"\n    doc = \"written by snh\"\n    endTimeCode = {}\n    metersPerUnit = 1\n"
-      "    startTimeCode = 0\n    timeCodesPerSecond = {:.17g}\n    upAxis = \"Y\"\n)\n\n",
-      root, frames ? frames - 1 : 0, frames_per_second);
+      "    framesPerSecond = {:.17g}\n    startTimeCode = 0\n    timeCodesPerSecond = {:.17g}\n    upAxis = \"Y\"\n)\n\n",
+      root, frames ? frames - 1 : 0, frames_per_second, frames_per_second);
   put(o, "def Xform \"{}\"\n{{\n", root);
   for (const UsdMesh& m : meshes) {
     put(o, "    def Mesh \"{}\"\n    {{\n", m.name);

@@ -60,7 +60,7 @@ class BoneCarried {
     for (std::size_t i = 0; i < binding.vertex.size(); ++i) {
       const int j = flesh_->bones[binding.bone[i]].joint;
       joint_[i] = j;
-      local_.col(static_cast<Eigen::Index>(i)) = flesh_->rest_world[j].inverse() * flesh_->volume.vertices.col(binding.vertex[i]);
+      local_.col(static_cast<Eigen::Index>(i)) = flesh_->bind_world[j].inverse() * flesh_->volume.vertices.col(binding.vertex[i]);
     }
   }
   void at(double t, Eigen::Matrix3Xd& out) const {
@@ -90,6 +90,7 @@ class BoneMotion final : public KinematicProvider {
 Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
   Flesh f;
   f.model = read_gltf(spec.model);
+  f.bind = place_at_bind_pose(f.model);
   const RiggedModel& m = f.model;
   const EdgeCounts edges = edge_counts(m.surface_triangles);
   if (edges.open > 0 || edges.non_manifold > 0)
@@ -98,7 +99,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
                                m.source.string(), edges.open, edges.non_manifold, edges.edges));
   if (spec.resolution < 1) throw std::invalid_argument(fmt::format("{}: resolution {} must be at least 1", where, spec.resolution));
   f.clip = choose_clip(spec, m, where);
-  f.rest_world = m.skeleton.world(m.skeleton.rest_pose());
+  f.bind_world = f.bind.joints;
   f.surface_volume = enclosed_volume(m.surface_vertices, m.surface_triangles);
   if (!(f.surface_volume > 0.0))
     throw RigError(fmt::format("{}: the surface encloses no volume ({:g}): are its triangles turned inside out?",
@@ -121,7 +122,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     f.embedding = embed_in_tets(f.volume, m.vertices);
   }
 
-  f.bones = bones_of(m.skeleton, f.rest_world);
+  f.bones = bones_of(m.skeleton, f.bind_world);
   const std::vector<double> radii = default_radii(f.bones, m.surface_vertices);
   std::vector<bool> radius_given(f.bones.size(), false);
   for (std::size_t b = 0; b < f.bones.size(); ++b) f.bones[b].radius = radii[b];
@@ -193,7 +194,7 @@ std::function<void(double, std::vector<Eigen::Matrix<double, 3, 4>>&)> flesh_car
   return [flesh, joints, weights](double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames) {
     const std::vector<Eigen::Affine3d> world = joint_world(*flesh, t);
     std::vector<Eigen::Matrix<double, 3, 4>> motion(world.size());
-    for (std::size_t j = 0; j < world.size(); ++j) motion[j] = (world[j] * flesh->rest_world[j].inverse()).matrix().topRows<3>();
+    for (std::size_t j = 0; j < world.size(); ++j) motion[j] = (world[j] * flesh->bind_world[j].inverse()).matrix().topRows<3>();
     const Eigen::Index n = joints->cols();
     frames.assign(static_cast<std::size_t>(n), Eigen::Matrix<double, 3, 4>::Zero());
     for (Eigen::Index v = 0; v < n; ++v)
@@ -261,7 +262,7 @@ std::vector<std::shared_ptr<Term>> bone_collider_terms(std::shared_ptr<const Fle
     shape.a = bone.a;
     shape.b = bone.b;
     shape.radius = bone.radius;
-    const Eigen::Affine3d rest_inverse = flesh->rest_world[static_cast<std::size_t>(bone.joint)].inverse();
+    const Eigen::Affine3d rest_inverse = flesh->bind_world[static_cast<std::size_t>(bone.joint)].inverse();
     // The joint's motion from rest is rigid up to the rounding of the file's single-precision transforms:
     // taken as the nearest rotation (polar decomposition) and the mean scale, as the shape needs.
     ColliderPose pose = [flesh, joint = bone.joint, rest_inverse](double t) {

@@ -17,6 +17,7 @@
 #include "snh/fem/term.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 #include "snh/rig/animation.hpp"
+#include "snh/rig/bind_pose.hpp"
 #include "snh/rig/bones.hpp"
 #include "snh/rig/gltf.hpp"
 #include "snh/sim/kinematics.hpp"
@@ -66,7 +67,8 @@ struct FleshSpec {
   // Defaults of a flesh run (the paper's: nu = 0.488) where the scene or command gives none:
   static constexpr double youngs = 1e5, poisson = 0.488;  ///< Pa; with quasi-static bones only nu matters
   static constexpr double density = 1000.0;               ///< kg/m³ (dynamics)
-  /// Frames per second of animation: a scene without "frames" runs end_time × fps of them.
+  /// Frames per second of animation: a scene without "frames" runs frames at t = i / fps up to end_time
+  /// rounded up to a whole frame.
   double fps = 24.0;
 };
 
@@ -74,7 +76,9 @@ struct FleshSpec {
 struct Flesh {
   RiggedModel model;
   Clip clip;                                 ///< the animation that drives the bones
-  std::vector<Eigen::Affine3d> rest_world;   ///< joints at rest
+  BindPose bind;                             ///< how the model was placed at its bind pose (model is placed)
+  std::vector<Eigen::Affine3d> bind_world;   ///< the joints' frames at the bind pose (bind.joints): the bones'
+                                             ///< motion at time t is joint_world(t) · bind_world⁻¹
   VolumeMesh volume;
   double cell_size = 0.0;                    ///< the lattice's cube edge (tets: the edge of the cube whose volume bounds a tet)
   double volume_of_cells = 0.0;              ///< the volume mesh's rest volume
@@ -103,7 +107,7 @@ struct Flesh {
                                                       double youngs);
 
 /// A frame per volume vertex that carries the flesh along with the bones (SimulationSetup::carrier): the
-/// joints' motions from rest, world(t)·rest⁻¹, blended with the skin weights of the model vertex nearest
+/// joints' motions from the bind pose, world(t)·bind⁻¹, blended with the skin weights of the model vertex nearest
 /// to the volume vertex at rest (linear blend skinning of the volume, used only to predict).
 [[nodiscard]] std::function<void(double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames)> flesh_carrier(
     std::shared_ptr<const Flesh> flesh);

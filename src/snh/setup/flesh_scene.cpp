@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/obj.hpp"
+#include "snh/io/pc2.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/io/usda.hpp"
 #include "snh/run/stats.hpp"
@@ -39,6 +41,10 @@ void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& setting
   settings["bones"] = bones;
   settings["joint_cells"] = to_string(spec.joint_cells);
   settings["released_vertices"] = flesh.released.vertex.size();
+  const BindPose& bind = flesh.bind;
+  settings["bind_pose"] = {{"placed", bind.placed}, {"placement_scale", bind.placement.scale},
+                           {"placement_degrees", bind.placement.angle() * 180.0 / std::numbers::pi},
+                           {"rest_is_bind", bind.rest_is_bind}, {"worst_joint", bind.worst_joint}, {"worst_offset", bind.worst_offset}};
   if (spec.soft_shell > 0.0)
     settings["soft_binding"] = {{"shell", spec.soft_shell}, {"stiffness", spec.soft_stiffness}, {"vertices", flesh.soft.vertex.size()}};
 }
@@ -56,6 +62,7 @@ void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream&
                    spec.volume == FleshVolume::lattice ? "cubes" : "tets no larger than a sixth of a cube", flesh.cell_size,
                    flesh.volume.cell_count(), flesh.volume.vertex_count(), flesh.volume_of_cells, flesh.surface_volume,
                    flesh.volume_of_cells / flesh.surface_volume);
+  if (const std::string bind = describe(flesh.bind); !bind.empty()) o << bind << "\n";
   std::string counts;
   for (std::size_t b = 0; b < flesh.bones.size(); ++b)
     counts += fmt::format("{}{} {}", b ? ", " : "", flesh.bones[b].name, flesh.bound_per_bone[b]);
@@ -85,6 +92,10 @@ void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, dou
   if (meshes[0].frames.empty()) return;
   write_usda(out / "flesh.usda", "character", meshes, fps);
   stats["usd"] = "flesh.usda";
+  // The same frames as point caches for tools without USD (Blender's Mesh Cache modifier): sample k at frame k.
+  write_pc2(out / "flesh.pc2", meshes[0].frames);
+  write_pc2(out / "lbs.pc2", meshes[1].frames);
+  stats["pc2"] = {{"flesh", "flesh.pc2"}, {"linear_blend_skinning", "lbs.pc2"}};
   // The bones at every frame written: segment ends in world space.
   json names = json::array(), frames = json::array();
   for (const Bone& b : flesh.bones) names.push_back(b.name);
@@ -93,8 +104,8 @@ void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, dou
     const std::vector<Eigen::Affine3d> world = joint_world(flesh, t);
     json segments = json::array();
     for (const Bone& b : flesh.bones) {
-      const Eigen::Vector3d a = world[b.joint] * (flesh.rest_world[b.joint].inverse() * b.a);
-      const Eigen::Vector3d c = world[b.joint] * (flesh.rest_world[b.joint].inverse() * b.b);
+      const Eigen::Vector3d a = world[b.joint] * (flesh.bind_world[b.joint].inverse() * b.a);
+      const Eigen::Vector3d c = world[b.joint] * (flesh.bind_world[b.joint].inverse() * b.b);
       segments.push_back({a[0], a[1], a[2], c[0], c[1], c[2]});
     }
     frames.push_back({{"time", t}, {"segments", segments}});
@@ -109,18 +120,21 @@ void flesh_time(const Scene& s, const Flesh& flesh, double& end_time, int& frame
   if (!s.time.end_time && duration > 0.0) end_time = duration;
   if (s.time.frames) return;
   const double fps = s.flesh->fps;  // a flesh body comes from the scene's flesh section
-  const double n = std::max(1.0, std::round(end_time * fps));
+  // Frames on the animation's grid, t = i / fps: the end time rounded up to a whole frame (a clip holds its
+  // last key after its end), so a cache's samples fall on the frames of the user's tool.
+  const double n = std::max(1.0, std::ceil(end_time * fps * (1.0 - 1e-9)));
   if (!(n <= TimeSpec::max_frames))
     throw SceneError(fmt::format("{}: end_time: {:g} s at {:g} frames per second makes {:.3g} frames; at most {} can run",
                                  s.source.string(), end_time, fps, n, TimeSpec::max_frames));
   frames = static_cast<int>(n);
+  end_time = n / fps;
 }
 
-NewtonOptions flesh_newton_options(const SolverSpec& solver, const Flesh& flesh, double youngs) {
+NewtonOptions flesh_newton_options(const SolverSpec& solver, const Flesh& flesh, const Lame& lame) {
   const double h = flesh.cell_size;
   NewtonOptions o = solver.newton;
-  o.tolerance = solver.tolerance ? *solver.tolerance : 1e-6 * youngs * h * h;
-  o.step_tolerance = solver.step_tolerance ? *solver.step_tolerance : 1e-4 * h;
+  o.tolerance = solver.tolerance ? *solver.tolerance : 1e-6 * youngs_modulus(lame) * h * h;
+  o.step_tolerance = solver.step_tolerance ? *solver.step_tolerance : o.tolerance / ((lame.lambda + 2.0 * lame.mu) * h);
   return o;
 }
 
@@ -170,7 +184,8 @@ void add_flesh_output(const BuiltScene& b, const Simulation& sim, RunPlan& plan)
     write_obj(out / "surface" / frame_name(index), flesh_surface(flesh, x), flesh.model.triangles);
     write_obj(out / "lbs" / frame_name(index), skinned_surface(flesh, time), flesh.model.triangles);
   };
-  const double fps = b.frames / b.end_time;
+  // The grid's own rate where the frames were put on it (flesh_time), exactly; else what the scene's frames make.
+  const double fps = b.scene.time.frames ? b.frames / b.end_time : spec.fps;
   plan.finish = [&flesh, out, fps](json& stats) { write_flesh_cache(flesh, out, fps, stats); };
 }
 

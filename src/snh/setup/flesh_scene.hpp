@@ -11,12 +11,15 @@
 
 namespace snh {
 
-/// The end time and frames where the scene gives none: the clip's length (when it has one) and end time × fps.
+/// The end time and frames where the scene gives none: the clip's length (when it has one), and frames on the
+/// grid of 1 / fps from 0, up to the end time rounded up to a whole frame (which becomes the end time).
 /// Throws SceneError when that makes more than TimeSpec::max_frames.
 void flesh_time(const Scene& scene, const Flesh& flesh, double& end_time, int& frames);
 /// Newton's stopping rule at the flesh's scale, unless the scene sets one: a force of 1e-6 of what a unit
-/// strain puts on a cell's face (E h²), or a step under 1e-4 of a cell (h the cell size).
-[[nodiscard]] NewtonOptions flesh_newton_options(const SolverSpec& solver, const Flesh& flesh, double youngs);
+/// strain puts on a cell's face (E h², h the cell size), and the step rule derived from it through the
+/// stiffness the solve sees, (λ + 2μ) h: a Newton step under tolerance / ((λ + 2μ) h), the displacement that
+/// such a force moves a cell's vertex by (docs/solvers.md, "When a solve has converged").
+[[nodiscard]] NewtonOptions flesh_newton_options(const SolverSpec& solver, const Flesh& flesh, const Lame& lame);
 /// Contact's d̂ and κ, as given or the flesh's defaults (flesh_contact_dhat, flesh_contact_stiffness).
 [[nodiscard]] ContactParameters flesh_contact(const ContactSpec& contact, const Flesh& flesh, double youngs);
 /// A flesh scene's own terms: the carrier (quasi-static), the soft binding's springs into setup.terms, and the

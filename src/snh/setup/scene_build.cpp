@@ -165,7 +165,7 @@ BuiltScene build_scene(const Scene& s) {
   if (const Flesh* flesh = b.body->flesh.get()) {
     flesh_time(s, *flesh, b.end_time, b.frames);
     b.substeps = checked_substeps(s.time, b.end_time, b.frames, file);
-    b.newton = flesh_newton_options(s.solver, *flesh, youngs);
+    b.newton = flesh_newton_options(s.solver, *flesh, s.material.params);
   } else {
     b.newton = newton_options(s.solver, mesh, youngs);
   }

@@ -35,7 +35,7 @@ struct BuiltScene {
   Scene scene;                             ///< as parsed, its mesh colliders' files read
   std::shared_ptr<const SceneBody> body;
   double end_time = 0.0;                   ///< given, or the flesh's clip length, or 1 s
-  int frames = 0;                          ///< given, or end_time × fps for flesh, or 25
+  int frames = 0;                          ///< given, or end_time × fps (rounded up) for flesh, or 25
   int substeps = 1;                        ///< solves per frame (backward Euler: no longer than dt each)
   double substep = 0.0;                    ///< their length
   NewtonOptions newton;                    ///< the solver section's, its tolerances at the body's scale

@@ -1,0 +1,214 @@
+// Flesh on characters as files deliver them (docs/flesh.md "Your own character"): a skin bound without its
+// armature's transform (scale 100, a quarter turn) or in a pose other than the rest pose, honest convergence
+// (every converged frame's ‖g‖ within 10 times the tolerance, the step rule derived from it), frames on the
+// animation's grid, and the point caches (PC2) that carry the frames back to a DCC.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "limb_model.hpp"
+#include "snh/io/pc2.hpp"
+#include "snh/io/surface_read.hpp"
+#include "snh/rig/bind_pose.hpp"
+#include "snh/rig/skinning.hpp"
+#include "snh/setup/scene_run.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+class Character : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("snh-test-character-" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    test::write_limb_gltf(dir_ / "limb.gltf");
+    test::write_limb_gltf(dir_ / "placed.gltf", {.armature_scale = 100.0, .armature_degrees = -90.0});
+    test::write_limb_gltf(dir_ / "bent_rest.gltf", {.rest_elbow_degrees = 40.0});
+    test::write_limb_gltf(dir_ / "long.gltf", {.duration = 1.56});
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+
+  static json scene(const std::string& model, const std::string& out, int resolution = 10) {
+    return {{"flesh", {{"model", (dir_ / model).string()}, {"resolution", resolution}}},
+            {"frames", 4},
+            {"output", {{"dir", (dir_ / out).string()}}}};
+  }
+  static SceneResult run(const json& j, std::string* log_out = nullptr) {
+    std::ostringstream log;
+    SceneResult r = run_scene(parse_scene(j, dir_ / "scene.json"), log);
+    EXPECT_TRUE(r.all_converged) << log.str();
+    if (log_out) *log_out = log.str();
+    return r;
+  }
+  static json stats(const std::string& out) {
+    std::ifstream in(dir_ / out / "stats.json");
+    return json::parse(in);
+  }
+  static inline fs::path dir_;
+};
+
+TEST(BindPose, FitSimilarityRecoversAKnownOne) {
+  std::srand(7);
+  const Eigen::Matrix3Xd p = Eigen::Matrix3Xd::Random(3, 40);
+  Similarity truth;
+  truth.scale = 37.5;
+  truth.rotation = Eigen::AngleAxisd(2.1, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  truth.translation = Eigen::Vector3d(4, -8, 15);
+  const Similarity fit = fit_similarity(p, truth.affine() * p);
+  EXPECT_NEAR(fit.scale, truth.scale, 1e-10 * truth.scale);
+  EXPECT_LT((fit.rotation - truth.rotation).norm(), 1e-12);
+  EXPECT_LT((fit.translation - truth.translation).norm(), 1e-10);
+  EXPECT_NEAR(fit.angle(), 2.1, 1e-12);
+  // A reflection is never fitted: mirrored points get a proper rotation.
+  Eigen::Matrix3Xd mirrored = p;
+  mirrored.row(0) *= -1.0;
+  EXPECT_GT(fit_similarity(p, mirrored).rotation.determinant(), 0.0);
+}
+
+// An FBX character converted to glTF: the armature node scales by 100 and turns a quarter about x, and the
+// inverse bind matrices leave that out. Before, every bone stood 100 times too far from the flesh and the
+// build said "no volume vertex lies inside a bone's capsule". The flesh is built where the rest pose puts
+// the skin; quasi-statically the physics does not see a similarity, so every frame is the plain limb's,
+// placed.
+TEST_F(Character, AnArmatureLeftOutOfTheSkinPlacesTheFleshWhereTheRestPoseDoes) {
+  RiggedModel model = read_gltf(dir_ / "placed.gltf");
+  const RiggedModel stored = model;
+  const std::vector<Eigen::Affine3d> rest = model.skeleton.world(model.skeleton.rest_pose());
+  const BindPose bind = place_at_bind_pose(model);
+  EXPECT_TRUE(bind.placed);
+  EXPECT_TRUE(bind.rest_is_bind);
+  EXPECT_NEAR(bind.placement.scale, 100.0, 1e-4);
+  EXPECT_NEAR(bind.placement.angle() * 180.0 / std::numbers::pi, 90.0, 1e-4);
+  // The placed skin is the skin posed at rest, and skinning any pose gives what it gave before.
+  EXPECT_LT((model.vertices - skin_vertices(stored, rest)).cwiseAbs().maxCoeff(), 1e-4);
+  for (double t : {0.0, 0.4, 1.0}) {
+    const auto world = model.skeleton.world(sample(model.clips.front(), model.skeleton, t));
+    EXPECT_LT((skin_vertices(model, world) - skin_vertices(stored, world)).cwiseAbs().maxCoeff(), 1e-9 * 300.0) << t;
+  }
+  EXPECT_NE(describe(bind).find("scaled 100x"), std::string::npos) << describe(bind);
+
+  std::string log;
+  const SceneResult placed = run(scene("placed.gltf", "placed"), &log);
+  EXPECT_NE(log.find("placement: the rest pose puts the skin scaled 100x, turned 90.0 degrees"), std::string::npos) << log;
+  const SceneResult plain = run(scene("limb.gltf", "plain"));
+  ASSERT_EQ(placed.frames.size(), plain.frames.size());
+  const Eigen::Affine3d a = bind.placement.affine();
+  for (const char* frame : {"000.obj", "002.obj", "004.obj"}) {
+    const Eigen::Matrix3Xd p = read_surface(dir_ / "placed" / "surface" / frame).vertices;
+    const Eigen::Matrix3Xd q = a * read_surface(dir_ / "plain" / "surface" / frame).vertices;
+    // 100 model units across; the OBJ frames hold 10 significant digits; each run's Newton tolerance.
+    EXPECT_LT((p - q).cwiseAbs().maxCoeff(), 1e-5 * 100.0) << frame;
+  }
+  EXPECT_TRUE(stats("placed")["bind_pose"]["placed"].get<bool>());
+  EXPECT_FALSE(stats("plain")["bind_pose"]["placed"].get<bool>());
+}
+
+// A character bound straight but resting with its elbow bent: bones are placed in the bind pose (the rest
+// pose's forearm bone would run out of the straight flesh), the header says so, and the clip, which starts
+// straight, leaves frame 0 at the stored skin.
+TEST_F(Character, ARestPoseThatIsNotTheBindPoseBindsTheFleshInTheBindPose) {
+  std::string log;
+  const SceneResult r = run(scene("bent_rest.gltf", "bent_rest"), &log);
+  EXPECT_NE(log.find("bind pose: the rest pose differs from the pose the skin was bound in (joint tip"), std::string::npos) << log;
+  const BuiltScene built = build_scene(parse_scene(scene("bent_rest.gltf", "bent_rest"), dir_ / "scene.json"));
+  const Flesh& f = *built.body->flesh;
+  EXPECT_FALSE(f.bind.rest_is_bind);
+  for (const Bone& b : f.bones) {  // every bone on the straight limb's axis
+    EXPECT_LT(std::hypot(b.a.y(), b.a.z()), 1e-6) << b.name;
+    EXPECT_LT(std::hypot(b.b.y(), b.b.z()), 1e-6) << b.name;
+  }
+  const Eigen::Matrix3Xd frame0 = read_surface(dir_ / "bent_rest" / "surface" / "000.obj").vertices;
+  EXPECT_LT((frame0 - f.model.vertices).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_EQ(r.frames.size(), 5u);
+}
+
+// Honest convergence: every frame that says converged has ‖g‖ within 10 times the tolerance stats.json
+// reports, and the flesh's step rule is the tolerance's displacement through (λ + 2μ) h. Before, at ν =
+// 0.488 the step rule (1e-4 h) ended frames with ‖g‖ up to 800 times the tolerance.
+TEST_F(Character, AConvergedFrameHasItsForceResidualWithinTenTimesTheTolerance) {
+  (void)run(scene("limb.gltf", "honest", 12));
+  const json st = stats("honest");
+  const double tol = st["tolerance"].get<double>(), lambda = st["lambda"].get<double>(), mu = st["mu"].get<double>();
+  const BuiltScene built = build_scene(parse_scene(scene("limb.gltf", "honest", 12), dir_ / "scene.json"));
+  EXPECT_NEAR(st["step_tolerance"].get<double>(), tol / ((lambda + 2.0 * mu) * built.body->flesh->cell_size), 1e-12 * tol);
+  int frames = 0;
+  for (const json& fr : st["frames"]) {
+    if (fr["frame"].get<int>() == 0) continue;
+    ++frames;
+    EXPECT_TRUE(fr["converged"].get<bool>());
+    EXPECT_LE(fr["residual"].get<double>(), 10.0 * tol) << "frame " << fr["frame"];
+    EXPECT_TRUE(fr.contains("newton_step"));
+    EXPECT_EQ(fr["inverted"].get<int>(), 0);
+  }
+  EXPECT_EQ(frames, 4);
+}
+
+// Frames on the animation's grid: a 1.56 s clip at 24 fps runs 38 frames to 38/24 s (not 37 frames 1.56/37
+// apart), and the USD stage plays at 24 time codes a second.
+TEST_F(Character, FramesLieOnTheClipsGridAtItsFramesPerSecond) {
+  json j = scene("long.gltf", "grid", 6);
+  j.erase("frames");
+  const BuiltScene built = build_scene(parse_scene(j, dir_ / "scene.json"));
+  EXPECT_EQ(built.frames, 38);
+  EXPECT_DOUBLE_EQ(built.end_time, 38.0 / 24.0);
+  EXPECT_DOUBLE_EQ(built.end_time / built.frames, 1.0 / 24.0);
+  j["flesh"]["fps"] = 30;
+  EXPECT_EQ(build_scene(parse_scene(j, dir_ / "scene.json")).frames, 47);  // 1.56 × 30 = 46.8, rounded up
+  j["flesh"]["fps"] = 25;
+  EXPECT_EQ(build_scene(parse_scene(j, dir_ / "scene.json")).frames, 39);  // 39 exactly
+}
+
+// The point caches hold the OBJ frames, sample k at frame k, in the model's vertex order.
+TEST_F(Character, PointCachesHoldTheFramesInTheModelsOrder) {
+  (void)run(scene("limb.gltf", "cache"));
+  const json st = stats("cache");
+  EXPECT_EQ(st["pc2"]["flesh"], "flesh.pc2");
+  std::ifstream usd(dir_ / "cache" / "flesh.usda");
+  std::stringstream text;
+  text << usd.rdbuf();
+  EXPECT_NE(text.str().find("timeCodesPerSecond = 4"), std::string::npos);  // 4 frames over the 1 s clip
+  for (const auto& [file, dir] : {std::pair{"flesh.pc2", "surface"}, std::pair{"lbs.pc2", "lbs"}}) {
+    const std::vector<Eigen::Matrix3Xd> samples = read_pc2(dir_ / "cache" / file);
+    ASSERT_EQ(samples.size(), 5u) << file;
+    for (int k = 0; k < 5; ++k) {
+      const Eigen::Matrix3Xd obj = read_surface(dir_ / "cache" / dir / fmt::format("{:03d}.obj", k)).vertices;
+      ASSERT_EQ(samples[k].cols(), obj.cols());
+      EXPECT_LT((samples[k] - obj).cwiseAbs().maxCoeff(), 1e-6 * 3.0) << file << " " << k;  // single precision
+    }
+  }
+}
+
+TEST(Pc2, WritesWhatItReadsAndRefusesWhatItCannotHold) {
+  const fs::path path = fs::temp_directory_path() / ("snh-test-pc2-" + std::to_string(::getpid()) + ".pc2");
+  std::vector<Eigen::Matrix3Xd> samples{Eigen::Matrix3Xd::Random(3, 7), Eigen::Matrix3Xd::Random(3, 7)};
+  write_pc2(path, samples, 1.0, 0.5);
+  EXPECT_EQ(fs::file_size(path), 32u + 2u * 7u * 12u);
+  const std::vector<Eigen::Matrix3Xd> back = read_pc2(path);
+  ASSERT_EQ(back.size(), 2u);
+  for (int k = 0; k < 2; ++k) EXPECT_LT((back[k] - samples[k]).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_THROW(write_pc2(path, {}), std::invalid_argument);
+  EXPECT_THROW(write_pc2(path, {Eigen::Matrix3Xd::Zero(3, 2), Eigen::Matrix3Xd::Zero(3, 3)}), std::invalid_argument);
+  Eigen::Matrix3Xd bad = Eigen::Matrix3Xd::Zero(3, 2);
+  bad(1, 1) = 1e300;  // beyond single precision
+  EXPECT_THROW(write_pc2(path, {bad}), std::invalid_argument);
+  bad(1, 1) = std::nan("");
+  EXPECT_THROW(write_pc2(path, {bad}), std::invalid_argument);
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << "POINTCACHE2";  // truncated
+  EXPECT_THROW((void)read_pc2(path), std::runtime_error);
+  fs::remove(path);
+}
+
+}  // namespace
+}  // namespace snh
