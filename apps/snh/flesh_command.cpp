@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <memory>
 
 #include <fmt/format.h>
@@ -12,21 +13,54 @@
 #include "../common/out_option.hpp"
 #include "parameter_options.hpp"
 #include "run_command.hpp"
+#include "snh/mesh/surface.hpp"
 #include "snh/setup/scene_build.hpp"
 
 namespace snh::cli {
+namespace {
+
+/// `snh flesh MODEL --list`: what the model holds, for choosing a clip or a joint by name.
+void list_model(const std::string& file, std::ostream& o) {
+  const RiggedModel m = read_gltf(file);
+  const EdgeCounts edges = edge_counts(m.surface_triangles);
+  o << fmt::format("model {}: {} vertices ({} welded), {} triangles, {} open and {} non-manifold edges\n", file, m.vertices.cols(),
+                   m.surface_vertices.cols(), m.triangles.cols(), edges.open, edges.non_manifold);
+  o << fmt::format("skinned meshes ({}):\n", m.parts.size());
+  for (const ModelPart& p : m.parts) o << fmt::format("  {}: {} vertices\n", p.name, p.vertices);
+  for (const std::string& s : m.skipped) o << fmt::format("  {}: not read (bound to another skin)\n", s);
+  o << fmt::format("joints ({}, hierarchy from the {}):\n", m.skeleton.size(), m.hierarchy == "names" ? "joint names" : "file");
+  const std::vector<std::vector<int>> children = m.skeleton.children();
+  std::vector<std::pair<int, int>> stack;  // joint, depth
+  for (int j = m.skeleton.size() - 1; j >= 0; --j)
+    if (m.skeleton.joints[static_cast<std::size_t>(j)].parent < 0) stack.emplace_back(j, 0);
+  while (!stack.empty()) {
+    const auto [j, depth] = stack.back();
+    stack.pop_back();
+    o << fmt::format("  {:{}}{}\n", "", 2 * depth, m.skeleton.joints[static_cast<std::size_t>(j)].name);
+    const std::vector<int>& c = children[static_cast<std::size_t>(j)];
+    for (auto it = c.rbegin(); it != c.rend(); ++it) stack.emplace_back(*it, depth + 1);
+  }
+  const int chosen = default_clip(m);
+  o << fmt::format("clips ({}):\n", m.clips.size());
+  for (std::size_t c = 0; c < m.clips.size(); ++c)
+    o << fmt::format("  {}: \"{}\", {:g} s, {} channels{}\n", c, m.clips[c].name, m.clips[c].duration(), m.clips[c].channels.size(),
+                     static_cast<int>(c) == chosen ? " (played by default)" : m.clips[c].moves() ? "" : " (does not move)");
+}
+
+}  // namespace
 
 void add_flesh_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::string model, animation, volume = "lattice", material = "stable_neo_hookean", out, solver = "auto";
-    int resolution = FleshSpec{}.resolution;
+    int resolution = 0;
+    double cell_size = 0.0;
     ParameterOptions params;
     bool quasi_static = false, dynamic = false, resume = false, no_report = false, force = false;
     double fps = FleshSpec{}.fps;
     double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness;
     std::string joint_cells = to_string(FleshSpec{}.joint_cells);
     int threads = 0;
-    bool self_contact = false;
+    bool self_contact = false, list = false;
     double ground = 0.0, dhat = 0.0, contact_stiffness = 0.0, friction = 0.0;
   };
   auto o = std::make_shared<Options>();
@@ -44,8 +78,14 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--animation", o->animation, "The clip to play, by name or 0-based index (default: the first)");
   cmd->add_option("--volume", o->volume, "lattice (default: hexahedra, as the paper's Figure 1) or tets (TetGen)")
       ->check(CLI::IsMember({"lattice", "tets"}));
-  cmd->add_option("--resolution", o->resolution, "Cubes along the model's longest side (tets: of that size; default 16)")
-      ->check(CLI::Range(1, 1000));
+  auto* res = cmd->add_option("--resolution", o->resolution,
+                               "Cubes along the model's longest side (tets: of that size). Default: chosen from the bones, at "
+                               "least 16: cells no wider than 2/sqrt(3) of the thinnest capsule, so that every bone binds flesh "
+                               "(capped at about 20 000 cells); the header says why")
+                   ->check(CLI::Range(1, 1000));
+  cmd->add_option("--cell-size", o->cell_size, "The cubes' edge in model units, instead of --resolution")
+      ->check(CLI::PositiveNumber)
+      ->excludes(res);
   cmd->add_option("--soft-shell", o->soft_shell,
                                 "Bind softly the flesh within this distance outside the bones' capsules (model units): springs "
                                 "pull it toward where its bone carries it (default: none, only the capsules' hard binding)");
@@ -83,10 +123,18 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--force", o->force, "Write into --out even if it is not empty and holds no snh run (files with the names of ours are replaced)");
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
+  cmd->add_flag("--list", o->list, "Print the model's skinned meshes, joints (as a tree) and clips, and run nothing");
   cmd->callback([o, cmd, &exit_code]() {
+    if (o->list) {
+      list_model(o->model, std::cout);
+      exit_code = 0;
+      return;
+    }
     // The options become a scene, checked by the same parser as a scene file.
     nlohmann::json j;
-    j["flesh"] = {{"model", o->model}, {"volume", o->volume}, {"resolution", o->resolution}};
+    j["flesh"] = {{"model", o->model}, {"volume", o->volume}};
+    if (cmd->count("--resolution")) j["flesh"]["resolution"] = o->resolution;
+    if (cmd->count("--cell-size")) j["flesh"]["cell_size"] = o->cell_size;
     if (!o->animation.empty()) j["flesh"]["animation"] = o->animation;
     if (cmd->count("--soft-shell")) j["flesh"]["soft_binding"]["shell"] = o->soft_shell;
     if (cmd->count("--soft-stiffness")) j["flesh"]["soft_binding"]["stiffness"] = o->soft_stiffness;

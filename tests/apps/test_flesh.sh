@@ -25,6 +25,14 @@ python3 "$HERE/check_usda.py" "$work/limb/flesh.usda" 2 25 > "$work/usda.log" 2>
 grep -q '"surface_volume_ratio"' "$work/limb/stats.json" && grep -q '"lbs_volume_ratio"' "$work/limb/stats.json" \
   && grep -q '"all_converged": true' "$work/limb/stats.json" && ok || bad "limb: stats.json"
 [ -f "$work/limb/index.html" ] && [ -f "$work/limb/bones.json" ] && ok || bad "limb: report and bones.json"
+# --list: the meshes, the joints as a tree, the clips; nothing run, nothing written.
+if "$SNH" flesh "$limb" --list --out "$work/listed" > "$work/list.log" 2>&1; then ok; else bad "list: $(tail -3 "$work/list.log")"; fi
+grep -q '^skinned meshes (1):' "$work/list.log" && grep -q '^joints (3, hierarchy from the file):' "$work/list.log" \
+  && grep -q '^      tip$' "$work/list.log" && grep -q '^  0: "bend", 1 s, 1 channels (played by default)$' "$work/list.log" \
+  && ok || bad "list: $(cat "$work/list.log")"
+[ ! -e "$work/listed" ] && ok || bad "list: wrote an output folder"
+# The point caches: one sample per frame, the model's 386 vertices, 32 bytes of header.
+[ "$(stat -c %s "$work/limb/flesh.pc2")" -eq $((32 + 25 * 386 * 12)) ] && [ -f "$work/limb/lbs.pc2" ] && ok || bad "limb: flesh.pc2 size"
 # The grammar check is a real one: a broken stage fails it.
 sed 's/point3f\[\] points.timeSamples = {/point3f[] points.timeSamples = /' "$work/limb/flesh.usda" > "$work/broken.usda"
 python3 "$HERE/check_usda.py" "$work/broken.usda" > /dev/null 2>&1 && bad "check_usda accepts a broken stage" || ok

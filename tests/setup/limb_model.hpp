@@ -29,6 +29,10 @@ struct LimbOptions {
   /// The elbow's rest rotation about z (the skin is bound straight): a rest pose that is not the bind pose.
   double rest_elbow_degrees = 0.0;
   double duration = 1.0;        ///< the clip's length in seconds
+  bool inside_out = false;      ///< triangles wound clockwise seen from outside
+  /// Two mesh nodes sharing the skin and the vertices, each with half of the triangles (a character in parts).
+  bool two_meshes = false;
+  bool still_clip_first = false;  ///< a one-key "bind" clip before "bend" (as FBX conversions write)
 };
 
 inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions& o = {}) {
@@ -58,6 +62,8 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
     idx.insert(idx.end(), {c0, ring(0, k + 1), ring(0, k)});
     idx.insert(idx.end(), {c1, ring(o.along - 1, k), ring(o.along - 1, k + 1)});
   }
+  if (o.inside_out)
+    for (std::size_t t = 0; t + 2 < idx.size(); t += 3) std::swap(idx[t + 1], idx[t + 2]);
   // Inverse bind matrices (column-major): translations by −x of each joint.
   std::vector<float> ibm;
   for (double x : {0.0, 1.0, 2.0}) {
@@ -84,7 +90,9 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
   accessors[a_pos]["max"] = {2.0, o.radius, o.radius};
   const int a_joints = add(joints.data(), joints.size() * 2, 5123, joints.size() / 4, "VEC4", 34962);
   const int a_weights = add(weights.data(), weights.size() * 4, 5126, weights.size() / 4, "VEC4", 34962);
-  const int a_idx = add(idx.data(), idx.size() * 4, 5125, idx.size(), "SCALAR", 34963);
+  const std::size_t first_half = o.two_meshes ? idx.size() / 6 * 3 : idx.size();
+  const int a_idx = add(idx.data(), first_half * 4, 5125, first_half, "SCALAR", 34963);
+  const int a_idx2 = o.two_meshes ? add(idx.data() + first_half, (idx.size() - first_half) * 4, 5125, idx.size() - first_half, "SCALAR", 34963) : -1;
   const int a_ibm = add(ibm.data(), ibm.size() * 4, 5126, 3, "MAT4", 0);
   const int a_t = add(times.data(), times.size() * 4, 5126, 2, "SCALAR", 0);
   accessors[a_t]["min"] = {0.0};
@@ -96,6 +104,7 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
   g["scene"] = 0;
   const bool armature = o.armature_scale != 1.0 || o.armature_degrees != 0.0;
   g["scenes"] = nlohmann::json::array({nlohmann::json{{"nodes", {0, armature ? 4 : 1}}}});
+  if (o.two_meshes) g["scenes"][0]["nodes"].push_back(armature ? 5 : 4);
   g["nodes"] = nlohmann::json::array({nlohmann::json{{"name", "limb"}, {"mesh", 0}, {"skin", 0}},
                                       nlohmann::json{{"name", "shoulder"}, {"children", {2}}},
                                       nlohmann::json{{"name", "elbow"}, {"translation", {1.0, 0.0, 0.0}}, {"children", {3}}},
@@ -112,12 +121,29 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
   nlohmann::json primitive = {{"attributes", {{"POSITION", a_pos}, {"JOINTS_0", a_joints}, {"WEIGHTS_0", a_weights}}},
                                {"indices", a_idx}};
   g["meshes"] = nlohmann::json::array({nlohmann::json{{"primitives", nlohmann::json::array({primitive})}}});
+  if (o.two_meshes) {
+    primitive["indices"] = a_idx2;
+    g["meshes"].push_back({{"primitives", nlohmann::json::array({primitive})}});
+    g["nodes"].push_back({{"name", "limb_far"}, {"mesh", 1}, {"skin", 0}});
+  }
   g["skins"] = nlohmann::json::array({nlohmann::json{{"joints", {1, 2, 3}}, {"inverseBindMatrices", a_ibm}}});
   nlohmann::json channel = {{"sampler", 0}, {"target", {{"node", 2}, {"path", "rotation"}}}};
   nlohmann::json sampler = {{"input", a_t}, {"output", a_r}, {"interpolation", "LINEAR"}};
   g["animations"] = nlohmann::json::array({nlohmann::json{{"name", "bend"},
                                                           {"channels", nlohmann::json::array({channel})},
                                                           {"samplers", nlohmann::json::array({sampler})}}});
+  if (o.still_clip_first) {  // one key: the first of "bend"'s times and values
+    const int a_t1 = add(times.data(), 4, 5126, 1, "SCALAR", 0);
+    accessors[a_t1]["min"] = {0.0};
+    accessors[a_t1]["max"] = {0.0};
+    const int a_r1 = add(rotations.data(), 16, 5126, 1, "VEC4", 0);
+    g["accessors"] = accessors;
+    g["bufferViews"] = views;
+    nlohmann::json still = g["animations"][0];
+    still["name"] = "bind";
+    still["samplers"][0] = {{"input", a_t1}, {"output", a_r1}, {"interpolation", "LINEAR"}};
+    g["animations"].insert(g["animations"].begin(), still);
+  }
   g["bufferViews"] = views;
   g["accessors"] = accessors;
   g["buffers"] = nlohmann::json::array(

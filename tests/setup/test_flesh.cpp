@@ -299,13 +299,19 @@ TEST_F(FleshLimb, BadFleshScenesAreNamed) {
   EXPECT_NE(error_of(j).find("flesh.soft_binding.stiffness: must be > 0, got -1"), std::string::npos) << error_of(j);
   j["flesh"]["soft_binding"] = {{"shell", 0.1}, {"stifness", 1}};
   EXPECT_NE(error_of(j).find("flesh.soft_binding.stifness: unknown key"), std::string::npos) << error_of(j);
-  // An open surface: the limb without its end caps has two rims of 16 edges.
+  // An open surface (the limb without its end caps has two rims of 16 edges) takes a lattice
+  // (test_flesh_character), not tets.
   test::LimbOptions open;
   open.caps = false;
   test::write_limb_gltf(dir_ / "open.gltf", open);
-  j = scene("lattice", 10, "bad");
+  j = scene("tets", 10, "bad");
   j["flesh"]["model"] = (dir_ / "open.gltf").string();
-  EXPECT_NE(error_of(j).find("not closed: 32 open"), std::string::npos) << error_of(j);
+  EXPECT_NE(error_of(j).find("not closed: 32 open and 0 non-manifold edges of"), std::string::npos) << error_of(j);
+  EXPECT_NE(error_of(j).find("use the lattice"), std::string::npos) << error_of(j);
+  // A resolution and a cell size together.
+  j = scene("lattice", 10, "bad");
+  j["flesh"]["cell_size"] = 0.1;
+  EXPECT_NE(error_of(j).find("give a resolution or a cell_size, not both"), std::string::npos) << error_of(j);
 }
 
 }  // namespace

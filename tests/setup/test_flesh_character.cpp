@@ -37,6 +37,10 @@ class Character : public ::testing::Test {
     test::write_limb_gltf(dir_ / "placed.gltf", {.armature_scale = 100.0, .armature_degrees = -90.0});
     test::write_limb_gltf(dir_ / "bent_rest.gltf", {.rest_elbow_degrees = 40.0});
     test::write_limb_gltf(dir_ / "long.gltf", {.duration = 1.56});
+    test::write_limb_gltf(dir_ / "open.gltf", {.caps = false});
+    test::write_limb_gltf(dir_ / "inward.gltf", {.inside_out = true});
+    test::write_limb_gltf(dir_ / "parts.gltf", {.two_meshes = true});
+    test::write_limb_gltf(dir_ / "still.gltf", {.still_clip_first = true});
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 
@@ -188,6 +192,82 @@ TEST_F(Character, PointCachesHoldTheFramesInTheModelsOrder) {
       EXPECT_LT((samples[k] - obj).cwiseAbs().maxCoeff(), 1e-6 * 3.0) << file << " " << k;  // single precision
     }
   }
+}
+
+// Skins as characters have them: holes (the limb without its end caps: 32 open edges), triangles turned
+// inside out, and a character in two meshes (each node half of the triangles). Before, each was refused
+// (or the second mesh dropped without a word); now each runs, and the inside-out and two-part limbs give the
+// plain limb's frames exactly (the same welded surface, the same lattice).
+TEST_F(Character, OpenInsideOutAndManyPartSkinsRun) {
+  std::string log;
+  (void)run(scene("limb.gltf", "whole"));
+  (void)run(scene("open.gltf", "open"), &log);
+  EXPECT_NE(log.find("skin: 32 open and 0 non-manifold edges"), std::string::npos) << log;
+  EXPECT_EQ(stats("open")["open_edges"].get<int>(), 32);
+  (void)run(scene("inward.gltf", "inward"), &log);
+  EXPECT_NE(log.find("its triangles face inwards"), std::string::npos) << log;
+  EXPECT_TRUE(stats("inward")["inside_out"].get<bool>());
+  (void)run(scene("parts.gltf", "parts"), &log);
+  EXPECT_NE(log.find("skin: 2 skinned meshes, limb (386), limb_far (386)"), std::string::npos) << log;
+  EXPECT_EQ(stats("parts")["parts"].size(), 2u);
+  EXPECT_EQ(stats("whole")["cells"], stats("inward")["cells"]);
+  EXPECT_EQ(stats("whole")["cells"], stats("parts")["cells"]);
+  for (const char* frame : {"000.obj", "004.obj"}) {
+    const Eigen::Matrix3Xd whole = read_surface(dir_ / "whole" / "surface" / frame).vertices;
+    EXPECT_LT((read_surface(dir_ / "inward" / "surface" / frame).vertices - whole).cwiseAbs().maxCoeff(), 1e-9) << frame;
+    const Eigen::Matrix3Xd parts = read_surface(dir_ / "parts" / "surface" / frame).vertices;
+    ASSERT_EQ(parts.cols(), 2 * whole.cols());
+    EXPECT_LT((parts.leftCols(whole.cols()) - whole).cwiseAbs().maxCoeff(), 1e-9) << frame;
+    EXPECT_LT((parts.rightCols(whole.cols()) - whole).cwiseAbs().maxCoeff(), 1e-9) << frame;
+  }
+  // The open limb's lattice holds its inside (the winding number at every cube) and no more than the closed one's.
+  const int open_cells = stats("open")["cells"].get<int>(), whole_cells = stats("whole")["cells"].get<int>();
+  EXPECT_GE(open_cells, whole_cells * 9 / 10);
+  EXPECT_LE(open_cells, whole_cells);
+}
+
+// The clip played by default is the first that lasts and moves: a one-key "bind" clip, as FBX conversions
+// write, is skipped.
+TEST_F(Character, AStillClipIsNotPlayedByDefault) {
+  const RiggedModel m = read_gltf(dir_ / "still.gltf");
+  ASSERT_EQ(m.clips.size(), 2u);
+  EXPECT_FALSE(m.clips[0].moves());
+  EXPECT_TRUE(m.clips[1].moves());
+  EXPECT_EQ(default_clip(m), 1);
+  json j = scene("still.gltf", "still");
+  const BuiltScene built = build_scene(parse_scene(j, dir_ / "scene.json"));
+  EXPECT_EQ(built.body->flesh->clip.name, "bend");
+  j["flesh"]["animation"] = "bind";  // asked for by name, it is played
+  EXPECT_EQ(build_scene(parse_scene(j, dir_ / "scene.json")).body->flesh->clip.name, "bind");
+}
+
+// The lattice's resolution: given, from a cell size in model units, or chosen from the bones so that every
+// capsule holds a lattice node (at least 16).
+TEST_F(Character, TheResolutionComesFromACellSizeOrTheBones) {
+  json j = scene("limb.gltf", "res");
+  j["flesh"].erase("resolution");
+  j["flesh"]["cell_size"] = 0.1;  // the limb is 2.0 long
+  const BuiltScene sized = build_scene(parse_scene(j, dir_ / "scene.json"));
+  EXPECT_EQ(sized.body->flesh->resolution, 20);
+  EXPECT_NEAR(sized.body->flesh->cell_size, 0.1, 0.01);
+  j["flesh"].erase("cell_size");
+  const BuiltScene chosen = build_scene(parse_scene(j, dir_ / "scene.json"));
+  const Flesh& f = *chosen.body->flesh;
+  EXPECT_GE(f.resolution, 16);
+  EXPECT_NE(f.resolution_reason.find(f.resolution == 16 ? "the default 16" : "thinnest capsule"), std::string::npos);
+  for (std::size_t b = 0; b < f.bones.size(); ++b)
+    if (f.bones[b].child >= 0) EXPECT_GT(f.bound_per_bone[b], 0) << f.bones[b].name;
+  // A thin limb (radius 0.03 over a length of 2): resolution 16 would leave its bones' capsules empty.
+  test::write_limb_gltf(dir_ / "thin.gltf", {.radius = 0.03});
+  j["flesh"]["model"] = (dir_ / "thin.gltf").string();
+  const BuiltScene thin = build_scene(parse_scene(j, dir_ / "scene.json"));
+  const Flesh& t = *thin.body->flesh;
+  EXPECT_GT(t.resolution, 16);
+  EXPECT_NE(t.resolution_reason.find("thinnest capsule"), std::string::npos) << t.resolution_reason;
+  for (std::size_t b = 0; b < t.bones.size(); ++b)
+    if (t.bones[b].child >= 0) EXPECT_GT(t.bound_per_bone[b], 0) << t.bones[b].name;
+  j["flesh"]["resolution"] = 16;
+  EXPECT_THROW((void)build_scene(parse_scene(j, dir_ / "scene.json")), std::invalid_argument);
 }
 
 TEST(Pc2, WritesWhatItReadsAndRefusesWhatItCannotHold) {

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "snh/embed/winding_number.hpp"
+#include "snh/mesh/surface.hpp"
 #include "snh/math/parallel.hpp"
 
 namespace snh {
@@ -115,11 +116,13 @@ std::vector<unsigned char> touched_cubes(const Lattice& L, const Eigen::Matrix3X
   return touched;
 }
 
-/// Whether each untouched cube is inside: untouched cubes, grouped by face neighbours into regions the surface
-/// does not cross; each region is inside or outside as a whole (the winding number is constant off the
-/// surface), asked at its first cube. Touched cubes come back 0.
+/// Whether each untouched cube is inside, |winding number| > ½ (either orientation): untouched cubes, grouped
+/// by face neighbours into regions the surface does not cross; on a closed surface each region is inside or
+/// outside as a whole (the winding number is constant off the surface), asked at its first cube; on an open
+/// one (`open`: holes let a region reach from inside to outside, where the generalized winding number varies
+/// smoothly) every cube is asked. Touched cubes come back 0.
 std::vector<unsigned char> inside_cubes(const Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F,
-                                        const std::vector<unsigned char>& touched) {
+                                        const std::vector<unsigned char>& touched, bool open) {
   const Eigen::Vector3i& dims = L.dims;
   const std::size_t n_cubes = touched.size();
   std::vector<int> region(n_cubes, -1);
@@ -130,6 +133,7 @@ std::vector<unsigned char> inside_cubes(const Lattice& L, const Eigen::Matrix3Xd
     const int r = static_cast<int>(seed.size());
     seed.push_back(static_cast<int>(c0));
     region[c0] = r;
+    if (open) continue;  // a region per cube
     stack.assign(1, static_cast<int>(c0));
     while (!stack.empty()) {
       const int c = stack.back();
@@ -155,7 +159,7 @@ std::vector<unsigned char> inside_cubes(const Lattice& L, const Eigen::Matrix3Xd
       const int c = seed[static_cast<std::size_t>(r)];
       const int i = c % dims.x(), j = (c / dims.x()) % dims.y(), k = c / (dims.x() * dims.y());
       const Eigen::Vector3d centre = L.origin + L.spacing * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
-      inside[static_cast<std::size_t>(r)] = winding_number(V, F, centre) > 0.5 ? 1 : 0;
+      inside[static_cast<std::size_t>(r)] = std::abs(winding_number(V, F, centre)) > 0.5 ? 1 : 0;
     });
   }
   errors.rethrow();
@@ -212,7 +216,7 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
   Lattice L = empty_grid(V, F, resolution);
   // Every cube a triangle meets (exact separating-axis tests), and every cube wholly inside.
   std::vector<unsigned char> keep = touched_cubes(L, V, F);
-  const std::vector<unsigned char> inside = inside_cubes(L, V, F, keep);
+  const std::vector<unsigned char> inside = inside_cubes(L, V, F, keep, edge_counts(F).open > 0);
   for (std::size_t c = 0; c < keep.size(); ++c) keep[c] = keep[c] || inside[c];
   build_cells(L, keep);
   return L;

@@ -23,14 +23,16 @@ struct Lattice {
   [[nodiscard]] Eigen::Vector3d grid_coordinates(const Eigen::Vector3d& p) const { return (p - origin) / spacing; }
 };
 
-/// The lattice of a closed surface with `resolution` cubes along the bounding box's longest side (the grid
-/// padded by a small fraction of a cube so no surface point lies on its outer faces). A cube is kept when a
-/// triangle overlaps it (separating axes, the cube grown by 1e-9 of its edge so a point on a shared face
-/// counts for the cubes on both sides) or when the region of untouched cubes it belongs to (face neighbours)
-/// has winding number > ½ at one cube's centre. Cells and vertices are numbered in grid order (x fastest).
+/// The lattice of a surface with `resolution` cubes along the bounding box's longest side (the grid padded by
+/// a small fraction of a cube so no surface point lies on its outer faces). A cube is kept when a triangle
+/// overlaps it (separating axes, the cube grown by 1e-9 of its edge so a point on a shared face counts for
+/// the cubes on both sides) or when its centre is inside: |winding number| > ½, so either orientation, and
+/// overlapping parts, count (Jacobson et al. 2013's generalized winding number: holes tolerated). On a closed
+/// surface the winding number is asked once per region of untouched cubes (face neighbours), on an open one
+/// at every untouched cube. Cells and vertices are numbered in grid order (x fastest).
 /// Throws std::invalid_argument for resolution < 1, a non-finite vertex, an index out of range, no
 /// triangles, a surface with no extent, or a grid of more than 2^28 cubes.
-///   V  3 by #V (the bounding box is that of the vertices F uses);  F  3 by #F, outward
+///   V  3 by #V (the bounding box is that of the vertices F uses);  F  3 by #F (a closed surface, or a soup)
 [[nodiscard]] Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution);
 
 }  // namespace snh

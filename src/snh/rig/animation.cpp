@@ -78,6 +78,13 @@ double Clip::duration() const {
   return d;
 }
 
+bool Clip::moves() const {
+  for (const Channel& c : channels)
+    for (Eigen::Index k = 1; k < c.values.cols(); ++k)
+      if (c.values.col(k) != c.values.col(0)) return true;
+  return false;
+}
+
 Pose sample(const Clip& clip, const Skeleton& skeleton, double t) {
   if (std::isnan(t)) throw std::invalid_argument(fmt::format("clip {}: sampled at a time that is not a number", clip.name));
   Pose pose = skeleton.rest_pose();

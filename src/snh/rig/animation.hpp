@@ -30,6 +30,8 @@ struct Clip {
   std::vector<Channel> channels;
   /// The last key's time over all channels (0 for no keys).
   [[nodiscard]] double duration() const;
+  /// Some channel's keys differ from each other (a clip of one pose, such as a "bind" clip, does not move).
+  [[nodiscard]] bool moves() const;
 };
 
 /// The pose of `skeleton` at time t: the rest pose with every channel's value at t in place of the path it

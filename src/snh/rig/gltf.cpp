@@ -249,14 +249,34 @@ class Builder {
     RiggedModel out;
     out.source = path_;
     link_nodes();
-    const int node = find_skinned_node();
-    const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(node)];
-    if (n.skin < 0 || n.skin >= static_cast<int>(m_.skins.size()))
-      fail(fmt::format("node {} refers to skin {}, which does not exist", node_name(node), n.skin));
-    if (n.mesh < 0 || n.mesh >= static_cast<int>(m_.meshes.size()))
-      fail(fmt::format("node {} refers to mesh {}, which does not exist", node_name(node), n.mesh));
-    read_skin(m_.skins[static_cast<std::size_t>(n.skin)], n.skin, out);
-    read_mesh(n.mesh, out);
+    const std::vector<int> nodes = skinned_nodes();
+    const int skin = m_.nodes[static_cast<std::size_t>(nodes.front())].skin;
+    for (const int node : nodes) {
+      const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(node)];
+      if (n.skin < 0 || n.skin >= static_cast<int>(m_.skins.size()))
+        fail(fmt::format("node {} refers to skin {}, which does not exist", node_name(node), n.skin));
+      if (n.mesh < 0 || n.mesh >= static_cast<int>(m_.meshes.size()))
+        fail(fmt::format("node {} refers to mesh {}, which does not exist", node_name(node), n.mesh));
+    }
+    read_skin(m_.skins[static_cast<std::size_t>(skin)], skin, out);
+    // Every skinned mesh of the first one's skin, in the scene's order (a mesh that two nodes show, once); a
+    // mesh of another skin is named in `skipped`.
+    MeshData data;
+    std::vector<int> read;
+    for (const int node : nodes) {
+      const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(node)];
+      const std::string name = n.name.empty() ? fmt::format("mesh{}", n.mesh) : one_line(n.name);
+      if (n.skin != skin) {
+        out.skipped.push_back(name);
+        continue;
+      }
+      if (std::find(read.begin(), read.end(), n.mesh) != read.end()) continue;
+      read.push_back(n.mesh);
+      const auto first = static_cast<Eigen::Index>(data.xyz.size());
+      read_mesh(n.mesh, out.skeleton.size(), data);
+      out.parts.push_back({.name = name, .first_vertex = first, .vertices = static_cast<Eigen::Index>(data.xyz.size()) - first});
+    }
+    data.store(out);
     weld(out);
     read_animations(out);
     if (all_roots(out.skeleton) && !animated_) rebuild_from_names(out);
@@ -297,9 +317,9 @@ class Builder {
     }
   }
 
-  /// The first node with a mesh and a skin, depth first through the default scene (scene 0 if none is named;
-  /// every root node if the file has no scene).
-  int find_skinned_node() const {
+  /// The nodes with a mesh and a skin, depth first through the default scene (scene 0 if none is named; every
+  /// root node if the file has no scene).
+  std::vector<int> skinned_nodes() const {
     std::vector<int> roots;
     if (!m_.scenes.empty()) {
       const int s = m_.defaultScene >= 0 && m_.defaultScene < static_cast<int>(m_.scenes.size()) ? m_.defaultScene : 0;
@@ -308,7 +328,7 @@ class Builder {
       for (int i = 0; i < static_cast<int>(m_.nodes.size()); ++i)
         if (parent_[static_cast<std::size_t>(i)] < 0) roots.push_back(i);
     }
-    std::vector<int> stack(roots.rbegin(), roots.rend());
+    std::vector<int> stack(roots.rbegin(), roots.rend()), found;
     std::vector<char> seen(m_.nodes.size(), 0);
     while (!stack.empty()) {
       const int i = stack.back();
@@ -317,10 +337,11 @@ class Builder {
       if (seen[static_cast<std::size_t>(i)]) continue;  // a scene listing a node twice
       seen[static_cast<std::size_t>(i)] = 1;
       const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(i)];
-      if (n.mesh >= 0 && n.skin >= 0) return i;
+      if (n.mesh >= 0 && n.skin >= 0) found.push_back(i);
       stack.insert(stack.end(), n.children.rbegin(), n.children.rend());
     }
-    fail("no skinned mesh (a mesh node with a skin)");
+    if (found.empty()) fail("no skinned mesh (a mesh node with a skin)");
+    return found;
   }
 
   /// A node's local transform as TRS (from its matrix if it has one).
@@ -447,14 +468,33 @@ class Builder {
     return out;
   }
 
-  void read_mesh(int mesh_index, RiggedModel& out) const {
-    const tinygltf::Mesh& mesh = m_.meshes[static_cast<std::size_t>(mesh_index)];
-    if (mesh.primitives.empty()) fail(fmt::format("mesh {} has no primitives", mesh_index));
-    const int joints = out.skeleton.size();
+  /// Vertices (positions, joints, weights) and triangles of the meshes read so far.
+  struct MeshData {
     std::vector<Eigen::Vector3d> xyz;
     std::vector<Eigen::Vector4i> jidx;
     std::vector<Eigen::Vector4d> jw;
     std::vector<Eigen::Vector3i> tri;
+    void store(RiggedModel& out) const {
+      const auto cols = [](std::size_t n) { return static_cast<Eigen::Index>(n); };
+      out.vertices.resize(3, cols(xyz.size()));
+      out.joint_index.resize(4, cols(xyz.size()));
+      out.joint_weight.resize(4, cols(xyz.size()));
+      for (std::size_t v = 0; v < xyz.size(); ++v) {
+        out.vertices.col(cols(v)) = xyz[v];
+        out.joint_index.col(cols(v)) = jidx[v];
+        out.joint_weight.col(cols(v)) = jw[v];
+      }
+      out.triangles.resize(3, cols(tri.size()));
+      for (std::size_t t = 0; t < tri.size(); ++t) out.triangles.col(cols(t)) = tri[t];
+    }
+  };
+
+  /// Appends a mesh's triangle primitives to `data`.
+  void read_mesh(int mesh_index, int joints, MeshData& data) const {
+    const tinygltf::Mesh& mesh = m_.meshes[static_cast<std::size_t>(mesh_index)];
+    if (mesh.primitives.empty()) fail(fmt::format("mesh {} has no primitives", mesh_index));
+    auto& [xyz, jidx, jw, tri] = data;
+    const std::size_t triangles_before = tri.size();
     for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
       const tinygltf::Primitive& prim = mesh.primitives[p];
       const std::string where = fmt::format("mesh {} primitive {}", mesh_index, p);
@@ -522,18 +562,7 @@ class Builder {
         for (int t = 0; t < static_cast<int>(n / 3); ++t) tri.emplace_back(offset + 3 * t, offset + 3 * t + 1, offset + 3 * t + 2);
       }
     }
-    if (tri.empty()) fail(fmt::format("mesh {} has no triangles", mesh_index));
-    const auto cols = [](std::size_t n) { return static_cast<Eigen::Index>(n); };
-    out.vertices.resize(3, cols(xyz.size()));
-    out.joint_index.resize(4, cols(xyz.size()));
-    out.joint_weight.resize(4, cols(xyz.size()));
-    for (std::size_t v = 0; v < xyz.size(); ++v) {
-      out.vertices.col(cols(v)) = xyz[v];
-      out.joint_index.col(cols(v)) = jidx[v];
-      out.joint_weight.col(cols(v)) = jw[v];
-    }
-    out.triangles.resize(3, cols(tri.size()));
-    for (std::size_t t = 0; t < tri.size(); ++t) out.triangles.col(cols(t)) = tri[t];
+    if (tri.size() == triangles_before) fail(fmt::format("mesh {} has no triangles", mesh_index));
   }
 
   /// Vertices at the same position (bitwise, +0 and −0 alike) merged, in order of first appearance; triangles
@@ -717,6 +746,12 @@ class Builder {
 RiggedModel read_gltf(const std::filesystem::path& path) {
   const tinygltf::Model model = load(path);
   return Builder(path, model).build();
+}
+
+int default_clip(const RiggedModel& model) {
+  for (std::size_t c = 0; c < model.clips.size(); ++c)
+    if (model.clips[c].duration() > 0.0 && model.clips[c].moves()) return static_cast<int>(c);
+  return model.clips.empty() ? -1 : 0;
 }
 
 const Clip& find_clip(const RiggedModel& model, const std::string& name_or_index) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <Eigen/SVD>
@@ -45,7 +46,7 @@ Clip choose_clip(const FleshSpec& spec, const RiggedModel& model, const std::str
                                                   model.skeleton.joints[keys[a].joint].name));
     return clip_from_keys("keyframes", model.skeleton, keys);
   }
-  if (!model.clips.empty()) return model.clips.front();
+  if (const int c = default_clip(model); c >= 0) return model.clips[static_cast<std::size_t>(c)];
   throw RigError(fmt::format("{}: the model {} has no animation clip: give keyframes (a scene's flesh.keyframes)", where,
                              model.source.string()));
 }
@@ -87,33 +88,93 @@ class BoneMotion final : public KinematicProvider {
 
 }  // namespace
 
+int flesh_resolution(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface, double surface_volume, std::string& reason) {
+  constexpr int kLeast = 16, kMost = 1000;
+  constexpr double kMostCells = 2e4;
+  const double longest = (surface.rowwise().maxCoeff() - surface.rowwise().minCoeff()).maxCoeff();
+  // The bones nearest to some skin vertex, and the thinnest of their capsules.
+  std::vector<char> near(bones.size(), 0);
+  for (Eigen::Index v = 0; v < surface.cols(); ++v) {
+    int best = -1;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (std::size_t b = 0; b < bones.size(); ++b)
+      if (const double d = segment_distance(bones[b].a, bones[b].b, surface.col(v)); d < best_d) best_d = d, best = static_cast<int>(b);
+    if (best >= 0) near[static_cast<std::size_t>(best)] = 1;
+  }
+  int thinnest = -1;
+  for (std::size_t b = 0; b < bones.size(); ++b)
+    if (near[b] && bones[b].radius > 0.0 && (thinnest < 0 || bones[b].radius < bones[static_cast<std::size_t>(thinnest)].radius))
+      thinnest = static_cast<int>(b);
+  int n = kLeast;
+  reason = fmt::format("the default {}", kLeast);
+  if (thinnest >= 0) {
+    const Bone& t = bones[static_cast<std::size_t>(thinnest)];
+    const double wanted = std::ceil(longest / (2.0 / std::sqrt(3.0) * t.radius));
+    if (wanted > kLeast) {
+      n = static_cast<int>(std::min<double>(wanted, kMost));
+      reason = fmt::format("chosen: cells no wider than 2/sqrt(3) of the thinnest capsule, {} of radius {:.4g}, so that every "
+                           "bone binds flesh",
+                           t.name, t.radius);
+    }
+  }
+  // Cells kept about twice the skin's volume over h³ (a coarse lattice holds 1.5 to 3.5 times it): capped.
+  const double most = std::floor(longest / std::cbrt(2.0 * surface_volume / kMostCells));
+  if (n > kLeast && n > most) {
+    n = std::max(kLeast, static_cast<int>(most));
+    reason += fmt::format(", capped at about {:.0f} cells", kMostCells);
+  }
+  return n;
+}
+
 Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
   Flesh f;
   f.model = read_gltf(spec.model);
   f.bind = place_at_bind_pose(f.model);
   const RiggedModel& m = f.model;
-  const EdgeCounts edges = edge_counts(m.surface_triangles);
-  if (edges.open > 0 || edges.non_manifold > 0)
+  // Skins as characters have them: holes (a mouth, a neck), several meshes, either orientation. The lattice
+  // takes them all (its inside test is the generalized winding number); TetGen needs a closed surface.
+  f.edges = edge_counts(m.surface_triangles);
+  if (spec.volume == FleshVolume::tets && (f.edges.open > 0 || f.edges.non_manifold > 0))
     throw RigError(fmt::format("{}: the surface (welded by position) is not closed: {} open and {} non-manifold edges of {}; "
-                               "a volume needs a closed surface",
-                               m.source.string(), edges.open, edges.non_manifold, edges.edges));
-  if (spec.resolution < 1) throw std::invalid_argument(fmt::format("{}: resolution {} must be at least 1", where, spec.resolution));
+                               "tets (TetGen) need a closed surface: use the lattice (--volume lattice), which takes open skins",
+                               m.source.string(), f.edges.open, f.edges.non_manifold, f.edges.edges));
   f.clip = choose_clip(spec, m, where);
   f.bind_world = f.bind.joints;
-  f.surface_volume = enclosed_volume(m.surface_vertices, m.surface_triangles);
+  const double signed_volume = enclosed_volume(m.surface_vertices, m.surface_triangles);
+  f.inside_out = signed_volume < 0.0;
+  f.surface_volume = std::abs(signed_volume);
   if (!(f.surface_volume > 0.0))
-    throw RigError(fmt::format("{}: the surface encloses no volume ({:g}): are its triangles turned inside out?",
-                               m.source.string(), f.surface_volume));
+    throw RigError(fmt::format("{}: the surface encloses no volume ({:g}): is it flat?", m.source.string(), signed_volume));
+
+  f.bones = bones_of(m.skeleton, f.bind_world);
+  const std::vector<double> radii = default_radii(f.bones, m.surface_vertices);
+  for (std::size_t b = 0; b < f.bones.size(); ++b) f.bones[b].radius = radii[b];
+  const double longest = (m.surface_vertices.rowwise().maxCoeff() - m.surface_vertices.rowwise().minCoeff()).maxCoeff();
+  if (spec.cell_size > 0.0 && spec.resolution > 0)
+    throw std::invalid_argument(fmt::format("{}: give a resolution or a cell size, not both", where));
+  if (spec.cell_size > 0.0) {
+    const double n = std::ceil(longest / spec.cell_size * (1.0 - 1e-12));
+    if (!(n <= 1000))
+      throw std::invalid_argument(fmt::format("{}: cell size {:g} makes {:.3g} cells along the model's longest side ({:g}); at most 1000",
+                                              where, spec.cell_size, n, longest));
+    f.resolution = std::max(1, static_cast<int>(n));
+    f.resolution_reason = fmt::format("from the cell size {:g}", spec.cell_size);
+  } else if (spec.resolution > 0) {
+    f.resolution = spec.resolution;
+    f.resolution_reason = "given";
+  } else {
+    f.resolution = flesh_resolution(f.bones, m.surface_vertices, f.surface_volume, f.resolution_reason);
+  }
 
   if (spec.volume == FleshVolume::lattice) {
-    const Lattice lattice = lattice_for_surface(m.surface_vertices, m.surface_triangles, spec.resolution);
+    const Lattice lattice = lattice_for_surface(m.surface_vertices, m.surface_triangles, f.resolution);
     f.volume = lattice.mesh;
     f.cell_size = lattice.spacing;
     f.volume_of_cells = static_cast<double>(f.volume.cell_count()) * std::pow(lattice.spacing, 3);
     f.embedding = embed_in_lattice(lattice, m.vertices);
   } else {
     const Eigen::Vector3d extent = m.surface_vertices.rowwise().maxCoeff() - m.surface_vertices.rowwise().minCoeff();
-    f.cell_size = extent.maxCoeff() / spec.resolution;
+    f.cell_size = extent.maxCoeff() / f.resolution;
     // No tet larger than a sixth of a cube of the lattice's size (the five or six tets a cube splits into).
     MeshFile tets = tetrahedralize(SurfaceMesh{m.surface_vertices, m.surface_triangles}, spec.model,
                                    std::pow(f.cell_size, 3) / 6.0);
@@ -122,10 +183,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     f.embedding = embed_in_tets(f.volume, m.vertices);
   }
 
-  f.bones = bones_of(m.skeleton, f.bind_world);
-  const std::vector<double> radii = default_radii(f.bones, m.surface_vertices);
   std::vector<bool> radius_given(f.bones.size(), false);
-  for (std::size_t b = 0; b < f.bones.size(); ++b) f.bones[b].radius = radii[b];
   for (const BoneRadius& r : spec.radii) {
     const int j = joint_named(m, r.joint, where);
     if (!(r.radius > 0.0) || !std::isfinite(r.radius))

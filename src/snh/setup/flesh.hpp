@@ -15,6 +15,7 @@
 
 #include "snh/embed/embedding.hpp"
 #include "snh/fem/term.hpp"
+#include "snh/mesh/surface.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 #include "snh/rig/animation.hpp"
 #include "snh/rig/bind_pose.hpp"
@@ -55,7 +56,9 @@ struct FleshSpec {
   std::string animation;                     ///< the model's clip, by name or index; empty: `keyframes`, else clip 0
   std::vector<KeyframeSpec> keyframes;
   FleshVolume volume = FleshVolume::lattice;
-  int resolution = 16;                       ///< lattice cubes (tets: cube-sized tets) along the longest side
+  /// Lattice cubes (tets: cube-sized tets) along the longest side; 0: chosen from the bones (flesh_resolution).
+  int resolution = 0;
+  double cell_size = 0.0;                    ///< > 0: the cubes' edge in model units instead of a resolution
   std::vector<BoneRadius> radii;
   /// Soft binding: the volume vertices within `soft_shell` (model units; 0: none) outside a capsule are
   /// pulled toward where their bone carries them by springs of stiffness soft_stiffness × E × h × weight
@@ -81,8 +84,13 @@ struct Flesh {
                                              ///< motion at time t is joint_world(t) · bind_world⁻¹
   VolumeMesh volume;
   double cell_size = 0.0;                    ///< the lattice's cube edge (tets: the edge of the cube whose volume bounds a tet)
+  int resolution = 0;                        ///< cubes along the longest side: given, from cell_size, or chosen
+  std::string resolution_reason;             ///< why this resolution (one clause for the header)
   double volume_of_cells = 0.0;              ///< the volume mesh's rest volume
-  double surface_volume = 0.0;               ///< enclosed by the render surface at rest
+  double surface_volume = 0.0;               ///< enclosed by the render surface at rest (its magnitude; for an
+                                             ///< open surface the volume its triangles and the origin span)
+  EdgeCounts edges;                          ///< of the welded surface: open edges are holes, tolerated
+  bool inside_out = false;                   ///< the surface's signed volume is negative (triangles face inwards)
   Embedding embedding;                       ///< the model's vertices (its order) in the volume
   std::vector<Bone> bones;                   ///< with their capsule radii
   Binding binding;                           ///< volume vertices that follow bones
@@ -91,6 +99,14 @@ struct Flesh {
   SoftBinding soft;                          ///< volume vertices pulled toward bones: the shell's, and the
                                              ///< released ones when joint_cells is soft
 };
+
+/// The resolution a flesh gets when neither a resolution nor a cell size is given: cells no wider than 2/√3 of
+/// the thinnest capsule among the bones nearest to some of the skin (a lattice node then lies within every such
+/// capsule, which then binds flesh), at least 16; at most the resolution whose cells, estimated as twice the
+/// skin's volume over h³, stay under 20 000 (a default run takes seconds; more is asked for by name). `reason`
+/// says which rule chose it.
+[[nodiscard]] int flesh_resolution(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface, double surface_volume,
+                                   std::string& reason);
 
 /// Reads the model and builds its flesh. Throws RigError (bad model, a surface that is not closed: the open
 /// and non-manifold edge counts; a joint of the spec that the model lacks), MeshError (tetgen failed) or

@@ -30,7 +30,8 @@ void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& setting
     bones.push_back({{"name", flesh.bones[b].name}, {"radius", flesh.bones[b].radius}, {"bound", flesh.bound_per_bone[b]}});
   settings["model"] = spec.model.string();
   settings["volume"] = spec.volume == FleshVolume::lattice ? "lattice" : "tets";
-  settings["resolution"] = spec.resolution;
+  settings["resolution"] = flesh.resolution;
+  settings["resolution_reason"] = flesh.resolution_reason;
   settings["animation"] = flesh.clip.name;
   settings["model_vertices"] = m.vertices.cols();
   settings["model_triangles"] = m.triangles.cols();
@@ -41,12 +42,43 @@ void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& setting
   settings["bones"] = bones;
   settings["joint_cells"] = to_string(spec.joint_cells);
   settings["released_vertices"] = flesh.released.vertex.size();
+  json parts = json::array();
+  for (const ModelPart& p : m.parts) parts.push_back({{"name", p.name}, {"first_vertex", p.first_vertex}, {"vertices", p.vertices}});
+  settings["parts"] = parts;
+  settings["skipped_meshes"] = m.skipped;
+  settings["open_edges"] = flesh.edges.open;
+  settings["non_manifold_edges"] = flesh.edges.non_manifold;
+  settings["inside_out"] = flesh.inside_out;
   const BindPose& bind = flesh.bind;
   settings["bind_pose"] = {{"placed", bind.placed}, {"placement_scale", bind.placement.scale},
                            {"placement_degrees", bind.placement.angle() * 180.0 / std::numbers::pi},
                            {"rest_is_bind", bind.rest_is_bind}, {"worst_joint", bind.worst_joint}, {"worst_offset", bind.worst_offset}};
   if (spec.soft_shell > 0.0)
     settings["soft_binding"] = {{"shell", spec.soft_shell}, {"stiffness", spec.soft_stiffness}, {"vertices", flesh.soft.vertex.size()}};
+}
+
+/// One line on a skin that is more than one closed, outward mesh: its parts, holes, orientation, and the
+/// meshes not read; empty for one closed, outward mesh.
+std::string describe_skin(const Flesh& flesh) {
+  const RiggedModel& m = flesh.model;
+  std::string out;
+  if (m.parts.size() > 1) {
+    std::string names;
+    for (std::size_t i = 0; i < m.parts.size(); ++i) names += fmt::format("{}{} ({})", i ? ", " : "", m.parts[i].name, m.parts[i].vertices);
+    out = fmt::format("skin: {} skinned meshes, {}", m.parts.size(), names);
+  }
+  const auto add = [&out](const std::string& s) { out += (out.empty() ? "skin: " : "; ") + s; };
+  if (flesh.edges.open > 0 || flesh.edges.non_manifold > 0)
+    add(fmt::format("{} open and {} non-manifold edges (holes and overlaps: inside is where the generalized winding number "
+                    "says, |w| > 1/2)",
+                    flesh.edges.open, flesh.edges.non_manifold));
+  if (flesh.inside_out) add("its triangles face inwards (taken as they are: the inside test takes either orientation)");
+  if (!m.skipped.empty()) {
+    std::string names;
+    for (std::size_t i = 0; i < m.skipped.size(); ++i) names += (i ? ", " : "") + m.skipped[i];
+    add(fmt::format("not read, bound to another skin: {}", names));
+  }
+  return out;
 }
 
 /// The header's lines on the model, the volume and the binding.
@@ -56,9 +88,10 @@ void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream&
                    "of {:g} s\n",
                    m.source.string(), m.vertices.cols(), m.surface_vertices.cols(), m.triangles.cols(), m.skeleton.size(),
                    m.hierarchy == "names" ? "joint names" : "file", flesh.clip.name, flesh.clip.duration());
-  o << fmt::format("volume: {} at resolution {} ({} {:.4g} wide): {} cells, {} vertices; volume {:.6g} against the surface's "
-                   "{:.6g} ({:.3f}x)\n",
-                   spec.volume == FleshVolume::lattice ? "hexahedral lattice" : "tets (TetGen)", spec.resolution,
+  if (const std::string skin = describe_skin(flesh); !skin.empty()) o << skin << "\n";
+  o << fmt::format("volume: {} at resolution {} ({}; {} {:.4g} wide): {} cells, {} vertices; volume {:.6g} against the "
+                   "surface's {:.6g} ({:.3f}x)\n",
+                   spec.volume == FleshVolume::lattice ? "hexahedral lattice" : "tets (TetGen)", flesh.resolution, flesh.resolution_reason,
                    spec.volume == FleshVolume::lattice ? "cubes" : "tets no larger than a sixth of a cube", flesh.cell_size,
                    flesh.volume.cell_count(), flesh.volume.vertex_count(), flesh.volume_of_cells, flesh.surface_volume,
                    flesh.volume_of_cells / flesh.surface_volume);

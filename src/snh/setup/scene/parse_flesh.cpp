@@ -49,6 +49,8 @@ std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& sou
   s.model = f.is_absolute() ? f : source.parent_path() / f;
   s.volume = k.choice("volume", "lattice", {"lattice", "tets"}) == "tets" ? FleshVolume::tets : FleshVolume::lattice;
   s.resolution = static_cast<int>(k.integer("resolution", s.resolution, 1, 1000));
+  if (k.has("cell_size")) s.cell_size = k.positive("cell_size", 1.0);
+  if (k.has("resolution") && k.has("cell_size")) k.fail("give a resolution or a cell_size, not both", "cell_size");
   if (const json* a = k.get("animation")) {
     if (a->is_string() && !a->get<std::string>().empty()) s.animation = a->get<std::string>();
     else if (a->is_number_integer() && a->get<long long>() >= 0) s.animation = std::to_string(a->get<long long>());
