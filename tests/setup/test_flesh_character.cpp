@@ -210,6 +210,15 @@ TEST_F(Character, OpenInsideOutAndManyPartSkinsRun) {
   (void)run(scene("parts.gltf", "parts"), &log);
   EXPECT_NE(log.find("skin: 2 skinned meshes, limb (386), limb_far (386)"), std::string::npos) << log;
   EXPECT_EQ(stats("parts")["parts"].size(), 2u);
+  // A cache per mesh: each holds its own vertices of the whole cache.
+  const std::vector<Eigen::Matrix3Xd> whole_cache = read_pc2(dir_ / "parts" / "flesh.pc2");
+  ASSERT_EQ(stats("parts")["pc2"]["meshes"].size(), 2u);
+  for (const json& m : stats("parts")["pc2"]["meshes"]) {
+    const std::vector<Eigen::Matrix3Xd> part = read_pc2(dir_ / "parts" / m["file"].get<std::string>());
+    ASSERT_EQ(part.size(), whole_cache.size());
+    EXPECT_EQ(part.back(), whole_cache.back().middleCols(m["first_vertex"].get<Eigen::Index>(), m["vertices"].get<Eigen::Index>()));
+  }
+  EXPECT_TRUE(fs::exists(dir_ / "parts" / "flesh_limb.pc2") && fs::exists(dir_ / "parts" / "flesh_limb_far.pc2"));
   EXPECT_EQ(stats("whole")["cells"], stats("inward")["cells"]);
   EXPECT_EQ(stats("whole")["cells"], stats("parts")["cells"]);
   for (const char* frame : {"000.obj", "004.obj"}) {

@@ -1,6 +1,7 @@
 #include "snh/setup/flesh_scene.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -113,6 +114,20 @@ void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream&
                        flesh.bones[b].radius, flesh.cell_size);
 }
 
+/// The file name of part p's flesh cache: flesh_NAME.pc2, the name kept to letters, digits, '-' and '_' (others
+/// become '_'), and the part's index added when two parts would share a name.
+std::string part_cache_name(const std::vector<ModelPart>& parts, std::size_t p) {
+  const auto clean = [](const std::string& name) {
+    std::string s;
+    for (const char c : name) s += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_') ? c : '_';
+    return s.empty() ? std::string("mesh") : s;
+  };
+  const std::string mine = clean(parts[p].name);
+  bool shared = false;
+  for (std::size_t q = 0; q < parts.size(); ++q) shared = shared || (q != p && clean(parts[q].name) == mine);
+  return shared ? fmt::format("flesh_{}_{}.pc2", mine, p) : fmt::format("flesh_{}.pc2", mine);
+}
+
 /// flesh.usda from the surface/ and lbs/ frames on disk (so that a resumed run's stage holds them all), and
 /// bones.json (the bones' segments at every frame written, for the report). Nothing without frames.
 void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, double fps, json& stats) {
@@ -129,6 +144,19 @@ void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, dou
   write_pc2(out / "flesh.pc2", meshes[0].frames);
   write_pc2(out / "lbs.pc2", meshes[1].frames);
   stats["pc2"] = {{"flesh", "flesh.pc2"}, {"linear_blend_skinning", "lbs.pc2"}};
+  // A character in several meshes: a cache per mesh too, as each is its own object in the user's tool.
+  const std::vector<ModelPart>& parts = flesh.model.parts;
+  if (parts.size() > 1) {
+    json files = json::array();
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+      std::vector<Eigen::Matrix3Xd> samples;
+      for (const Eigen::Matrix3Xd& f : meshes[0].frames) samples.push_back(f.middleCols(parts[p].first_vertex, parts[p].vertices));
+      const std::string file = part_cache_name(parts, p);
+      write_pc2(out / file, samples);
+      files.push_back({{"mesh", parts[p].name}, {"file", file}, {"first_vertex", parts[p].first_vertex}, {"vertices", parts[p].vertices}});
+    }
+    stats["pc2"]["meshes"] = files;
+  }
   // The bones at every frame written: segment ends in world space.
   json names = json::array(), frames = json::array();
   for (const Bone& b : flesh.bones) names.push_back(b.name);
