@@ -1,6 +1,6 @@
 #pragma once
 // PC2 point caches (docs/formats.md "PC2"): the positions of a mesh's vertices at every frame, the format
-// of 3ds Max's Point Cache 2 that Blender's Mesh Cache modifier, Maya and Houdini read. A 32-byte header
+// of 3ds Max's Point Cache 2 that Blender's Mesh Cache modifier reads. A 32-byte header
 // ("POINTCACHE2\0", version 1, the point count, the first frame, the frames between samples, the sample
 // count; little-endian 32-bit integers and floats) and then every sample's points as three 32-bit floats.
 #include <filesystem>
