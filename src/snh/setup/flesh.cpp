@@ -173,8 +173,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     f.volume_of_cells = static_cast<double>(f.volume.cell_count()) * std::pow(lattice.spacing, 3);
     f.embedding = embed_in_lattice(lattice, m.vertices);
   } else {
-    const Eigen::Vector3d extent = m.surface_vertices.rowwise().maxCoeff() - m.surface_vertices.rowwise().minCoeff();
-    f.cell_size = extent.maxCoeff() / f.resolution;
+    f.cell_size = longest / f.resolution;
     // No tet larger than a sixth of a cube of the lattice's size (the five or six tets a cube splits into).
     MeshFile tets = tetrahedralize(SurfaceMesh{m.surface_vertices, m.surface_triangles}, spec.model,
                                    std::pow(f.cell_size, 3) / 6.0);
