@@ -21,10 +21,11 @@ namespace {
 
 /// `snh flesh MODEL --list`: what the model holds, for choosing a clip or a joint by name.
 void list_model(const std::string& file, std::ostream& o) {
-  const RiggedModel m = read_gltf(file);
+  const RiggedModel m = read_model(file);
   const EdgeCounts edges = edge_counts(m.surface_triangles);
-  o << fmt::format("model {}: {} vertices ({} welded), {} triangles, {} open and {} non-manifold edges\n", file, m.vertices.cols(),
+  o << fmt::format("model {} ({}): {} vertices ({} welded), {} triangles, {} open and {} non-manifold edges\n", file, m.format, m.vertices.cols(),
                    m.surface_vertices.cols(), m.triangles.cols(), edges.open, edges.non_manifold);
+  for (const std::string& note : m.notes) o << "note: " << note << "\n";
   o << fmt::format("skinned meshes ({}):\n", m.parts.size());
   for (const ModelPart& p : m.parts) o << fmt::format("  {}: {} vertices\n", p.name, p.vertices);
   for (const std::string& s : m.skipped) o << fmt::format("  {}: not read (bound to another skin)\n", s);
@@ -66,16 +67,17 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
       "flesh",
-      "Skeleton-driven flesh (the paper's Figure 1 workflow): fills a rigged glTF model's closed surface with a hexahedral "
-      "lattice or tets, binds the volume vertices inside each bone's capsule to the bone, plays the model's animation "
+      "Skeleton-driven flesh (the paper's Figure 1 workflow): fills a rigged model's skin (glTF, or FBX, COLLADA, .x … through assimp) with a "
+      "hexahedral lattice or tets, binds the volume vertices inside each bone's capsule to the bone, plays the model's animation "
       "clip and solves the rest of the flesh (quasi-static by default, stable_neo_hookean, nu = 0.488). Writes the render "
       "surface per frame (surface/NNN.obj) beside the same surface posed by linear blend skinning (lbs/NNN.obj), the "
       "volume (NNN.vtu, frames.pvd), flesh.usda, the point caches flesh.pc2 and lbs.pc2 (Blender's Mesh Cache modifier reads them), "
       "stats.json and the report. A model without a clip runs from a scene "
       "file instead (snh run, with keyframes: see scenes/hand_fist.json). Exit code 0 when every frame converged, 1 "
       "when the run stopped early, 2 for bad input.");
-  cmd->add_option("model", o->model, "Rigged model (.glb, or .gltf with external or embedded buffers)")->required();
-  cmd->add_option("--animation", o->animation, "The clip to play, by name or 0-based index (default: the first)");
+  cmd->add_option("model", o->model, "Rigged model: .glb or .gltf (snh's glTF 2.0 reader), or FBX, COLLADA (.dae), DirectX .x and the other formats "
+                  "assimp reads")->required();
+  cmd->add_option("--animation", o->animation, "The clip to play, by name or 0-based index (default: the first that lasts and moves; --list shows them)");
   cmd->add_option("--volume", o->volume, "lattice (default: hexahedra, as the paper's Figure 1) or tets (TetGen)")
       ->check(CLI::IsMember({"lattice", "tets"}));
   auto* res = cmd->add_option("--resolution", o->resolution,
@@ -101,7 +103,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                 "Self-contact of the render surface (IPC barrier on the welded skin, embedded in the volume: no two of its "
                 "triangles pass through each other)");
   cmd->add_option("--ground", o->ground,
-                  "A ground plane y = Y (normal +y, glTF's up axis) that the render surface stays above; it must start above it");
+                  "A ground plane y = Y (normal +y, glTF's up axis; other formats keep their own) that the render surface stays above; it must start above it");
   cmd->add_option("--dhat", o->dhat,
                   "Distance below which contact repels, model units (default: a quarter of the render surface's mean edge "
                   "length, at most half its smallest distance at rest)")

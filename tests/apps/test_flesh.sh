@@ -16,7 +16,7 @@ limb="$DATA/flesh/limb.gltf"
 
 # The clip is 1 s: 24 frames at the default 24 fps, frame 0 the rest pose.
 if "$SNH" flesh "$limb" --resolution 12 --out "$work/limb" > "$work/limb.log" 2>&1; then ok; else bad "limb: $(tail -3 "$work/limb.log")"; fi
-grep -q '^model .*limb.gltf: .* 3 joints' "$work/limb.log" && ok || bad "limb: header names the model"
+grep -q '^model .*limb.gltf (glTF 2.0): .* 3 joints' "$work/limb.log" && ok || bad "limb: header names the model"
 grep -q '^bones: 3 binding' "$work/limb.log" && ok || bad "limb: bound vertices per bone printed"
 [ -f "$work/limb/surface/024.obj" ] && [ -f "$work/limb/lbs/024.obj" ] && [ ! -f "$work/limb/surface/025.obj" ] && [ -f "$work/limb/024.vtu" ] \
   && ok || bad "limb: surface/, lbs/ and .vtu frames 0-24"

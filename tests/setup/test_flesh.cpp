@@ -101,7 +101,6 @@ TEST_F(FleshLimb, BentElbowKeepsTheFleshVolumeWhereSkinningLosesIt) {
   const SceneResult r = run(scene("lattice", 14, "lattice"));
   ASSERT_EQ(r.frames.size(), 5u);
   const BuiltScene built = build_scene(parse_scene(scene("lattice", 14, "lattice"), dir_ / "limb.json"));
-  const Scene& s = built.scene;
   const Flesh& f = *built.body->flesh;
 
   // Bound vertices sit exactly where their bones carry them at the last frame (t = 1: the elbow at 90°).
@@ -157,7 +156,6 @@ TEST_F(FleshLimb, SoftBindingPullsTheShellTowardItsBonesAndStiffensWithItsStiffn
     return j;
   };
   const BuiltScene built = build_scene(parse_scene(soft_scene("soft_rest", 1.0), dir_ / "limb.json"));
-  const Scene& s = built.scene;
   const Flesh& f = *built.body->flesh;
   ASSERT_GT(f.soft.vertex.size(), 0u);
   for (std::size_t i = 0; i < f.soft.vertex.size(); ++i) {  // outside every capsule, within the shell of its own
@@ -200,7 +198,6 @@ TEST_F(FleshLimb, CellsSpanningTheElbowAreHeldByOneJointAtMost) {
     json j = scene("lattice", 14, std::string("joints_") + mode);
     j["flesh"]["joint_cells"] = mode;
     const BuiltScene built = build_scene(parse_scene(j, dir_ / "limb.json"));
-    const Scene& s = built.scene;
     const Flesh& f = *built.body->flesh;
     released[mode] = f.released.vertex.size();
     std::vector<int> joint(f.volume.vertex_count(), -1);

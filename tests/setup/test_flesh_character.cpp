@@ -87,7 +87,7 @@ TEST(BindPose, FitSimilarityRecoversAKnownOne) {
 // the skin; quasi-statically the physics does not see a similarity, so every frame is the plain limb's,
 // placed.
 TEST_F(Character, AnArmatureLeftOutOfTheSkinPlacesTheFleshWhereTheRestPoseDoes) {
-  RiggedModel model = read_gltf(dir_ / "placed.gltf");
+  RiggedModel model = read_model(dir_ / "placed.gltf");
   const RiggedModel stored = model;
   const std::vector<Eigen::Affine3d> rest = model.skeleton.world(model.skeleton.rest_pose());
   const BindPose bind = place_at_bind_pose(model);
@@ -238,7 +238,7 @@ TEST_F(Character, OpenInsideOutAndManyPartSkinsRun) {
 // The clip played by default is the first that lasts and moves: a one-key "bind" clip, as FBX conversions
 // write, is skipped.
 TEST_F(Character, AStillClipIsNotPlayedByDefault) {
-  const RiggedModel m = read_gltf(dir_ / "still.gltf");
+  const RiggedModel m = read_model(dir_ / "still.gltf");
   ASSERT_EQ(m.clips.size(), 2u);
   EXPECT_FALSE(m.clips[0].moves());
   EXPECT_TRUE(m.clips[1].moves());
@@ -265,7 +265,9 @@ TEST_F(Character, TheResolutionComesFromACellSizeOrTheBones) {
   EXPECT_GE(f.resolution, 16);
   EXPECT_NE(f.resolution_reason.find(f.resolution == 16 ? "the default 16" : "thinnest capsule"), std::string::npos);
   for (std::size_t b = 0; b < f.bones.size(); ++b)
-    if (f.bones[b].child >= 0) EXPECT_GT(f.bound_per_bone[b], 0) << f.bones[b].name;
+    if (f.bones[b].child >= 0) {
+      EXPECT_GT(f.bound_per_bone[b], 0) << f.bones[b].name;
+    }
   // A thin limb (radius 0.03 over a length of 2): resolution 16 would leave its bones' capsules empty.
   test::write_limb_gltf(dir_ / "thin.gltf", {.radius = 0.03});
   j["flesh"]["model"] = (dir_ / "thin.gltf").string();
@@ -274,7 +276,9 @@ TEST_F(Character, TheResolutionComesFromACellSizeOrTheBones) {
   EXPECT_GT(t.resolution, 16);
   EXPECT_NE(t.resolution_reason.find("thinnest capsule"), std::string::npos) << t.resolution_reason;
   for (std::size_t b = 0; b < t.bones.size(); ++b)
-    if (t.bones[b].child >= 0) EXPECT_GT(t.bound_per_bone[b], 0) << t.bones[b].name;
+    if (t.bones[b].child >= 0) {
+      EXPECT_GT(t.bound_per_bone[b], 0) << t.bones[b].name;
+    }
   j["flesh"]["resolution"] = 16;
   EXPECT_THROW((void)build_scene(parse_scene(j, dir_ / "scene.json")), std::invalid_argument);
 }

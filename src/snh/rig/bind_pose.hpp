@@ -10,7 +10,7 @@
 
 #include <Eigen/Geometry>
 
-#include "snh/rig/gltf.hpp"
+#include "snh/rig/model.hpp"
 
 namespace snh {
 

@@ -20,54 +20,22 @@
 #include <Eigen/SVD>
 #include <fmt/format.h>
 
-#include "snh/rig/skinning.hpp"
+#include "snh/rig/model_build.hpp"
 
 namespace snh {
 namespace {
 
 namespace fs = std::filesystem;
+using rig_build::check_file;
+using rig_build::decompose;
+using rig_build::fail;
+using rig_build::one_line;
 static_assert(std::endian::native == std::endian::little, "glTF buffers are little-endian; this reader copies them as is");
-
-/// Files larger than this are refused before they are read (glTF binaries are limited to 4 GiB anyway).
-constexpr std::uintmax_t max_file_bytes = std::uintmax_t{1} << 30;
-
-/// Text from a file or from tinygltf on one line: its lines joined by "; ", other control characters as spaces.
-std::string one_line(std::string_view text) {
-  std::string out, line;
-  const auto flush = [&] {
-    const auto first = line.find_first_not_of(' '), last = line.find_last_not_of(' ');
-    if (first != std::string::npos) {
-      if (!out.empty()) out += "; ";
-      out += line.substr(first, last - first + 1);
-    }
-    line.clear();
-  };
-  for (const char ch : text) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (ch == '\n' || ch == '\r') flush();
-    else line += (c < 0x20 || c == 0x7f) ? ' ' : ch;
-  }
-  flush();
-  return out;
-}
-
-[[noreturn]] void fail(const fs::path& path, const std::string& what) {
-  throw RigError(fmt::format("{}: {}", one_line(path.string()), what));
-}
 
 /// The whole file, checked to be a readable regular file of a sensible size, followed by 16 zero bytes (a
 /// margin for tinygltf's GLB chunk parsing, which may look a few bytes past a chunk that ends the file).
 std::vector<unsigned char> read_file(const fs::path& path, std::size_t& size) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (!fs::exists(st)) fail(path, ec && ec != std::errc::no_such_file_or_directory ? fmt::format("cannot open ({})", ec.message())
-                                                                                    : std::string("no such file"));
-  if (fs::is_directory(st)) fail(path, "a directory, not a glTF file");
-  if (!fs::is_regular_file(st)) fail(path, "not a regular file");
-  const std::uintmax_t n = fs::file_size(path, ec);
-  if (ec) fail(path, fmt::format("cannot read its size ({})", ec.message()));
-  if (n == 0) fail(path, "empty file, not glTF");
-  if (n > max_file_bytes) fail(path, fmt::format("too large for a glTF model ({} bytes; at most {})", n, max_file_bytes));
+  const std::uintmax_t n = check_file(path, "glTF");
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open the file");
   std::vector<unsigned char> bytes(static_cast<std::size_t>(n) + 16, 0);
@@ -202,25 +170,6 @@ double component(const unsigned char* p, int type, bool normalize) {
   }
 }
 
-/// A node's transform when the spec's TRS is not enough: translation · rotation · scale from a 4 by 4 matrix.
-/// Returns an empty string and sets `out`, or the reason it cannot be decomposed.
-std::string decompose(const Eigen::Matrix4d& m, Transform& out) {
-  if (!m.allFinite()) return "has a value that is not finite";
-  if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-6) return "is not affine (last row not 0 0 0 1)";
-  const Eigen::Matrix3d a = m.topLeftCorner<3, 3>();
-  const Eigen::Vector3d s = a.colwise().norm().transpose();
-  if (!(s.minCoeff() > 1e-12 * std::max(1.0, s.maxCoeff()))) return "has a zero scale";
-  const Eigen::Matrix3d r = a * s.cwiseInverse().asDiagonal();
-  if (r.determinant() < 0) return "mirrors (a negative scale)";
-  // Columns orthogonal up to float32 storage (about 1e-7) and the products of a few of them.
-  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-4) return "shears (not translation, rotation, scale)";
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  out.translation = m.block<3, 1>(0, 3);
-  out.rotation = Eigen::Quaterniond(Eigen::Matrix3d(svd.matrixU() * svd.matrixV().transpose())).normalized();
-  out.scale = s;
-  return {};
-}
-
 /// The 25 joints of the WebXR Hand Input API and the parent of each (by name; "" for the wrist).
 const std::vector<std::pair<std::string, std::string>>& webxr_hand_joints() {
   static const std::vector<std::pair<std::string, std::string>> joints = [] {
@@ -248,6 +197,7 @@ class Builder {
   RiggedModel build() {
     RiggedModel out;
     out.source = path_;
+    out.format = "glTF 2.0";
     link_nodes();
     const std::vector<int> nodes = skinned_nodes();
     const int skin = m_.nodes[static_cast<std::size_t>(nodes.front())].skin;
@@ -277,15 +227,15 @@ class Builder {
       out.parts.push_back({.name = name, .first_vertex = first, .vertices = static_cast<Eigen::Index>(data.xyz.size()) - first});
     }
     data.store(out);
-    weld(out);
+    rig_build::weld(out);
     read_animations(out);
     if (all_roots(out.skeleton) && !animated_) rebuild_from_names(out);
-    check_rest(out);
+    rig_build::check_rest(out);
     return out;
   }
 
  private:
-  [[noreturn]] void fail(const std::string& what) const { snh::fail(path_, what); }
+  [[noreturn]] void fail(const std::string& what) const { rig_build::fail(path_, what); }
 
   std::string node_name(int i) const {
     const std::string& name = m_.nodes[static_cast<std::size_t>(i)].name;
@@ -565,32 +515,6 @@ class Builder {
     if (tri.size() == triangles_before) fail(fmt::format("mesh {} has no triangles", mesh_index));
   }
 
-  /// Vertices at the same position (bitwise, +0 and −0 alike) merged, in order of first appearance; triangles
-  /// that lose a corner to the merge dropped from the welded surface.
-  static void weld(RiggedModel& out) {
-    std::map<std::array<std::uint64_t, 3>, int> index;
-    const Eigen::Index n = out.vertices.cols();
-    out.weld.assign(static_cast<std::size_t>(n), -1);
-    std::vector<Eigen::Index> first;
-    for (Eigen::Index v = 0; v < n; ++v) {
-      std::array<std::uint64_t, 3> key;
-      for (int c = 0; c < 3; ++c) key[static_cast<std::size_t>(c)] = std::bit_cast<std::uint64_t>(out.vertices(c, v) + 0.0);
-      const auto [it, added] = index.try_emplace(key, static_cast<int>(first.size()));
-      if (added) first.push_back(v);
-      out.weld[static_cast<std::size_t>(v)] = it->second;
-    }
-    out.surface_vertices.resize(3, static_cast<Eigen::Index>(first.size()));
-    for (std::size_t s = 0; s < first.size(); ++s) out.surface_vertices.col(static_cast<Eigen::Index>(s)) = out.vertices.col(first[s]);
-    std::vector<Eigen::Vector3i> kept;
-    for (Eigen::Index t = 0; t < out.triangles.cols(); ++t) {
-      Eigen::Vector3i w;
-      for (int c = 0; c < 3; ++c) w(c) = out.weld[static_cast<std::size_t>(out.triangles(c, t))];
-      if (w(0) != w(1) && w(1) != w(2) && w(0) != w(2)) kept.push_back(w);
-    }
-    out.surface_triangles.resize(3, static_cast<Eigen::Index>(kept.size()));
-    for (std::size_t t = 0; t < kept.size(); ++t) out.surface_triangles.col(static_cast<Eigen::Index>(t)) = kept[t];
-  }
-
   void read_animations(RiggedModel& out) {
     for (std::size_t ai = 0; ai < m_.animations.size(); ++ai) {
       const tinygltf::Animation& anim = m_.animations[ai];
@@ -650,60 +574,11 @@ class Builder {
             if (per_key == 1) c.values.col(col) /= len;
           }
         if (between_[static_cast<std::size_t>(joint)] != Eigen::Matrix4d::Identity())
-          fold_in(between_[static_cast<std::size_t>(joint)], c, out.skeleton.joints[static_cast<std::size_t>(joint)].name);
+          rig_build::fold_in(path_, between_[static_cast<std::size_t>(joint)], c, out.skeleton.joints[static_cast<std::size_t>(joint)].name);
         clip.channels.push_back(std::move(c));
         animated_ = true;
       }
       out.clips.push_back(std::move(clip));
-    }
-  }
-
-  /// A channel of a joint below non-joint nodes whose transforms B were folded into its rest transform: its
-  /// keys made relative to the joint's parent (or the model) too. For B a similarity (uniform scale s, rotation
-  /// R, translation b): translation t → b + s·R·t, rotation q → R·q, scale σ → s·σ; these maps are affine, so
-  /// they commute with every interpolation (tangents take the linear part only).
-  void fold_in(const Eigen::Matrix4d& between, Channel& c, const std::string& joint) const {
-    Transform b;
-    const std::string what = fmt::format("joint \"{}\" is animated below nodes whose transforms", one_line(joint));
-    if (const std::string why = decompose(between, b); !why.empty()) fail(fmt::format("{}: the product {}", what, why));
-    const double s = b.scale.mean();
-    if ((b.scale.array() - s).abs().maxCoeff() > 1e-6 * s)
-      fail(fmt::format("{} scale non-uniformly ({} {} {}): not supported", what, b.scale(0), b.scale(1), b.scale(2)));
-    const bool cubic = c.interpolation == Interpolation::cubic_spline;
-    for (Eigen::Index k = 0; k < c.values.cols(); ++k) {
-      const bool tangent = cubic && k % 3 != 1;
-      // Element by element: GCC 12 wrongly warns of AVX-512 loads past a fixed-size vector copied from or to a
-      // dynamic-size column.
-      Eigen::Vector4d v = Eigen::Vector4d::Zero();
-      for (Eigen::Index r = 0; r < c.values.rows(); ++r) v(r) = c.values(r, k);
-      switch (c.path) {
-        case ChannelPath::translation:
-          v.head<3>() = s * (b.rotation * Eigen::Vector3d(v.head<3>()));
-          if (!tangent) v.head<3>() += b.translation;
-          break;
-        case ChannelPath::rotation: v = (b.rotation * Eigen::Quaterniond(v(3), v(0), v(1), v(2))).coeffs(); break;
-        case ChannelPath::scale: v *= s; break;
-      }
-      for (Eigen::Index r = 0; r < c.values.rows(); ++r) c.values(r, k) = v(r);
-    }
-  }
-
-  /// Finite values can still overflow when composed: the rest pose and its skinning matrices must be finite.
-  void check_rest(const RiggedModel& out) const {
-    std::vector<Eigen::Affine3d> world;
-    try {
-      world = out.skeleton.world(out.skeleton.rest_pose());
-    } catch (const std::invalid_argument& e) {
-      fail(fmt::format("at rest, {}", one_line(e.what())));
-    }
-    for (std::size_t j = 0; j < world.size(); ++j)
-      if (!(world[j].matrix() * out.inverse_bind[j]).allFinite())
-        fail(fmt::format("joint \"{}\": its rest transform times its inverse bind matrix is not finite",
-                         one_line(out.skeleton.joints[j].name)));
-    try {
-      (void)skin_vertices(out, world);
-    } catch (const std::invalid_argument& e) {
-      fail(fmt::format("at rest, {}", one_line(e.what())));
     }
   }
 
@@ -746,26 +621,6 @@ class Builder {
 RiggedModel read_gltf(const std::filesystem::path& path) {
   const tinygltf::Model model = load(path);
   return Builder(path, model).build();
-}
-
-int default_clip(const RiggedModel& model) {
-  for (std::size_t c = 0; c < model.clips.size(); ++c)
-    if (model.clips[c].duration() > 0.0 && model.clips[c].moves()) return static_cast<int>(c);
-  return model.clips.empty() ? -1 : 0;
-}
-
-const Clip& find_clip(const RiggedModel& model, const std::string& name_or_index) {
-  for (const Clip& c : model.clips)
-    if (c.name == name_or_index) return c;
-  if (!name_or_index.empty() && name_or_index.size() <= 9 &&
-      std::all_of(name_or_index.begin(), name_or_index.end(), [](unsigned char c) { return c >= '0' && c <= '9'; })) {
-    const std::size_t i = std::stoul(name_or_index);
-    if (i < model.clips.size()) return model.clips[i];
-  }
-  std::string names;
-  for (const Clip& c : model.clips) names += (names.empty() ? "" : ", ") + one_line(c.name);
-  throw RigError(fmt::format("{}: no animation clip \"{}\" ({})", one_line(model.source.string()), one_line(name_or_index),
-                             model.clips.empty() ? std::string("the model has no animation clip") : "clips: " + names));
 }
 
 }  // namespace snh

@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "snh/rig/gltf.hpp"
+#include "snh/rig/model.hpp"
 
 namespace snh {
 

@@ -128,7 +128,7 @@ int flesh_resolution(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& sur
 
 Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
   Flesh f;
-  f.model = read_gltf(spec.model);
+  f.model = read_model(spec.model);
   f.bind = place_at_bind_pose(f.model);
   const RiggedModel& m = f.model;
   // Skins as characters have them: holes (a mouth, a neck), several meshes, either orientation. The lattice

@@ -20,7 +20,7 @@
 #include "snh/rig/animation.hpp"
 #include "snh/rig/bind_pose.hpp"
 #include "snh/rig/bones.hpp"
-#include "snh/rig/gltf.hpp"
+#include "snh/rig/model.hpp"
 #include "snh/sim/kinematics.hpp"
 
 namespace snh {

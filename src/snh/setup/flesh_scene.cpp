@@ -47,6 +47,8 @@ void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& setting
   for (const ModelPart& p : m.parts) parts.push_back({{"name", p.name}, {"first_vertex", p.first_vertex}, {"vertices", p.vertices}});
   settings["parts"] = parts;
   settings["skipped_meshes"] = m.skipped;
+  settings["model_format"] = m.format;
+  settings["model_notes"] = m.notes;
   settings["open_edges"] = flesh.edges.open;
   settings["non_manifold_edges"] = flesh.edges.non_manifold;
   settings["inside_out"] = flesh.inside_out;
@@ -85,10 +87,11 @@ std::string describe_skin(const Flesh& flesh) {
 /// The header's lines on the model, the volume and the binding.
 void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream& o) {
   const RiggedModel& m = flesh.model;
-  o << fmt::format("model {}: {} vertices ({} welded), {} triangles, {} joints (hierarchy from the {}), animation \"{}\" "
+  o << fmt::format("model {} ({}): {} vertices ({} welded), {} triangles, {} joints (hierarchy from the {}), animation \"{}\" "
                    "of {:g} s\n",
-                   m.source.string(), m.vertices.cols(), m.surface_vertices.cols(), m.triangles.cols(), m.skeleton.size(),
+                   m.source.string(), m.format, m.vertices.cols(), m.surface_vertices.cols(), m.triangles.cols(), m.skeleton.size(),
                    m.hierarchy == "names" ? "joint names" : "file", flesh.clip.name, flesh.clip.duration());
+  for (const std::string& note : m.notes) o << "model: " << note << "\n";
   if (const std::string skin = describe_skin(flesh); !skin.empty()) o << skin << "\n";
   o << fmt::format("volume: {} at resolution {} ({}; {} {:.4g} wide): {} cells, {} vertices; volume {:.6g} against the "
                    "surface's {:.6g} ({:.3f}x)\n",

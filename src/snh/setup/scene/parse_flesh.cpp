@@ -44,7 +44,7 @@ std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& sou
   Keys k(*flesh, "flesh", top.file());
   FleshSpec s;
   const json* model = k.get("model");
-  if (!model || !model->is_string() || model->get<std::string>().empty()) k.fail("needs model: a .glb or .gltf file");
+  if (!model || !model->is_string() || model->get<std::string>().empty()) k.fail("needs model: a rigged model file (.glb, .gltf, .fbx, .dae, .x, …)");
   const std::filesystem::path f = model->get<std::string>();
   s.model = f.is_absolute() ? f : source.parent_path() / f;
   s.volume = k.choice("volume", "lattice", {"lattice", "tets"}) == "tets" ? FleshVolume::tets : FleshVolume::lattice;

@@ -1,0 +1,46 @@
+#pragma once
+// What the model readers (rig/gltf.cpp, rig/assimp.cpp) share once a file is parsed: the checks on the file
+// itself, one-line messages, TRS from a matrix, welding the skin by position, folding the transforms of
+// nodes between joints into clips' keys, and the final check of the rest pose. Internal to the rig layer.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include <Eigen/Core>
+
+#include "snh/rig/model.hpp"
+
+namespace snh::rig_build {
+
+/// Model files larger than this are refused before they are read.
+inline constexpr std::uintmax_t max_file_bytes = std::uintmax_t{1} << 30;
+
+/// Text from a file or a library on one line: its lines joined by "; ", other control characters as spaces.
+[[nodiscard]] std::string one_line(std::string_view text);
+
+/// Throws RigError("FILE: what").
+[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what);
+
+/// Checks that `path` names a readable regular file of 1 byte to max_file_bytes (`kind` names what it should
+/// be in the messages: "a glTF file"); returns its size.
+std::uintmax_t check_file(const std::filesystem::path& path, std::string_view kind);
+
+/// Translation · rotation · scale from a 4 by 4 affine matrix. Returns an empty string and sets `out`, or the
+/// reason it cannot be decomposed (not finite, not affine, a zero or negative scale, a shear).
+[[nodiscard]] std::string decompose(const Eigen::Matrix4d& m, Transform& out);
+
+/// Fills surface_vertices, surface_triangles and weld from vertices and triangles: vertices at the same
+/// position (bitwise, +0 and −0 alike) merged in order of first appearance; triangles that lose a corner to
+/// the merge dropped from the welded surface.
+void weld(RiggedModel& model);
+
+/// A channel of a joint below non-joint nodes whose transforms `between` were folded into its rest transform:
+/// its keys made relative to the joint's parent (or the model) too. Those nodes must scale uniformly.
+void fold_in(const std::filesystem::path& path, const Eigen::Matrix4d& between, Channel& channel, const std::string& joint);
+
+/// The rest pose, its skinning matrices and the skin at rest are finite (finite values can still overflow when
+/// composed); throws RigError naming the joint or vertex.
+void check_rest(const RiggedModel& model);
+
+}  // namespace snh::rig_build

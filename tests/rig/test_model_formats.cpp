@@ -1,0 +1,217 @@
+// Rigged characters in the formats DCCs export (docs/flesh.md "Formats"), read by read_model: glTF by our own
+// reader, FBX and COLLADA through assimp.
+//   * A character made in Blender (tests/apps/blender_character.py, run here in Debian's Blender in background
+//     mode) and exported by Blender's own glTF, FBX and COLLADA exporters: each file's linear blend skinning
+//     over the clip matches Blender's own skinning of the character, up to the one similarity that each
+//     exporter's axes and units make (fitted on the bones' heads at the first frame, never on the skin).
+//   * Debian's assimp-testmodels: the five rigged, animated characters read directly, with the joints, clips
+//     and meshes their files hold; and the errors read_assimp gives for files it cannot use.
+// Tests that need Blender or assimp-testmodels are skipped where they are not installed (CI installs both).
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "snh/rig/assimp.hpp"
+#include "snh/rig/bind_pose.hpp"
+#include "snh/rig/model.hpp"
+#include "snh/rig/skinning.hpp"
+
+namespace snh {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+const fs::path kAssimpModels = "/usr/share/assimp/models";
+
+/// The first key time of a clip over all channels (exporters start a clip at their first frame's time).
+double first_key(const Clip& clip) {
+  double t = 1e300;
+  for (const Channel& c : clip.channels)
+    if (!c.times.empty()) t = std::min(t, c.times.front());
+  return t;
+}
+
+/// The largest distance from a point of `a` to the nearest point of `b`, and back (Hausdorff over vertices).
+double hausdorff(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) {
+  const auto one_way = [](const Eigen::Matrix3Xd& p, const Eigen::Matrix3Xd& q) {
+    double worst = 0.0;
+    for (Eigen::Index i = 0; i < p.cols(); ++i) worst = std::max(worst, std::sqrt((q.colwise() - p.col(i)).colwise().squaredNorm().minCoeff()));
+    return worst;
+  };
+  return std::max(one_way(a, b), one_way(b, a));
+}
+
+class BlenderCharacter : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    if (std::system("command -v blender > /dev/null 2>&1") != 0) return;
+    dir_ = fs::temp_directory_path() / ("snh-test-blender-character-" + std::to_string(::getpid()));
+    const std::string cmd = fmt::format("blender -b --factory-startup --python-exit-code 1 -P '{}/apps/blender_character.py' -- '{}' > '{}.log' 2>&1",
+                                        SNH_TESTS_DIR, dir_.string(), dir_.string());
+    made_ = std::system(cmd.c_str()) == 0;
+    if (!made_) {
+      std::ifstream log(dir_.string() + ".log");
+      log_ = std::string(std::istreambuf_iterator<char>(log), {});
+      return;
+    }
+    std::ifstream in(dir_ / "truth.json");
+    truth_ = json::parse(in);
+  }
+  static void TearDownTestSuite() {
+    if (!dir_.empty()) {
+      fs::remove_all(dir_);
+      fs::remove(dir_.string() + ".log");
+    }
+  }
+  void SetUp() override {
+    if (dir_.empty()) GTEST_SKIP() << "blender is not installed (scripts/install-deps installs it)";
+    ASSERT_TRUE(made_) << "Blender failed to make the character:\n" << log_;
+  }
+
+  /// The file's skin at Blender's frames 1, 12 and 24, taken to Blender's world by the similarity that maps
+  /// the file's joint heads at the first frame onto Blender's bone heads; compared with Blender's own skin.
+  static void expect_blender_skinning(const std::string& file, const std::string& prefix) {
+    RiggedModel m = read_model(dir_ / file);
+    (void)place_at_bind_pose(m);
+    ASSERT_EQ(m.clips.size(), 1u);
+    const Clip& clip = m.clips[0];
+    const double t0 = first_key(clip), fps = truth_["fps"].get<double>();
+    // Joint heads at the first frame against Blender's bone heads.
+    const std::vector<Eigen::Affine3d> first = m.skeleton.world(sample(clip, m.skeleton, t0));
+    Eigen::Matrix3Xd ours(3, 3), theirs(3, 3);
+    int k = 0;
+    for (const char* name : {"upper", "lower", "hand"}) {
+      const int j = m.skeleton.find(prefix + name);
+      ASSERT_GE(j, 0) << file << ": no joint " << prefix + name;
+      ours.col(k) = first[static_cast<std::size_t>(j)].translation();
+      const auto h = truth_["heads"][name];
+      theirs.col(k++) = Eigen::Vector3d(h[0].get<double>(), h[1].get<double>(), h[2].get<double>());
+    }
+    const Similarity s = fit_similarity(ours, theirs);
+    EXPECT_LT((s.affine() * ours - theirs).cwiseAbs().maxCoeff(), 1e-5) << file << ": the joints do not fit Blender's by a similarity";
+    for (const auto& [frame, points] : truth_["frames"].items()) {
+      const int f = std::stoi(frame);
+      Eigen::Matrix3Xd blender(3, static_cast<Eigen::Index>(points.size()));
+      for (std::size_t i = 0; i < points.size(); ++i)
+        for (int c = 0; c < 3; ++c) blender(c, static_cast<Eigen::Index>(i)) = points[i][static_cast<std::size_t>(c)].get<double>();
+      const double t = t0 + (f - truth_["first_frame"].get<int>()) / fps;
+      const Eigen::Matrix3Xd skin = s.affine() * skin_vertices(m, m.skeleton.world(sample(clip, m.skeleton, t)));
+      // The arm is 1.2 long; files store single precision.
+      EXPECT_LT(hausdorff(skin, blender), 1e-4) << file << " at Blender's frame " << f << " (t = " << t << ")";
+    }
+  }
+
+  static inline fs::path dir_;
+  static inline bool made_ = false;
+  static inline std::string log_;
+  static inline json truth_;
+};
+
+TEST_F(BlenderCharacter, GltfExportSkinsAsBlenderDoes) { expect_blender_skinning("character.glb", ""); }
+
+TEST_F(BlenderCharacter, FbxExportReadThroughAssimpSkinsAsBlenderDoes) {
+  const RiggedModel m = read_model(dir_ / "character.fbx");
+  EXPECT_NE(m.format.find("FBX"), std::string::npos) << m.format;
+  expect_blender_skinning("character.fbx", "");
+}
+
+TEST_F(BlenderCharacter, ColladaExportReadThroughAssimpSkinsAsBlenderDoes) { expect_blender_skinning("character.dae", "rig_"); }
+
+/// The five rigged, animated characters of Debian's assimp-testmodels, read directly.
+class AssimpTestModels : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(kAssimpModels / "X" / "Testwuson.X")) GTEST_SKIP() << "assimp-testmodels is not installed";
+  }
+};
+
+TEST_F(AssimpTestModels, EachCharacterIsReadWithItsJointsClipsAndMeshes) {
+  struct Expect {
+    const char* file;
+    int joints, clips, parts;
+    const char* clip;  // the clip played by default
+    std::size_t notes;
+  };
+  for (const Expect& e : {Expect{"FBX/huesitos.fbx", 10, 1, 1, "Armature|Action", 0},
+                          Expect{"FBX/animation_with_skeleton.fbx", 15, 1, 1, "Armature|ArmatureAction", 0},
+                          Expect{"X/Testwuson.X", 38, 3, 1, "Wuson_Run", 0}, Expect{"X/BCN_Epileptic.X", 54, 1, 3, "Epileptisch", 0},
+                          // Its authors' note: the mesh names four bones, the hierarchy holds two.
+                          Expect{"X/anim_test.x", 4, 1, 1, "cylinder_test", 2}}) {
+    SCOPED_TRACE(e.file);
+    const RiggedModel m = read_model(kAssimpModels / e.file);
+    EXPECT_EQ(m.skeleton.size(), e.joints);
+    EXPECT_EQ(static_cast<int>(m.clips.size()), e.clips);
+    EXPECT_EQ(static_cast<int>(m.parts.size()), e.parts);
+    EXPECT_EQ(m.notes.size(), e.notes);
+    ASSERT_GE(default_clip(m), 0);
+    EXPECT_EQ(m.clips[static_cast<std::size_t>(default_clip(m))].name, e.clip);
+    // Every vertex bound to real joints by weights summing to 1, and the skin at the bind pose where the file
+    // put it (the rest pose of a .x file is often another pose).
+    EXPECT_LT((m.joint_weight.colwise().sum().array() - 1.0).abs().maxCoeff(), 1e-12);
+    EXPECT_GE(m.joint_index.minCoeff(), 0);
+    EXPECT_LT(m.joint_index.maxCoeff(), m.skeleton.size());
+    RiggedModel placed = m;
+    const BindPose bind = place_at_bind_pose(placed);
+    const double size = (placed.vertices.rowwise().maxCoeff() - placed.vertices.rowwise().minCoeff()).norm();
+    EXPECT_LT((skin_vertices(placed, bind.joints) - placed.vertices).cwiseAbs().maxCoeff(), 1e-6 * size);
+  }
+}
+
+TEST_F(AssimpTestModels, TheXFileClipsMoveTheSkin) {
+  const RiggedModel m = read_model(kAssimpModels / "X" / "Testwuson.X");
+  const Clip& run = m.clips[0];
+  const Eigen::Matrix3Xd a = skin_vertices(m, m.skeleton.world(sample(run, m.skeleton, 0.0)));
+  const Eigen::Matrix3Xd b = skin_vertices(m, m.skeleton.world(sample(run, m.skeleton, run.duration() / 2)));
+  const double size = (m.vertices.rowwise().maxCoeff() - m.vertices.rowwise().minCoeff()).norm();
+  EXPECT_GT((a - b).colwise().norm().maxCoeff(), 0.05 * size);
+  EXPECT_FALSE(m.clips[2].moves());  // "Wuson_Bind": one pose
+}
+
+class AssimpErrors : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("snh-test-assimp-" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  /// read_model(path) throws a RigError of one line that names the file and holds `fragment`.
+  static void expect_error(const fs::path& path, const std::string& fragment) {
+    try {
+      (void)read_model(path);
+      ADD_FAILURE() << path << ": no error";
+    } catch (const RigError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+      EXPECT_EQ(what.rfind(path.string() + ": ", 0), 0u) << what;
+      EXPECT_NE(what.find(fragment), std::string::npos) << what;
+    }
+  }
+  void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+  fs::path dir_;
+};
+
+TEST_F(AssimpErrors, FilesItCannotUseAreRefusedInOneLine) {
+  expect_error(dir_ / "missing.fbx", "no such file");
+  fs::create_directories(dir_ / "folder.fbx");
+  expect_error(dir_ / "folder.fbx", "a directory");
+  write(dir_ / "empty.dae", "");
+  expect_error(dir_ / "empty.dae", "empty file");
+  write(dir_ / "junk.fbx", "this is not an FBX file\nat all\n");
+  expect_error(dir_ / "junk.fbx", "assimp could not read it");
+  // A well-formed model without bones: a triangle as OBJ.
+  write(dir_ / "static.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  expect_error(dir_ / "static.obj", "no skinned mesh");
+}
+
+}  // namespace
+}  // namespace snh
