@@ -40,9 +40,9 @@ std::string strip_importer(std::string name) {
 }
 
 /// Builds a RiggedModel from an assimp scene; every fault is a RigError naming the file.
-class Builder {
+class SceneReader {
  public:
-  Builder(const fs::path& path, const aiScene& scene) : path_(path), s_(scene) {}
+  SceneReader(const fs::path& path, const aiScene& scene) : path_(path), s_(scene) {}
 
   RiggedModel build(std::string format) {
     RiggedModel out;
@@ -172,10 +172,8 @@ class Builder {
     const std::size_t joints = joint_node_.size();
     out.inverse_bind.assign(joints, Eigen::Matrix4d::Identity());
     std::vector<int> bound_by(joints, -1);  // the mesh (index into meshes_) that set each joint's inverse bind
-    std::vector<Eigen::Vector3d> xyz;
-    std::vector<Eigen::Vector4i> jidx;
-    std::vector<Eigen::Vector4d> jw;
-    std::vector<Eigen::Vector3i> tri;
+    rig_build::SkinData data;
+    auto& [xyz, jidx, jw, tri] = data;
     for (std::size_t k = 0; k < meshes_.size(); ++k) {
       const auto [node, m] = meshes_[k];
       const aiMesh* mesh = s_.mMeshes[m];
@@ -286,17 +284,7 @@ class Builder {
     }
     for (std::size_t j = 0; j < joints; ++j)
       if (bound_by[j] < 0) out.inverse_bind[j] = world[j].matrix().inverse();
-    const auto cols = [](std::size_t n) { return static_cast<Eigen::Index>(n); };
-    out.vertices.resize(3, cols(xyz.size()));
-    out.joint_index.resize(4, cols(xyz.size()));
-    out.joint_weight.resize(4, cols(xyz.size()));
-    for (std::size_t v = 0; v < xyz.size(); ++v) {
-      out.vertices.col(cols(v)) = xyz[v];
-      out.joint_index.col(cols(v)) = jidx[v];
-      out.joint_weight.col(cols(v)) = jw[v];
-    }
-    out.triangles.resize(3, cols(tri.size()));
-    for (std::size_t t = 0; t < tri.size(); ++t) out.triangles.col(cols(t)) = tri[t];
+    data.store(out);
   }
 
   /// Keys of one path as a channel: times in seconds, strictly increasing (keys at one time: the last kept).
@@ -406,7 +394,7 @@ RiggedModel read_assimp(const std::filesystem::path& path) {
     if (const aiImporterDesc* desc = importer.GetImporterInfo(i); desc != nullptr && desc->mName != nullptr)
       format = fmt::format("{} (assimp {}.{}.{})", strip_importer(one_line(desc->mName)), aiGetVersionMajor(), aiGetVersionMinor(), aiGetVersionPatch());
   }
-  return Builder(path, *scene).build(format);
+  return SceneReader(path, *scene).build(format);
 }
 
 }  // namespace snh

@@ -211,7 +211,7 @@ class Builder {
     read_skin(m_.skins[static_cast<std::size_t>(skin)], skin, out);
     // Every skinned mesh of the first one's skin, in the scene's order (a mesh that two nodes show, once); a
     // mesh of another skin is named in `skipped`.
-    MeshData data;
+    rig_build::SkinData data;
     std::vector<int> read;
     for (const int node : nodes) {
       const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(node)];
@@ -418,29 +418,8 @@ class Builder {
     return out;
   }
 
-  /// Vertices (positions, joints, weights) and triangles of the meshes read so far.
-  struct MeshData {
-    std::vector<Eigen::Vector3d> xyz;
-    std::vector<Eigen::Vector4i> jidx;
-    std::vector<Eigen::Vector4d> jw;
-    std::vector<Eigen::Vector3i> tri;
-    void store(RiggedModel& out) const {
-      const auto cols = [](std::size_t n) { return static_cast<Eigen::Index>(n); };
-      out.vertices.resize(3, cols(xyz.size()));
-      out.joint_index.resize(4, cols(xyz.size()));
-      out.joint_weight.resize(4, cols(xyz.size()));
-      for (std::size_t v = 0; v < xyz.size(); ++v) {
-        out.vertices.col(cols(v)) = xyz[v];
-        out.joint_index.col(cols(v)) = jidx[v];
-        out.joint_weight.col(cols(v)) = jw[v];
-      }
-      out.triangles.resize(3, cols(tri.size()));
-      for (std::size_t t = 0; t < tri.size(); ++t) out.triangles.col(cols(t)) = tri[t];
-    }
-  };
-
   /// Appends a mesh's triangle primitives to `data`.
-  void read_mesh(int mesh_index, int joints, MeshData& data) const {
+  void read_mesh(int mesh_index, int joints, rig_build::SkinData& data) const {
     const tinygltf::Mesh& mesh = m_.meshes[static_cast<std::size_t>(mesh_index)];
     if (mesh.primitives.empty()) fail(fmt::format("mesh {} has no primitives", mesh_index));
     auto& [xyz, jidx, jw, tri] = data;

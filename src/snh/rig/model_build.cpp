@@ -56,6 +56,20 @@ std::uintmax_t check_file(const fs::path& path, std::string_view kind) {
   return n;
 }
 
+void SkinData::store(RiggedModel& out) const {
+  const auto cols = [](std::size_t n) { return static_cast<Eigen::Index>(n); };
+  out.vertices.resize(3, cols(xyz.size()));
+  out.joint_index.resize(4, cols(xyz.size()));
+  out.joint_weight.resize(4, cols(xyz.size()));
+  for (std::size_t v = 0; v < xyz.size(); ++v) {
+    out.vertices.col(cols(v)) = xyz[v];
+    out.joint_index.col(cols(v)) = jidx[v];
+    out.joint_weight.col(cols(v)) = jw[v];
+  }
+  out.triangles.resize(3, cols(tri.size()));
+  for (std::size_t t = 0; t < tri.size(); ++t) out.triangles.col(cols(t)) = tri[t];
+}
+
 /// A node's transform when the spec's TRS is not enough: translation · rotation · scale from a 4 by 4 matrix.
 /// Returns an empty string and sets `out`, or the reason it cannot be decomposed.
 std::string decompose(const Eigen::Matrix4d& m, Transform& out) {

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -25,6 +26,16 @@ inline constexpr std::uintmax_t max_file_bytes = std::uintmax_t{1} << 30;
 /// Checks that `path` names a readable regular file of 1 byte to max_file_bytes (`kind` names what it should
 /// be in the messages: "a glTF file"); returns its size.
 std::uintmax_t check_file(const std::filesystem::path& path, std::string_view kind);
+
+/// A skin as a reader gathers it, mesh after mesh: positions, four joints and weights per vertex, triangles.
+struct SkinData {
+  std::vector<Eigen::Vector3d> xyz;
+  std::vector<Eigen::Vector4i> jidx;
+  std::vector<Eigen::Vector4d> jw;
+  std::vector<Eigen::Vector3i> tri;
+  /// Into the model's vertices, joint_index, joint_weight and triangles.
+  void store(RiggedModel& out) const;
+};
 
 /// Translation · rotation · scale from a 4 by 4 affine matrix. Returns an empty string and sets `out`, or the
 /// reason it cannot be decomposed (not finite, not affine, a zero or negative scale, a shear).
