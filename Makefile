@@ -14,7 +14,10 @@ all: build
 deps:
 	bash scripts/install-deps
 
+# A build directory made before the presets used Ninja (Unix Makefiles) cannot be reconfigured: it is remade.
 configure: deps
+	@if [ -f $(BUILD)/CMakeCache.txt ] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$$' $(BUILD)/CMakeCache.txt; then \
+	  echo "make: $(BUILD) was made by another CMake generator; removing it to configure with Ninja"; rm -rf $(BUILD); fi
 	cmake --preset $(PRESET)
 
 build: configure

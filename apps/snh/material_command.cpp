@@ -23,7 +23,7 @@ namespace {
 
 using nlohmann::json;
 
-struct Options {
+struct MaterialOptions {
   std::string name;
   ParameterOptions params;
   std::string F_text;
@@ -85,7 +85,7 @@ std::string matrix_text(const Mat3& A, const std::string& indent) {
   return out;
 }
 
-int run_inspect(const Options& o) {
+int run_inspect(const MaterialOptions& o) {
   if (o.name.empty()) throw std::invalid_argument("give a material NAME (see --list), or --stability");
   if (o.F_text.empty() == o.stretch.empty())
     throw std::invalid_argument("give exactly one of --F \"f0 ... f8\" or --stretch sx sy sz");
@@ -174,7 +174,7 @@ std::string points_text(const StabilityRow& r) {
   return out;
 }
 
-int run_stability(const Options& o) {
+int run_stability(const MaterialOptions& o) {
   const Lame p = o.params.lame();
   const StabilityReport rep = measure_stability(p, o.params.reparametrize, o.samples, o.seed);
   if (o.json) {
@@ -232,7 +232,7 @@ int run_stability(const Options& o) {
 }  // namespace
 
 void add_material_command(CLI::App& app, int& exit_code) {
-  auto opts = std::make_shared<Options>();
+  auto opts = std::make_shared<MaterialOptions>();
   CLI::App* cmd = app.add_subcommand(
       "material",
       "Inspect an energy at one deformation gradient F: psi, P = dpsi/dF and the nine eigenvalues of dP/dF "
@@ -254,7 +254,7 @@ void add_material_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 1000000));
   cmd->add_option("--seed", opts->seed, "Seed of the samples for --stability (default 1)");
   cmd->callback([opts, &exit_code]() {
-    const Options& o = *opts;
+    const MaterialOptions& o = *opts;
     if (o.list) {
       for (auto n : material_names()) {
         std::visit([&](const auto& m) {

@@ -31,7 +31,7 @@ std::string linear_solver_help() {
 
 namespace {
 
-struct Options {
+struct StretchOptions {
   std::string element = "tet";
   int res = 10;
   std::string material = "stable_neo_hookean";
@@ -55,7 +55,7 @@ struct Options {
 }  // namespace
 
 void add_stretch_command(CLI::App& app, int& exit_code) {
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<StretchOptions>();
   CLI::App* cmd = app.add_subcommand(
       "stretch",
       "The paper's stretch test (tetcli/hexcli) with named options: a [-1,1]^3 box of tets or hexes whose y = -1 and "

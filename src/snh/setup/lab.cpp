@@ -79,7 +79,10 @@ std::vector<T> per_energy(const LabOptions& o, Body&& body) {
 
 /// Runs one simulation of an experiment into OUT/<experiment>/<case>/<energy> and summarises it.
 LabRun simulate(Scene s, const std::string& experiment, const std::string& case_name, const LabOptions& o) {
-  LabRun run{.experiment = experiment, .case_name = case_name, .energy = s.material.name};
+  LabRun run;  // (member by member: GCC 12 -Wextra warns of designated initializers that leave members to their defaults)
+  run.experiment = experiment;
+  run.case_name = case_name;
+  run.energy = s.material.name;
   s.source = fmt::format("lab {} {} {}", experiment, case_name, s.material.name);
   run.dir = (std::filesystem::path(experiment) / case_name / s.material.name).generic_string();
   s.output.dir = o.out / run.dir;
@@ -243,7 +246,10 @@ std::vector<PoissonRow> lab_poisson(const LabOptions& o) {
   return per_energy<PoissonRow>(o, [&](const std::string& e, std::vector<PoissonRow>& rows) {
     for (double nu : {0.3, 0.4, 0.45, 0.49})
       for (bool reparam : {false, true}) {
-        PoissonRow row{.energy = e, .nu = nu, .reparametrize = reparam, .expected = nu};
+        PoissonRow row;
+        row.energy = e;
+        row.nu = row.expected = nu;
+        row.reparametrize = reparam;
         Scene s;
         s.mesh.element = CellType::hex8;
         s.mesh.resolution = res;
@@ -306,7 +312,9 @@ std::vector<PoissonRow> lab_poisson(const LabOptions& o) {
 std::vector<StretchRow> lab_stretch(const LabOptions& o) {
   return per_energy<StretchRow>(o, [&](const std::string& e, std::vector<StretchRow>& rows) {
     for (double nu : {0.3, 0.4, 0.45, 0.49, 0.495}) {
-      StretchRow row{.energy = e, .nu = nu};
+      StretchRow row;
+      row.energy = e;
+      row.nu = nu;
       StretchConfig c;
       c.element = CellType::hex8;
       c.resolution = o.quick ? 5 : 8;
