@@ -281,14 +281,15 @@ SceneResult run_interruptibly(const BuiltScene& scene, std::ostream& log) {
 }
 
 pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesystem::path> base_dir,
-                       std::optional<std::filesystem::path> out, bool force, bool resume, bool report, bool quiet, int threads,
-                       bool check) {
+                       std::optional<std::filesystem::path> out, bool force, bool resume, bool keep_going, bool report, bool quiet,
+                       int threads, bool check) {
   Scene parsed = scene_of(scene_obj, base_dir);
   if (out) {
     require(!out->empty(), "out must not be empty");
     parsed.output.dir = *out;
   }
   parsed.run.resume = resume;
+  parsed.run.keep_going = keep_going;
   parsed.run.command_line = "snh.run_scene (Python)";
   require(threads >= 0 && threads <= 1024, fmt::format("threads must be from 0 to 1024, got {}", threads));
   const int previous_threads = omp_get_max_threads();
@@ -313,6 +314,7 @@ pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesyst
   d["frames"] = static_cast<int>(r.frames.size());
   d["all_converged"] = r.all_converged;
   d["failure"] = r.failure;
+  d["unconverged_frames"] = r.unconverged;
   d["total_seconds"] = r.total_seconds;
   d["element"] = std::string(to_string(r.element));
   d["final_positions"] = positions_array(r.final_positions);
@@ -398,13 +400,14 @@ void add_simulation(pyb::module_& m) {
            "without SciPy. projection: none (the true Hessian), clamp or abs per element.");
 
   m.def("run_scene", &run_scene_py, "scene"_a, pyb::kw_only(), "base_dir"_a = pyb::none(), "out"_a = pyb::none(), "force"_a = false,
-        "resume"_a = false, "report"_a = true, "quiet"_a = false, "threads"_a = 0, "check"_a = true,
+        "resume"_a = false, "keep_going"_a = false, "report"_a = true, "quiet"_a = false, "threads"_a = 0, "check"_a = true,
         "Runs a scene (a file path, or a dict with the file's keys: a flesh scene is snh flesh) as snh run does, into out "
         "(default: the scene's output.dir): frames, stats.json, stats.csv, checkpoint and the report. A dict's relative "
         "paths resolve against base_dir (default: the working directory), a file's against its directory. Returns a dict "
-        "(out, frames, all_converged, failure, total_seconds, element, final_positions: the volume's vertices, and for a "
+        "(out, frames, all_converged, failure, unconverged_frames, total_seconds, element, final_positions: the volume's vertices, and for a "
         "flesh scene final_surface and surface_triangles: the character's skin; report). ValueError for a bad "
-        "scene, RuntimeError when a frame fails (check=False: returned in the dict), KeyboardInterrupt on Ctrl-C (the "
+        "scene, RuntimeError when a frame fails (check=False: returned in the dict; keep_going=True: frames that do not converge are "
+        "written, marked in stats.json, and the run goes on to the end before that error), KeyboardInterrupt on Ctrl-C (the "
         "frames so far kept).");
 }
 

@@ -56,7 +56,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     int resolution = 0;
     double cell_size = 0.0;
     ParameterOptions params;
-    bool quasi_static = false, dynamic = false, resume = false, no_report = false, force = false;
+    bool quasi_static = false, dynamic = false, resume = false, keep_going = false, no_report = false, force = false;
     double fps = FleshSpec{}.fps;
     double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness;
     std::string joint_cells = to_string(FleshSpec{}.joint_cells);
@@ -122,6 +122,8 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--out", o->out, "Output directory (default output/<model name>)")->check(non_empty_path());
   cmd->add_option("--solver", o->solver, "Linear solver (default auto: by size; see snh stretch --help)");
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
+  cmd->add_flag("--keep-going", o->keep_going,
+                "Write a frame that does not converge (marked NOT CONVERGED in its line and in stats.json) and go on from it instead of stopping; the exit code is still 1");
   cmd->add_flag("--force", o->force, "Write into --out even if it is not empty and holds no snh run (files with the names of ours are replaced)");
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
@@ -187,6 +189,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     built.scene.source = o->model;
     built.scene.run.program = "snh flesh";
     built.scene.run.resume = o->resume;
+    built.scene.run.keep_going = o->keep_going;
     exit_code = run_scene_command(built, o->no_report, o->force);
   });
 }

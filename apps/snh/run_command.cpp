@@ -20,6 +20,7 @@ void add_run_command(CLI::App& app, int& exit_code) {
     std::string scene, out;
     int threads = 0;
     bool resume = false;
+    bool keep_going = false;
     bool no_report = false;
     bool force = false;
     bool check = false;
@@ -35,6 +36,8 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("scene", o->scene, "Scene file (.json)")->required();
   cmd->add_option("--out", o->out, "Output directory (default: the scene's output.dir, else output/<scene name>)")->check(non_empty_path());
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
+  cmd->add_flag("--keep-going", o->keep_going,
+                "Write a frame that does not converge (marked NOT CONVERGED in its line and in stats.json) and go on from it instead of stopping; the exit code is still 1");
   cmd->add_flag("--no-report", o->no_report, "Do not write the browser report (index.html; snh report DIR writes it later)");
   cmd->add_flag("--force", o->force, "Write into the output directory even if it is not empty and holds no snh run (files with the names of ours are replaced)");
   cmd->add_option("--threads", o->threads, "OpenMP threads for assembly (default: all cores)")->check(CLI::Range(0, 1024));
@@ -47,6 +50,7 @@ void add_run_command(CLI::App& app, int& exit_code) {
     BuiltScene built = build_scene(load_scene(o->scene));
     if (!o->out.empty()) built.scene.output.dir = o->out;
     built.scene.run.resume = o->resume;
+    built.scene.run.keep_going = o->keep_going;
     built.scene.run.check_only = o->check;
     exit_code = run_scene_command(built, o->no_report, o->force);
   });

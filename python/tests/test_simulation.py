@@ -101,6 +101,20 @@ def test_run_scene_file_matches_snh_run(tmp_path):
         assert (tmp_path / "py" / f"{frame:03d}.obj").read_text() == (tmp_path / "cli" / f"{frame:03d}.obj").read_text()
 
 
+def test_run_scene_keep_going(tmp_path):
+    # One Newton iteration a frame cannot hold a falling box: every frame fails.
+    scene = {"mesh": {"box": {"res": 2}}, "gravity": [0, -9.8, 0], "frames": 4, "end_time": 0.4,
+             "solver": {"max_iterations": 1}, "pins": [{"region": {"min": [-1, 1, -1], "max": [1, 1, 1]}}]}
+    r = snh.run_scene(scene, out=tmp_path / "stop", quiet=True, report=False, check=False)
+    assert r["frames"] == 2 and r["unconverged_frames"] == [1]
+    r = snh.run_scene(scene, out=tmp_path / "going", quiet=True, report=False, check=False, keep_going=True)
+    assert r["frames"] == 5 and r["unconverged_frames"] == [1, 2, 3, 4] and not r["all_converged"]
+    assert r["failure"].startswith("frame 1, ")
+    with pytest.raises(RuntimeError, match="^frame 1, "):
+        snh.run_scene(scene, out=tmp_path / "raises", quiet=True, report=False, keep_going=True)
+    assert (tmp_path / "raises" / "004.obj").exists()
+
+
 def test_run_scene_errors(tmp_path):
     scene = pin_scene(tmp_path)
     scene["dt"] = -1

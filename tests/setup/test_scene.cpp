@@ -521,6 +521,58 @@ TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
   std::filesystem::remove_all(base);
 }
 
+TEST(SceneRun, KeepGoingWritesFramesThatDoNotConvergeMarkedAndGoesOn) {
+  // One Newton iteration a frame is not enough for a box falling from its pins' hold: every frame fails.
+  const json j = json::parse(R"({"mesh": {"box": {"res": 2}}, "gravity": [0, -9.8, 0], "frames": 6, "end_time": 0.6,
+                                 "solver": {"max_iterations": 1}, "pins": [{"region": {"min": [-1, 1, -1], "max": [1, 1, 1]}}]})");
+  const auto base = std::filesystem::temp_directory_path() / ("snh_test_scene_keep_going_" + std::to_string(::getpid()));
+  std::ostringstream log;
+  Scene stop = parse_scene(j, "keep.json");
+  stop.output.dir = base / "stop";
+  const SceneResult a = run_scene(stop, log);
+  EXPECT_FALSE(a.all_converged);
+  EXPECT_EQ(a.frames.size(), 2u) << "without keep_going the run stops at the first frame that fails";
+  EXPECT_EQ(a.unconverged, std::vector<int>{1});
+
+  Scene going = parse_scene(j, "keep.json");
+  going.output.dir = base / "going";
+  going.run.keep_going = true;
+  std::ostringstream going_log;
+  const SceneResult b = run_scene(going, going_log);
+  EXPECT_FALSE(b.all_converged);
+  ASSERT_EQ(b.frames.size(), 7u) << going_log.str();
+  EXPECT_EQ(b.unconverged, (std::vector<int>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(b.failure.rfind("frame 1, ", 0), 0u) << b.failure;
+  EXPECT_TRUE(std::filesystem::exists(going.output.dir / "006.obj"));
+  EXPECT_NE(going_log.str().find("NOT CONVERGED"), std::string::npos);
+  EXPECT_NE(going_log.str().find("FINISHED WITH 6 FRAMES NOT CONVERGED"), std::string::npos) << going_log.str();
+  std::ifstream in(going.output.dir / "stats.json");
+  const json stats = json::parse(in);
+  EXPECT_EQ(stats["all_converged"], false);
+  EXPECT_EQ(stats["unconverged_frames"], json::array({1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(stats["frames"][6]["converged"], false);
+
+  // Interrupted in frame 4 and resumed: the frames before the stop stay marked, and the answer is the same.
+  Scene cut = parse_scene(j, "keep.json");
+  cut.output.dir = base / "cut";
+  cut.run.keep_going = true;
+  int calls = 0;
+  cut.solver.newton.on_iteration = [&](int, double) {
+    if (++calls == 4) request_stop(SIGINT);
+  };
+  const SceneResult c = run_scene(cut, log);
+  request_stop(0);
+  ASSERT_EQ(c.interrupted_by, SIGINT);
+  Scene again = parse_scene(j, "keep.json");
+  again.output.dir = cut.output.dir;
+  again.run.keep_going = again.run.resume = true;
+  const SceneResult d = run_scene(again, log);
+  EXPECT_EQ(d.unconverged, b.unconverged);
+  EXPECT_FALSE(d.all_converged);
+  EXPECT_LT((d.final_positions - b.final_positions).cwiseAbs().maxCoeff(), 1e-9);  // to rounding (the box is 2 wide)
+  std::filesystem::remove_all(base);
+}
+
 TEST(SceneRun, AMeshFileRelativeToTheScene) {
   const auto dir = std::filesystem::temp_directory_path() / ("snh_test_scene_file_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir / "meshes");

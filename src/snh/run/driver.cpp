@@ -29,6 +29,7 @@ void write_stats(const RunPlan& plan, const RunResult& r, const std::string& sta
   j["status"] = status;
   j["all_converged"] = status == "finished" ? r.all_converged : false;
   j["failure"] = r.failure;
+  j["unconverged_frames"] = r.unconverged;
   j["interrupted_by_signal"] = r.interrupted_by;
   j["total_seconds"] = r.total_seconds;
   j["peak_memory_mib"] = r.peak_memory_mib;
@@ -117,8 +118,11 @@ class RunLoop {
         throw std::invalid_argument(fmt::format("cannot resume: the checkpoint in {} is after {} {}, beyond the {} of this run",
                                                 plan_.out.string(), word_, resume_from_->step, plan_.frames));
       check_kept_frames(plan_.out, resume_from_->step, plan_.write_vtu);
-      for (const json& j : history_for_resume(plan_.out, table_.records, resume_from_->step + (table_.has_initial ? 1 : 0)))
+      for (const json& j : history_for_resume(plan_.out, table_.records, resume_from_->step + (table_.has_initial ? 1 : 0))) {
         result_.records.push_back(from_json(table_, j));
+        const StepRecord& r = result_.records.back();
+        if (!r.converged) not_converged(r);  // a frame that a --keep-going run went past
+      }
     } else {
       (void)clear_previous_run(plan_.out, *lock_);
     }
@@ -179,6 +183,13 @@ class RunLoop {
     if (plan_.summary) log_ << plan_.summary(result_) << "\n";
     log_.flush();
     return result_;
+  }
+
+  /// A frame that did not converge: the run's result says so (its failure names the first such frame).
+  void not_converged(const StepRecord& r) {
+    result_.all_converged = false;
+    result_.unconverged.push_back(r.index);
+    if (result_.failure.empty()) result_.failure = fmt::format("{} {}, {}", word_, r.index, r.failure);
   }
 
   RunResult interrupted() {
@@ -301,9 +312,8 @@ class RunLoop {
     if (plan_.line) log_ << plan_.line(r) << "\n";
     log_.flush();
     if (!r.converged) {
-      result_.all_converged = false;
-      result_.failure = fmt::format("{} {}, {}", word_, frame, r.failure);
-      return Outcome::stopped;
+      not_converged(r);
+      if (!plan_.keep_going) return Outcome::stopped;
     }
     // Everything needed to resume after this frame: the stats so far and the exact state.
     result_.total_seconds = since(t_start_);

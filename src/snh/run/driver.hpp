@@ -27,7 +27,8 @@ namespace snh {
 /// How a run ended, as every kind of run reports it (RunResult; a scene's and the stretch test's results).
 struct RunOutcome {
   bool all_converged = true;
-  std::string failure;     ///< why the run stopped early (empty when it ran to the end)
+  std::string failure;     ///< why the run stopped early, or its first frame that did not converge (empty when all did)
+  std::vector<int> unconverged;  ///< the frames that did not converge (with keep_going, the run went on past them)
   int interrupted_by = 0;  ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
   double total_seconds = 0.0;
   double peak_memory_mib = 0.0;  ///< peak resident memory of the process (VmHWM)
@@ -52,6 +53,10 @@ struct RunPlan {
   /// the run goes on: a run killed outright loses at most that much; 0: after every frame.
   double progress_interval = 1.0;
   bool resume = false;            ///< continue from DIR/checkpoint.bin
+  /// A frame that does not converge is written and recorded as such (its record's `converged` false, its
+  /// progress line NOT CONVERGED, stats.json's `unconverged_frames`), and the run goes on from its state
+  /// instead of stopping there; the run still reports that not all frames converged.
+  bool keep_going = false;
   std::string fingerprint;        ///< the settings that decide the result (a resume must match)
   nlohmann::json settings;        ///< stats.json's fields that describe the run
   bool live_progress = false;     ///< the log is a terminal: a line updated at every Newton iteration

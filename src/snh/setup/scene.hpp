@@ -180,6 +180,7 @@ struct OutputSpec {
 struct RunControl {
   std::string program = "snh run";  ///< the program that runs it (stats.json, the header)
   bool resume = false;         ///< continue the run in output.dir from its checkpoint (the last completed frame)
+  bool keep_going = false;     ///< write a frame that does not converge, marked, and go on (RunPlan::keep_going)
   std::string command_line;    ///< as the user typed it, for stats.json and the report
   bool live_progress = false;  ///< the log is a terminal: update a line per Newton iteration
   /// Build the problem, print the run's header, and stop before any frame: nothing is written.

@@ -137,6 +137,7 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
   plan.substep = b.substep;
   plan.write_vtu = s.output.vtu;
   plan.resume = s.run.resume;
+  plan.keep_going = s.run.keep_going;
   // The scene as parsed (or its source, for one built in code) and the mesh file's (model's) contents.
   plan.fingerprint = "scene " + (s.settings.empty() ? s.source.string() : s.settings) +
                      (b.body->digest.empty() ? "" : " mesh contents " + b.body->digest);
@@ -166,9 +167,17 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
   plan.failure = [](const StepReport& r) {
     return fmt::format("substep {} (t = {:.6g}): {}", r.failed_substep, r.failed_time, r.failure);
   };
-  plan.summary = [out = s.output.dir](const RunResult& r) {
-    return fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); frames, stats.json and stats.csv in {}",
-                       r.all_converged ? "finished" : "STOPPED: " + r.failure, r.total_seconds, r.peak_memory_mib, out.string());
+  plan.summary = [out = s.output.dir, frames](const RunResult& r) {
+    std::string how = r.all_converged ? "finished" : "STOPPED: " + r.failure;
+    if (!r.unconverged.empty() && r.interrupted_by == 0 && !r.records.empty() && r.records.back().index == frames) {
+      std::string list;
+      for (std::size_t i = 0; i < r.unconverged.size() && i < 10; ++i) list += fmt::format("{}{}", i ? ", " : "", r.unconverged[i]);
+      if (r.unconverged.size() > 10) list += ", …";
+      how = fmt::format("FINISHED WITH {} FRAME{} NOT CONVERGED ({}; kept going past them: their results cannot be trusted): first {}",
+                        r.unconverged.size(), r.unconverged.size() == 1 ? "" : "S", list, r.failure);
+    }
+    return fmt::format("{} in {:.3f} s (peak memory {:.0f} MiB); frames, stats.json and stats.csv in {}", how, r.total_seconds,
+                       r.peak_memory_mib, out.string());
   };
   if (b.body->flesh) add_flesh_output(b, sim, plan);
   const auto& terms = sim.problem().terms();
