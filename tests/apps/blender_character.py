@@ -5,7 +5,8 @@
 # character.dae (COLLADA exporter) and truth.json: per frame of the clip (1, 12, 24 at 24 fps) the evaluated
 # skin's vertices in Blender's world, and the bones' heads at frame 1.
 # The character: a bent arm of three bones (upper, lower, hand) inside a closed tube of 16 sides and 24 rings,
-# with smooth weights across the elbow and the wrist; the elbow bends 70° and the wrist 30° over the clip.
+# with smooth weights across the elbow and the wrist, smooth shading and a UV map; the elbow bends 70° and the
+# wrist 30° over the clip. truth.json also holds the evaluated skin's vertex normals at frame 1.
 import json
 import math
 import os
@@ -72,6 +73,19 @@ for k in range(sides):
 
 mesh = bpy.data.meshes.new("arm")
 mesh.from_pydata(verts, [], faces)
+# Smooth shading and a cylindrical UV map with a seam where the sides close, as a character's skin has them.
+uv = mesh.uv_layers.new(name="UVMap")
+for poly in mesh.polygons:
+    poly.use_smooth = True
+    ring = [v for v in poly.vertices if v < bottom]
+    wraps = any(v % sides == sides - 1 for v in ring) and any(v % sides == 0 for v in ring)
+    for li in poly.loop_indices:
+        v = mesh.loops[li].vertex_index
+        if v >= bottom:  # a cap's centre
+            uv.data[li].uv = (0.5, 0.0 if v == bottom else 1.0)
+            continue
+        r, k = divmod(v, sides)
+        uv.data[li].uv = (1.0 if (wraps and k == 0) else k / sides, r / rings)
 mesh.update()
 body = bpy.data.objects.new("arm", mesh)
 scene.collection.objects.link(body)
@@ -121,6 +135,11 @@ for frame in (1, 12, 24):
     truth["frames"][str(frame)] = [list(body.matrix_world @ v.co) for v in m.vertices]
     evaluated.to_mesh_clear()
 scene.frame_set(1)
+depsgraph = bpy.context.evaluated_depsgraph_get()
+evaluated = body.evaluated_get(depsgraph)
+m = evaluated.to_mesh()
+truth["normals"] = [list(v.normal) for v in m.vertices]
+evaluated.to_mesh_clear()
 truth["heads"] = {name: list(rig.matrix_world @ rig.data.bones[name].head_local) for name in names}
 with open(os.path.join(out, "truth.json"), "w") as f:
     json.dump(truth, f)

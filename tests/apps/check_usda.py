@@ -2,8 +2,10 @@
 """Parses a USD ASCII layer by the .usda grammar (the subset a stage of time-sampled meshes uses: layer
 metadata, def/over/class prims with a type and optional metadata, attributes with a type, optional
 `uniform`/`custom`, a value or `.timeSamples` dictionary; values are numbers, strings, tokens, tuples and
-arrays) and checks every mesh: face counts against indices, indices against points, every time sample with
-the same number of finite points. Prints one line per mesh; exits 1 with the line and column of the first
+arrays, with metadata on prims and attributes) and checks every mesh: face counts against indices, indices
+against points, every time sample with the same number of finite points; where present, an extent per sample
+that bounds its points, unit normals per vertex and sample, and texture coordinates `primvars:st` per vertex
+(both with interpolation "vertex"). Prints one line per mesh; exits 1 with the line and column of the first
 error.
 
 Usage: check_usda.py FILE.usda [EXPECTED_MESHES [EXPECTED_SAMPLES]]
@@ -131,7 +133,10 @@ class Parser:
                 if self.peek()[1] == '=':
                     self.i += 1
                     value = self.value()
-                prim['attrs'][attr] = ('value', type_tok, value)
+                if attr not in prim['attrs'] or value is not None:
+                    prim['attrs'][attr] = ('value', type_tok, value)
+            if self.peek()[1] == '(':
+                prim.setdefault('attr_meta', {}).setdefault(attr.replace('.timeSamples', ''), {}).update(self.metadata())
         self.take('punct', '}')
         return prim
 
@@ -179,8 +184,36 @@ def main():
             times = sorted(samples)
             if times[0] < meta.get('startTimeCode', 0) or times[-1] > meta.get('endTimeCode', times[-1]):
                 raise ParseError(f'mesh {m["name"]}: samples outside the stage\'s time codes')
+            if 'extent' in a:
+                kind, type_name, boxes = a['extent']
+                if kind != 'samples' or type_name != 'float3[]' or sorted(boxes) != times:
+                    raise ParseError(f'mesh {m["name"]}: extent is not a float3[] sample per points sample')
+                for t in times:
+                    lo, hi = boxes[t]
+                    if any(not (lo[d] - 1e-6 * (1 + abs(lo[d])) <= p[d] <= hi[d] + 1e-6 * (1 + abs(hi[d])))
+                           for p in samples[t] for d in range(3)):
+                        raise ParseError(f'mesh {m["name"]}: a point at time {t:g} lies outside its extent')
+            interpolation = lambda name: m.get('attr_meta', {}).get(name, {}).get('interpolation')
+            if 'normals' in a:
+                kind, type_name, normals = a['normals']
+                if kind != 'samples' or type_name != 'normal3f[]' or sorted(normals) != times:
+                    raise ParseError(f'mesh {m["name"]}: normals are not a normal3f[] sample per points sample')
+                if interpolation('normals') != 'vertex':
+                    raise ParseError(f'mesh {m["name"]}: normals without interpolation "vertex"')
+                for t in times:
+                    if len(normals[t]) != n or any(len(v) != 3 or not (abs(math.hypot(*v) - 1) < 1e-5 or math.hypot(*v) == 0)
+                                                   for v in normals[t]):
+                        raise ParseError(f'mesh {m["name"]}: the normals at time {t:g} are not {n} unit vectors')
+            if 'primvars:st' in a:
+                kind, type_name, st = a['primvars:st']
+                if kind != 'value' or type_name != 'texCoord2f[]' or len(st) != n or interpolation('primvars:st') != 'vertex':
+                    raise ParseError(f'mesh {m["name"]}: primvars:st is not {n} texCoord2f with interpolation "vertex"')
+                if any(len(v) != 2 or not all(math.isfinite(c) for c in v) for v in st):
+                    raise ParseError(f'mesh {m["name"]}: a texture coordinate is not 2 finite numbers')
             sample_counts.add(len(times))
-            print(f'{m["name"]}: {len(counts)} faces, {n} points, {len(times)} time samples')
+            extras = [name for name in ('extent', 'normals', 'primvars:st') if name in a]
+            print(f'{m["name"]}: {len(counts)} faces, {n} points, {len(times)} time samples' +
+                  (f' ({", ".join(extras)})' if extras else ''))
         if len(sys.argv) > 2 and len(found) != int(sys.argv[2]):
             raise ParseError(f'{len(found)} meshes, expected {sys.argv[2]}')
         if len(sys.argv) > 3 and sample_counts != {int(sys.argv[3])}:

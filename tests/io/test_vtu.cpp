@@ -19,6 +19,7 @@
 
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/obj.hpp"
+#include "snh/io/surface_read.hpp"
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/surface.hpp"
@@ -241,6 +242,29 @@ TEST(Obj, VerticesAreWrittenAsPrintfsTenSignificantDigits) {
   }
   want += "f 1 2 3\n";
   EXPECT_EQ(slurp(dir / "p.obj"), want);
+  fs::remove_all(dir);
+}
+
+TEST(Obj, TextureCoordinatesAndNormalsAreWrittenPerVertexAndNamedByTheFaces) {
+  Eigen::Matrix3Xd P(3, 3), N(3, 3);
+  P << 0, 1, 0, 0, 0, 1, 0, 0, 0;
+  N << 0, 0, 0, 0, 0, 0, 1, 1, 1;
+  Eigen::Matrix2Xd UV(2, 3);
+  UV << 0, 1, 0, 0, 0, 0.25;
+  Eigen::Matrix3Xi T(3, 1);
+  T << 0, 1, 2;
+  const fs::path dir = temp_dir("obj_uv");
+  write_obj(dir / "all.obj", P, UV, N, T);
+  EXPECT_EQ(slurp(dir / "all.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 0.25\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1/1/1 2/2/2 3/3/3\n");
+  write_obj(dir / "uv.obj", P, UV, Eigen::Matrix3Xd(3, 0), T);
+  EXPECT_EQ(slurp(dir / "uv.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 0.25\nf 1/1 2/2 3/3\n");
+  write_obj(dir / "n.obj", P, Eigen::Matrix2Xd(2, 0), N, T);
+  EXPECT_EQ(slurp(dir / "n.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1//1 2//2 3//3\n");
+  // The mesh readers take such a frame back (positions and triangles).
+  const SurfaceMesh back = read_surface(dir / "all.obj");
+  EXPECT_EQ(back.vertices, P);
+  EXPECT_EQ(back.triangles, T);
+  EXPECT_THROW(write_obj(dir / "bad.obj", P, Eigen::Matrix2Xd(2, 2), N, T), std::invalid_argument);
   fs::remove_all(dir);
 }
 

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -23,7 +24,9 @@
 #include "snh/rig/assimp.hpp"
 #include "snh/rig/bind_pose.hpp"
 #include "snh/rig/model.hpp"
+#include "snh/rig/normals.hpp"
 #include "snh/rig/skinning.hpp"
+#include "snh/setup/scene_run.hpp"
 
 namespace snh {
 namespace {
@@ -126,6 +129,82 @@ TEST_F(BlenderCharacter, FbxExportReadThroughAssimpSkinsAsBlenderDoes) {
 }
 
 TEST_F(BlenderCharacter, ColladaExportReadThroughAssimpSkinsAsBlenderDoes) { expect_blender_skinning("character.dae", "rig_"); }
+
+// The arm is smooth-shaded with a cylindrical UV map: each file's texture coordinates lie in the map's square
+// (v up, as OBJ and USD have it: the arm's root at v = 0), and the normals computed from the skin's triangles,
+// as every frame's are, agree with the normals Blender wrote.
+TEST_F(BlenderCharacter, TextureCoordinatesAndNormalsAreReadAndNormalsFromTheTrianglesAgree) {
+  for (const char* file : {"character.glb", "character.fbx", "character.dae"}) {
+    SCOPED_TRACE(file);
+    RiggedModel m = read_model(dir_ / file);
+    (void)place_at_bind_pose(m);
+    ASSERT_EQ(m.uv.cols(), m.vertices.cols());
+    ASSERT_EQ(m.normals.cols(), m.vertices.cols());
+    EXPECT_GE(m.uv.minCoeff(), -1e-6);
+    EXPECT_LE(m.uv.maxCoeff(), 1.0 + 1e-6);
+    // v grows along the arm (from its root at the origin): the lowest vertices have v near 0.
+    Eigen::Index lowest = 0;
+    for (Eigen::Index v = 0; v < m.vertices.cols(); ++v)
+      if (m.vertices.col(v).norm() < m.vertices.col(lowest).norm()) lowest = v;
+    EXPECT_LT(m.uv(1, lowest), 0.05) << "v runs down the image (glTF's v not flipped)?";
+    const NormalGroups groups = normal_groups(m);
+    const Eigen::Matrix3Xd ours = vertex_normals(m, groups, m.vertices);
+    const Eigen::ArrayXd agree = (ours.array() * m.normals.array()).colwise().sum();
+    // Angle-weighted normals, as Blender's: cos of the worst angle between them 0.99984 here (area weights gave 0.90).
+    EXPECT_GT(agree.minCoeff(), 0.999) << "the worst vertex";
+    EXPECT_GT(agree.mean(), 0.99999);
+  }
+}
+
+// The hand in data/ (made elsewhere, from npm): the normals computed from its triangles agree with its own.
+TEST(ModelNormals, TheHandsNormalsFromItsTrianglesAgreeWithItsOwn) {
+  const RiggedModel m = read_model(fs::path(SNH_TESTS_DIR) / ".." / "data" / "hand" / "left.glb");
+  ASSERT_EQ(m.normals.cols(), m.vertices.cols());
+  ASSERT_EQ(m.uv.cols(), m.vertices.cols());
+  const Eigen::Matrix3Xd ours = vertex_normals(m, normal_groups(m), m.vertices);
+  const Eigen::ArrayXd agree = (ours.array() * m.normals.array()).colwise().sum();
+  EXPECT_GT(agree.minCoeff(), 0.97);  // 0.977 (12°) at worst, where its tool weighted otherwise
+  EXPECT_GT(agree.mean(), 0.999);
+  // Inside out, the same normals (the sign follows the file's normals).
+  RiggedModel flipped = m;
+  flipped.triangles.row(1).swap(flipped.triangles.row(2));
+  const Eigen::Matrix3Xd again = vertex_normals(flipped, normal_groups(flipped), flipped.vertices);
+  EXPECT_LT((again - ours).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// A flesh run of the arm writes each frame's texture coordinates and normals into its OBJ frames and USD stage.
+TEST_F(BlenderCharacter, FleshFramesAndStageCarryTextureCoordinatesAndNormals) {
+  const fs::path out = dir_ / "flesh";
+  const json scene = {{"flesh", {{"model", (dir_ / "character.glb").string()}, {"resolution", 10}}},
+                      {"frames", 3},
+                      {"output", {{"dir", out.string()}}}};
+  std::ostringstream log;
+  const SceneResult r = run_scene(parse_scene(scene, dir_ / "scene.json"), log);
+  ASSERT_TRUE(r.all_converged) << log.str();
+  const RiggedModel m = read_model(dir_ / "character.glb");
+  std::ifstream in(out / "surface" / "003.obj");
+  std::map<std::string, int> lines;
+  std::string line, face;
+  while (std::getline(in, line)) {
+    const std::string tag = line.substr(0, line.find(' '));
+    ++lines[tag];
+    if (tag == "f" && face.empty()) face = line;
+  }
+  EXPECT_EQ(lines["v"], m.vertices.cols());
+  EXPECT_EQ(lines["vt"], m.vertices.cols());
+  EXPECT_EQ(lines["vn"], m.vertices.cols());
+  EXPECT_EQ(lines["f"], m.triangles.cols());
+  const int a = m.triangles(0, 0) + 1, b = m.triangles(1, 0) + 1, c = m.triangles(2, 0) + 1;
+  EXPECT_EQ(face, fmt::format("f {}/{}/{} {}/{}/{} {}/{}/{}", a, a, a, b, b, b, c, c, c));
+  const std::string check = fmt::format("python3 '{}/apps/check_usda.py' '{}' 2 4 > '{}' 2>&1", SNH_TESTS_DIR, (out / "flesh.usda").string(),
+                                        (out / "usda.log").string());
+  const int code = std::system(check.c_str());
+  std::ifstream usda_log(out / "usda.log");
+  const std::string checked(std::istreambuf_iterator<char>(usda_log), {});
+  EXPECT_EQ(code, 0) << checked;
+  EXPECT_NE(checked.find("flesh: " + std::to_string(m.triangles.cols()) + " faces"), std::string::npos) << checked;
+  EXPECT_NE(checked.find("(extent, normals, primvars:st)"), std::string::npos) << checked;
+}
 
 /// The five rigged, animated characters of Debian's assimp-testmodels, read directly.
 class AssimpTestModels : public ::testing::Test {

@@ -1,6 +1,7 @@
 #include "snh/io/obj.hpp"
 
 #include <charconv>
+#include <stdexcept>
 #include <string>
 
 #include <fmt/format.h>
@@ -17,26 +18,57 @@ std::string obj_faces(const Eigen::Matrix3Xi& triangles) {
   return fmt::to_string(buf);
 }
 
+namespace {
+/// "TAG x y …" per column with `digits` significant digits, by std::to_chars (the same characters as printf's
+/// "%.10g", which fmt's "{:.10g}" also gives: tested), without fmt's per-call overhead on every coordinate.
+template <int Rows>
+void append_rows(std::string& buf, std::string_view tag, const Eigen::Matrix<double, Rows, Eigen::Dynamic>& m, int digits) {
+  buf.reserve(buf.size() + static_cast<std::size_t>(m.cols()) * (16 * Rows + 4));
+  char line[Rows * 32 + 8];
+  for (Eigen::Index v = 0; v < m.cols(); ++v) {
+    char* p = line;
+    for (const char c : tag) *p++ = c;
+    for (int d = 0; d < Rows; ++d) {
+      *p++ = ' ';
+      p = std::to_chars(p, line + sizeof line, m(d, v), std::chars_format::general, digits).ptr;
+    }
+    *p++ = '\n';
+    buf.append(line, p);
+  }
+}
+}  // namespace
+
 void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, std::string_view faces) {
   write_atomically(path, [&](std::ostream& out) {
-    // "v %.10g %.10g %.10g" per vertex by std::to_chars (the same characters as printf's, which fmt's
-    // "{:.10g}" also gives: tested), without fmt's per-call formatting overhead on every coordinate.
     std::string buf;
-    buf.reserve(static_cast<std::size_t>(positions.cols()) * 48);
-    char line[3 * 32 + 4];
-    for (Eigen::Index v = 0; v < positions.cols(); ++v) {
-      char* p = line;
-      *p++ = 'v';
-      for (int d = 0; d < 3; ++d) {
-        *p++ = ' ';
-        p = std::to_chars(p, line + sizeof line, positions(d, v), std::chars_format::general, 10).ptr;
-      }
-      *p++ = '\n';
-      buf.append(line, p);
-    }
+    append_rows<3>(buf, "v", positions, 10);
     out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
     out.write(faces.data(), static_cast<std::streamsize>(faces.size()));
   });
+}
+
+void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, const Eigen::Matrix2Xd& texcoords,
+               const Eigen::Matrix3Xd& normals, const Eigen::Matrix3Xi& triangles) {
+  const bool st = texcoords.cols() > 0, vn = normals.cols() > 0;
+  if ((st && texcoords.cols() != positions.cols()) || (vn && normals.cols() != positions.cols()))
+    throw std::invalid_argument(fmt::format("{}: {} vertices with {} texture coordinates and {} normals", path.string(),
+                                            positions.cols(), texcoords.cols(), normals.cols()));
+  std::string buf;
+  append_rows<3>(buf, "v", positions, 10);
+  if (st) append_rows<2>(buf, "vt", texcoords, 8);
+  if (vn) append_rows<3>(buf, "vn", normals, 7);
+  for (Eigen::Index f = 0; f < triangles.cols(); ++f) {
+    buf += 'f';
+    for (int c = 0; c < 3; ++c) {
+      const int i = triangles(c, f) + 1;
+      if (st && vn) fmt::format_to(std::back_inserter(buf), " {}/{}/{}", i, i, i);
+      else if (st) fmt::format_to(std::back_inserter(buf), " {}/{}", i, i);
+      else if (vn) fmt::format_to(std::back_inserter(buf), " {}//{}", i, i);
+      else fmt::format_to(std::back_inserter(buf), " {}", i);
+    }
+    buf += '\n';
+  }
+  write_atomically(path, [&](std::ostream& out) { out.write(buf.data(), static_cast<std::streamsize>(buf.size())); });
 }
 
 void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, const Eigen::Matrix3Xi& triangles) {

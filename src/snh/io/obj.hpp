@@ -21,4 +21,10 @@ void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positi
 /// write_obj with the face lines made by obj_faces.
 void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, std::string_view faces);
 
+/// A character's frame: the vertices, then `vt u v` per vertex when `texcoords` (2 by #V) has columns, `vn x y z`
+/// per vertex when `normals` (3 by #V) has columns, and faces that name them (`f a/a/a`, `f a/a` or `f a//a`:
+/// each vertex's texture coordinate and normal have its own index).
+void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, const Eigen::Matrix2Xd& texcoords,
+               const Eigen::Matrix3Xd& normals, const Eigen::Matrix3Xi& triangles);
+
 }  // namespace snh

@@ -51,6 +51,15 @@ void write_usda(const std::filesystem::path& path, const std::string& root, cons
       if (!m.frames[f].allFinite())
         throw std::invalid_argument(fmt::format("USD mesh {}: frame {} has a non-finite point", m.name, f));
     }
+    if (!m.normals.empty() && m.normals.size() != m.frames.size())
+      throw std::invalid_argument(fmt::format("USD mesh {}: {} frames of normals for {} frames", m.name, m.normals.size(), m.frames.size()));
+    for (const Eigen::Matrix3Xd& n : m.normals)
+      if (n.cols() != m.frames[0].cols() || !n.allFinite())
+        throw std::invalid_argument(fmt::format("USD mesh {}: normals of {} vertices (or not finite) for {} points", m.name, n.cols(),
+                                                m.frames[0].cols()));
+    if (m.uv.cols() > 0 && (m.uv.cols() != m.frames[0].cols() || !m.uv.allFinite()))
+      throw std::invalid_argument(fmt::format("USD mesh {}: {} texture coordinates (or not finite) for {} points", m.name, m.uv.cols(),
+                                              m.frames[0].cols()));
     if (m.triangles.size() > 0 && (m.triangles.minCoeff() < 0 || m.triangles.maxCoeff() >= m.frames[0].cols()))
       throw std::invalid_argument(fmt::format("USD mesh {}: a triangle index is out of range", m.name));
   }
@@ -67,14 +76,35 @@ void write_usda(const std::filesystem::path& path, const std::string& root, cons
     put(o, "]\n        int[] faceVertexIndices = [");
     for (Eigen::Index f = 0; f < m.triangles.cols(); ++f)
       put(o, "{}{}, {}, {}", f ? ", " : "", m.triangles(0, f), m.triangles(1, f), m.triangles(2, f));
-    put(o, "]\n        uniform token orientation = \"rightHanded\"\n");
-    put(o, "        point3f[] points.timeSamples = {{\n");
-    for (std::size_t f = 0; f < m.frames.size(); ++f) {
-      put(o, "            {}: ", f);
-      points(o, m.frames[f]);
-      put(o, ",\n");
+    put(o, "]\n");
+    // One 3-vector array per time code: "TYPE NAME.timeSamples = { 0: [...], 1: [...], ... }".
+    const auto samples = [&o](const char* declaration, std::size_t count, const auto& array_at) {
+      put(o, "        {}.timeSamples = {{\n", declaration);
+      for (std::size_t f = 0; f < count; ++f) {
+        put(o, "            {}: ", f);
+        points(o, array_at(f));
+        put(o, ",\n");
+      }
+      put(o, "        }}\n");
+    };
+    // The bounds of every frame (a tool frames and culls by them without reading the points).
+    samples("float3[] extent", m.frames.size(), [&](std::size_t f) {
+      Eigen::Matrix3Xd box = Eigen::Matrix3Xd::Zero(3, 2);
+      if (m.frames[f].cols() > 0) box << m.frames[f].rowwise().minCoeff(), m.frames[f].rowwise().maxCoeff();
+      return box;
+    });
+    if (!m.normals.empty()) {
+      put(o, "        normal3f[] normals (\n            interpolation = \"vertex\"\n        )\n");
+      samples("normal3f[] normals", m.normals.size(), [&](std::size_t f) -> const Eigen::Matrix3Xd& { return m.normals[f]; });
     }
-    put(o, "        }}\n        uniform token subdivisionScheme = \"none\"\n    }}\n");
+    put(o, "        uniform token orientation = \"rightHanded\"\n");
+    samples("point3f[] points", m.frames.size(), [&](std::size_t f) -> const Eigen::Matrix3Xd& { return m.frames[f]; });
+    if (m.uv.cols() > 0) {
+      put(o, "        texCoord2f[] primvars:st = [");
+      for (Eigen::Index v = 0; v < m.uv.cols(); ++v) put(o, "{}({:.9g}, {:.9g})", v ? ", " : "", m.uv(0, v), m.uv(1, v));
+      put(o, "] (\n            interpolation = \"vertex\"\n        )\n");
+    }
+    put(o, "        uniform token subdivisionScheme = \"none\"\n    }}\n");
   }
   put(o, "}}\n");
   write_atomically(path, [&](std::ostream& out) { out.write(o.data(), static_cast<std::streamsize>(o.size())); });

@@ -1,7 +1,8 @@
 #pragma once
 // USD ASCII stages (docs/design.md): triangle meshes whose points are time-sampled per frame, written
 // following the .usda grammar (a `#usda 1.0` layer with stage metadata, `def Xform` and `def Mesh` prims,
-// `point3f[] points.timeSamples`), which usdview, Blender and Houdini open.
+// `point3f[] points.timeSamples`, with `extent` and, where given, `normals` per frame and the texture
+// coordinates `primvars:st`), which usdview, Blender and Houdini open.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -14,6 +15,8 @@ struct UsdMesh {
   std::string name;                    ///< the prim's name: a letter or '_' then letters, digits, '_'
   Eigen::Matrix3Xi triangles;          ///< 3 by #F, 0-based, counter-clockwise seen from outside
   std::vector<Eigen::Matrix3Xd> frames;  ///< the points (3 by #V) at time codes 0, 1, 2, …
+  std::vector<Eigen::Matrix3Xd> normals; ///< per frame, unit vertex normals (3 by #V); empty: none written
+  Eigen::Matrix2Xd uv;                   ///< texture coordinates per vertex (2 by #V, origin bottom left); empty: none
 };
 
 /// Writes the stage atomically: one Xform prim `root` (the default prim) holding each mesh, time codes 0 …

@@ -6,6 +6,7 @@
 #include <map>
 #include <numeric>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <assimp/Importer.hpp>
@@ -37,6 +38,27 @@ std::string strip_importer(std::string name) {
   constexpr std::string_view suffix = " Importer";
   if (name.size() > suffix.size() && name.ends_with(suffix)) name.resize(name.size() - suffix.size());
   return name;
+}
+
+/// A vertex's four strongest joints and their weights (a joint named twice has its weights added), and the
+/// sum of those four weights (0 for a vertex no bone weighs).
+std::tuple<Eigen::Vector4i, Eigen::Vector4d, double> strongest_four(std::vector<std::pair<double, int>> influences) {
+  std::sort(influences.begin(), influences.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  std::vector<std::pair<double, int>> merged;
+  for (const auto& [w, j] : influences)
+    if (!merged.empty() && merged.back().second == j) merged.back().first += w;
+    else merged.emplace_back(w, j);
+  std::stable_sort(merged.begin(), merged.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  if (merged.size() > 4) merged.resize(4);
+  Eigen::Vector4i j = Eigen::Vector4i::Zero();
+  Eigen::Vector4d w = Eigen::Vector4d::Zero();
+  double sum = 0.0;
+  for (std::size_t q = 0; q < merged.size(); ++q) {
+    w(static_cast<Eigen::Index>(q)) = merged[q].first;
+    j(static_cast<Eigen::Index>(q)) = merged[q].second;
+    sum += merged[q].first;
+  }
+  return {j, w, sum};
 }
 
 /// Builds a RiggedModel from an assimp scene; every fault is a RigError naming the file.
@@ -173,7 +195,10 @@ class SceneReader {
     out.inverse_bind.assign(joints, Eigen::Matrix4d::Identity());
     std::vector<int> bound_by(joints, -1);  // the mesh (index into meshes_) that set each joint's inverse bind
     rig_build::SkinData data;
-    auto& [xyz, jidx, jw, tri] = data;
+    auto& xyz = data.xyz;
+    auto& jidx = data.jidx;
+    auto& jw = data.jw;
+    auto& tri = data.tri;
     for (std::size_t k = 0; k < meshes_.size(); ++k) {
       const auto [node, m] = meshes_[k];
       const aiMesh* mesh = s_.mMeshes[m];
@@ -187,6 +212,11 @@ class SceneReader {
         fail(fmt::format("{}: too many vertices", where));
       const int offset = static_cast<int>(xyz.size());
       const std::size_t nv = mesh->mNumVertices;
+      // Texture coordinates (assimp's origin is the image's bottom left, as OBJ's and USD's) and normals, taken
+      // to the root's space as the positions are, where the mesh has them.
+      data.all_uv = data.all_uv && mesh->mTextureCoords[0] != nullptr;
+      data.all_normals = data.all_normals && mesh->mNormals != nullptr;
+      const Eigen::Matrix3d normal_map = to_root.topLeftCorner<3, 3>().inverse().transpose();
       std::vector<std::vector<std::pair<double, int>>> influences(nv);
       for (unsigned b = 0; b < mesh->mNumBones; ++b) {
         const aiBone* bone = mesh->mBones[b];
@@ -220,23 +250,7 @@ class SceneReader {
         const aiVector3D& p = mesh->mVertices[v];
         const Eigen::Vector3d x = (to_root * Eigen::Vector4d(p.x, p.y, p.z, 1.0)).head<3>();
         if (!x.allFinite()) fail(fmt::format("{}: vertex {} has a position that is not finite", where, v));
-        auto& inf = influences[v];
-        // Several weights of one joint (a bone listed twice) add up.
-        std::sort(inf.begin(), inf.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
-        std::vector<std::pair<double, int>> merged;
-        for (const auto& [w, j] : inf)
-          if (!merged.empty() && merged.back().second == j) merged.back().first += w;
-          else merged.emplace_back(w, j);
-        std::stable_sort(merged.begin(), merged.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-        if (merged.size() > 4) merged.resize(4);
-        Eigen::Vector4i j = Eigen::Vector4i::Zero();
-        Eigen::Vector4d w = Eigen::Vector4d::Zero();
-        double sum = 0.0;
-        for (std::size_t q = 0; q < merged.size(); ++q) {
-          w(static_cast<Eigen::Index>(q)) = merged[q].first;
-          j(static_cast<Eigen::Index>(q)) = merged[q].second;
-          sum += merged[q].first;
-        }
+        auto [j, w, sum] = strongest_four(influences[v]);
         if (!(sum > 0.0)) {
           if (fallback < 0) {
             ++unweighted;
@@ -244,6 +258,13 @@ class SceneReader {
           }
           j(0) = fallback;
           w(0) = sum = 1.0;
+        }
+        if (data.all_uv) data.uv.emplace_back(mesh->mTextureCoords[0][v].x, mesh->mTextureCoords[0][v].y);
+        if (data.all_normals) {
+          const aiVector3D& nv3 = mesh->mNormals[v];
+          Eigen::Vector3d nrm = normal_map * Eigen::Vector3d(nv3.x, nv3.y, nv3.z);
+          if (!nrm.allFinite()) nrm.setZero();
+          data.normal.push_back(nrm);
         }
         xyz.push_back(x);
         jidx.push_back(j);

@@ -56,6 +56,7 @@ BindPose place_at_bind_pose(RiggedModel& model) {
     const Eigen::Affine3d to = g.affine(), back = to.inverse();
     model.vertices = to * model.vertices;  // (Affine * 3×n applies to each column)
     model.surface_vertices = to * model.surface_vertices;
+    if (model.normals.cols() > 0) model.normals = g.rotation * model.normals;  // a similarity turns normals by its rotation
     for (Eigen::Matrix4d& m : model.inverse_bind) m = m * back.matrix();
   }
 

@@ -422,7 +422,10 @@ class Builder {
   void read_mesh(int mesh_index, int joints, rig_build::SkinData& data) const {
     const tinygltf::Mesh& mesh = m_.meshes[static_cast<std::size_t>(mesh_index)];
     if (mesh.primitives.empty()) fail(fmt::format("mesh {} has no primitives", mesh_index));
-    auto& [xyz, jidx, jw, tri] = data;
+    auto& xyz = data.xyz;
+    auto& jidx = data.jidx;
+    auto& jw = data.jw;
+    auto& tri = data.tri;
     const std::size_t triangles_before = tri.size();
     for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
       const tinygltf::Primitive& prim = mesh.primitives[p];
@@ -452,6 +455,23 @@ class Builder {
       }
       if (xyz.size() + static_cast<std::size_t>(n) > static_cast<std::size_t>(std::numeric_limits<int>::max() / 4))
         fail(fmt::format("{}: too many vertices", where));
+      // Texture coordinates and normals where the primitive has them (glTF's v runs down the image: flipped).
+      const auto optional = [&](const char* name, int type, std::initializer_list<int> kinds, bool normalize) {
+        const auto it = prim.attributes.find(name);
+        Eigen::MatrixXd m;
+        if (it != prim.attributes.end()) m = accessor(it->second, where + " " + name, type, kinds, normalize);
+        if (m.size() > 0 && (m.cols() != n || !m.allFinite())) m.resize(0, 0);  // unusable: left out, as if absent
+        return m;
+      };
+      const Eigen::MatrixXd st = optional("TEXCOORD_0", TINYGLTF_TYPE_VEC2,
+                                          {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                           TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
+                                          true);
+      const Eigen::MatrixXd nrm = optional("NORMAL", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, false);
+      data.all_uv = data.all_uv && st.size() > 0;
+      data.all_normals = data.all_normals && nrm.size() > 0;
+      for (Eigen::Index v = 0; data.all_uv && v < n; ++v) data.uv.emplace_back(st(0, v), 1.0 - st(1, v));
+      for (Eigen::Index v = 0; data.all_normals && v < n; ++v) data.normal.emplace_back(nrm(0, v), nrm(1, v), nrm(2, v));
       const int offset = static_cast<int>(xyz.size());
       for (Eigen::Index v = 0; v < n; ++v) {
         if (!pos.col(v).allFinite()) fail(fmt::format("{}: vertex {} has a position that is not finite", where, v));

@@ -38,6 +38,10 @@ struct RiggedModel {
   Eigen::Matrix3Xi triangles;      ///< 3 by #t, 0-based, counter-clockwise seen from outside
   Eigen::Matrix4Xi joint_index;    ///< 4 by #v: skin joints (indices into skeleton.joints)
   Eigen::Matrix4Xd joint_weight;   ///< 4 by #v: their weights, summing to 1
+  /// 2 by #v: the first texture coordinates, origin at the image's bottom left as OBJ and USD have it (glTF's
+  /// v flipped); empty unless every mesh read has them.
+  Eigen::Matrix2Xd uv;
+  Eigen::Matrix3Xd normals;        ///< 3 by #v: unit normals at the bind pose; empty unless every mesh has them
   // The same surface welded by position (a solid's boundary, or a soup of open and overlapping parts):
   Eigen::Matrix3Xd surface_vertices;  ///< 3 by #s
   Eigen::Matrix3Xi surface_triangles; ///< 3 by #t, the model's triangles on welded vertices

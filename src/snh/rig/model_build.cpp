@@ -68,6 +68,19 @@ void SkinData::store(RiggedModel& out) const {
   }
   out.triangles.resize(3, cols(tri.size()));
   for (std::size_t t = 0; t < tri.size(); ++t) out.triangles.col(cols(t)) = tri[t];
+  out.uv.resize(2, 0);
+  if (all_uv && uv.size() == xyz.size()) {
+    out.uv.resize(2, cols(uv.size()));
+    for (std::size_t v = 0; v < uv.size(); ++v) out.uv.col(cols(v)) = uv[v];
+  }
+  out.normals.resize(3, 0);
+  if (all_normals && normal.size() == xyz.size()) {
+    out.normals.resize(3, cols(normal.size()));
+    for (std::size_t v = 0; v < normal.size(); ++v) {
+      const double len = normal[v].norm();
+      out.normals.col(cols(v)) = len > 0.0 ? Eigen::Vector3d(normal[v] / len) : Eigen::Vector3d::Zero();
+    }
+  }
 }
 
 /// A node's transform when the spec's TRS is not enough: translation · rotation · scale from a 4 by 4 matrix.

@@ -33,7 +33,10 @@ struct SkinData {
   std::vector<Eigen::Vector4i> jidx;
   std::vector<Eigen::Vector4d> jw;
   std::vector<Eigen::Vector3i> tri;
-  /// Into the model's vertices, joint_index, joint_weight and triangles.
+  std::vector<Eigen::Vector2d> uv;      ///< kept only while every vertex so far has them
+  std::vector<Eigen::Vector3d> normal;  ///< likewise
+  bool all_uv = true, all_normals = true;
+  /// Into the model's vertices, joint_index, joint_weight and triangles (uv and normals where every vertex has them).
   void store(RiggedModel& out) const;
 };
 

@@ -134,6 +134,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
   // Skins as characters have them: holes (a mouth, a neck), several meshes, either orientation. The lattice
   // takes them all (its inside test is the generalized winding number); TetGen needs a closed surface.
   f.edges = edge_counts(m.surface_triangles);
+  f.normal_groups = normal_groups(m);
   if (spec.volume == FleshVolume::tets && (f.edges.open > 0 || f.edges.non_manifold > 0))
     throw RigError(fmt::format("{}: the surface (welded by position) is not closed: {} open and {} non-manifold edges of {}; "
                                "tets (TetGen) need a closed surface: use the lattice (--volume lattice), which takes open skins",
@@ -341,6 +342,10 @@ std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t) {
 }
 
 Eigen::Matrix3Xd flesh_surface(const Flesh& flesh, const Eigen::VectorXd& x) { return flesh.embedding.apply(x); }
+
+Eigen::Matrix3Xd surface_normals(const Flesh& flesh, const Eigen::Matrix3Xd& positions) {
+  return vertex_normals(flesh.model, flesh.normal_groups, positions);
+}
 
 Eigen::Matrix3Xd skinned_surface(const Flesh& flesh, double t) { return skin_vertices(flesh.model, joint_world(flesh, t)); }
 

@@ -21,6 +21,7 @@
 #include "snh/rig/bind_pose.hpp"
 #include "snh/rig/bones.hpp"
 #include "snh/rig/model.hpp"
+#include "snh/rig/normals.hpp"
 #include "snh/sim/kinematics.hpp"
 
 namespace snh {
@@ -91,6 +92,7 @@ struct Flesh {
                                              ///< open surface the volume its triangles and the origin span)
   EdgeCounts edges;                          ///< of the welded surface: open edges are holes, tolerated
   bool inside_out = false;                   ///< the surface's signed volume is negative (triangles face inwards)
+  NormalGroups normal_groups;                ///< the skin's vertices that share a normal in the frames written
   Embedding embedding;                       ///< the model's vertices (its order) in the volume
   std::vector<Bone> bones;                   ///< with their capsule radii
   Binding binding;                           ///< volume vertices that follow bones
@@ -169,6 +171,8 @@ struct EmbeddedSurface {
 [[nodiscard]] std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t);
 /// The render surface (model order, 3 by #v) embedded in the volume at positions x (3 #V).
 [[nodiscard]] Eigen::Matrix3Xd flesh_surface(const Flesh& flesh, const Eigen::VectorXd& x);
+/// The render surface's unit vertex normals at these positions (model order, 3 by #v): rig/normals.hpp.
+[[nodiscard]] Eigen::Matrix3Xd surface_normals(const Flesh& flesh, const Eigen::Matrix3Xd& positions);
 /// The render surface posed by linear blend skinning at time t (model order, 3 by #v).
 [[nodiscard]] Eigen::Matrix3Xd skinned_surface(const Flesh& flesh, double t);
 /// The volume enclosed by the render surface at these positions (model order).

@@ -134,11 +134,16 @@ std::string part_cache_name(const std::vector<ModelPart>& parts, std::size_t p) 
 /// flesh.usda from the surface/ and lbs/ frames on disk (so that a resumed run's stage holds them all), and
 /// bones.json (the bones' segments at every frame written, for the report). Nothing without frames.
 void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, double fps, json& stats) {
-  std::vector<UsdMesh> meshes{{.name = "flesh", .triangles = flesh.model.triangles, .frames = {}},
-                              {.name = "linear_blend_skinning", .triangles = flesh.model.triangles, .frames = {}}};
+  std::vector<UsdMesh> meshes{{.name = "flesh", .triangles = flesh.model.triangles, .frames = {}, .normals = {}, .uv = flesh.model.uv},
+                              {.name = "linear_blend_skinning", .triangles = flesh.model.triangles, .frames = {}, .normals = {},
+                               .uv = flesh.model.uv}};
+  const auto add = [&](UsdMesh& mesh, const std::filesystem::path& file) {
+    mesh.frames.push_back(read_surface(file).vertices);
+    mesh.normals.push_back(surface_normals(flesh, mesh.frames.back()));  // of the surface as it is in the frame
+  };
   for (int i = 0; std::filesystem::exists(out / "surface" / frame_name(i)) && std::filesystem::exists(out / "lbs" / frame_name(i)); ++i) {
-    meshes[0].frames.push_back(read_surface(out / "surface" / frame_name(i)).vertices);
-    meshes[1].frames.push_back(read_surface(out / "lbs" / frame_name(i)).vertices);
+    add(meshes[0], out / "surface" / frame_name(i));
+    add(meshes[1], out / "lbs" / frame_name(i));
   }
   if (meshes[0].frames.empty()) return;
   write_usda(out / "flesh.usda", "character", meshes, fps);
@@ -245,8 +250,11 @@ void add_flesh_output(const BuiltScene& b, const Simulation& sim, RunPlan& plan)
   plan.write_frame = [&flesh, out](int index, double time, const Eigen::VectorXd& x) {
     ensure_writable_directory(out / "surface");
     ensure_writable_directory(out / "lbs");
-    write_obj(out / "surface" / frame_name(index), flesh_surface(flesh, x), flesh.model.triangles);
-    write_obj(out / "lbs" / frame_name(index), skinned_surface(flesh, time), flesh.model.triangles);
+    // The model's texture coordinates, and the normals of the surface as it is in each frame.
+    const RiggedModel& m = flesh.model;
+    const Eigen::Matrix3Xd skin = flesh_surface(flesh, x), lbs = skinned_surface(flesh, time);
+    write_obj(out / "surface" / frame_name(index), skin, m.uv, surface_normals(flesh, skin), m.triangles);
+    write_obj(out / "lbs" / frame_name(index), lbs, m.uv, surface_normals(flesh, lbs), m.triangles);
   };
   // The grid's own rate where the frames were put on it (flesh_time), exactly; else what the scene's frames make.
   const double fps = b.scene.time.frames ? b.frames / b.end_time : spec.fps;
