@@ -45,7 +45,8 @@ if not os.path.exists(path):
 s = json.load(open(path))
 frames = [f for f in s["frames"] if f["frame"] > 0]
 converged = sum(1 for f in frames if f["converged"])
-total = round(s["end_time"] / s["dt"])
+last = s["frames"][-1]
+total = round(s["end_time"] * last["frame"] / last["time"]) if last["frame"] > 0 else 0  # the clip's frames
 newton = sum(f["newton_iterations"] for f in frames) / max(1, len(frames))
 flesh = min((f["surface_volume_ratio"] for f in frames), default=1.0)
 lbs = min((f["lbs_volume_ratio"] for f in frames), default=1.0)

@@ -85,7 +85,8 @@ class BlenderCharacter : public ::testing::Test {
   /// the file's joint heads at the first frame onto Blender's bone heads; compared with Blender's own skin.
   static void expect_blender_skinning(const std::string& file, const std::string& prefix) {
     RiggedModel m = read_model(dir_ / file);
-    (void)place_at_bind_pose(m);
+    const BindPose bind = place_at_bind_pose(m);
+    EXPECT_TRUE(bind.rest_is_bind) << file << ": " << bind.worst_joint << " by " << bind.worst_offset;
     ASSERT_EQ(m.clips.size(), 1u);
     const Clip& clip = m.clips[0];
     const double t0 = first_key(clip), fps = truth_["fps"].get<double>();
@@ -220,12 +221,17 @@ TEST_F(AssimpTestModels, EachCharacterIsReadWithItsJointsClipsAndMeshes) {
     int joints, clips, parts;
     const char* clip;  // the clip played by default
     std::size_t notes;
+    bool rest_is_bind;  // the file's rest pose is its bind pose, once the skin is in the right space
   };
-  for (const Expect& e : {Expect{"FBX/huesitos.fbx", 10, 1, 1, "Armature|Action", 0},
-                          Expect{"FBX/animation_with_skeleton.fbx", 15, 1, 1, "Armature|ArmatureAction", 0},
-                          Expect{"X/Testwuson.X", 38, 3, 1, "Wuson_Run", 0}, Expect{"X/BCN_Epileptic.X", 54, 1, 3, "Epileptisch", 0},
+  // huesitos' offsets are in its mesh node's frame (FBX), Testwuson's in the model's although its mesh node
+  // turns a quarter (.x): read in the other space, each seemed bound in another pose, and Testwuson's first
+  // frame failed. animation_with_skeleton is bound in another pose; anim_test's hierarchy lacks two bones.
+  for (const Expect& e : {Expect{"FBX/huesitos.fbx", 10, 1, 1, "Armature|Action", 0, true},
+                          Expect{"FBX/animation_with_skeleton.fbx", 15, 1, 1, "Armature|ArmatureAction", 0, false},
+                          Expect{"X/Testwuson.X", 38, 3, 1, "Wuson_Run", 0, true},
+                          Expect{"X/BCN_Epileptic.X", 54, 1, 3, "Epileptisch", 0, true},
                           // Its authors' note: the mesh names four bones, the hierarchy holds two.
-                          Expect{"X/anim_test.x", 4, 1, 1, "cylinder_test", 2}}) {
+                          Expect{"X/anim_test.x", 4, 1, 1, "cylinder_test", 2, false}}) {
     SCOPED_TRACE(e.file);
     const RiggedModel m = read_model(kAssimpModels / e.file);
     EXPECT_EQ(m.skeleton.size(), e.joints);
@@ -241,8 +247,10 @@ TEST_F(AssimpTestModels, EachCharacterIsReadWithItsJointsClipsAndMeshes) {
     EXPECT_LT(m.joint_index.maxCoeff(), m.skeleton.size());
     RiggedModel placed = m;
     const BindPose bind = place_at_bind_pose(placed);
+    EXPECT_EQ(bind.rest_is_bind, e.rest_is_bind) << bind.worst_joint << " by " << bind.worst_offset;
     const double size = (placed.vertices.rowwise().maxCoeff() - placed.vertices.rowwise().minCoeff()).norm();
-    EXPECT_LT((skin_vertices(placed, bind.joints) - placed.vertices).cwiseAbs().maxCoeff(), 1e-6 * size);
+    // (.x files store matrices and positions with 6 decimals: products of a few of them agree to about 1e-6.)
+    EXPECT_LT((skin_vertices(placed, bind.joints) - placed.vertices).cwiseAbs().maxCoeff(), 1e-5 * size);
   }
 }
 

@@ -189,11 +189,39 @@ class SceneReader {
     }
   }
 
-  /// Each skinned mesh's vertices in the root's space, its triangles, and each vertex's four strongest joints.
+  /// Where a mesh's vertices go in the model: skinning takes a vertex v to Σ w · joint world · offset · v
+  /// whatever this is, but the skin at the bind pose is M v, with M where the bones were bound. Files differ:
+  /// an FBX's offsets map the mesh node's local space (M = the node's transform), a DirectX .x file's and a
+  /// glTF's the model's (M = identity, the node's transform unused). M is the one of the two under which the
+  /// rest pose binds the bones best (rest world · offset · M⁻¹ nearest the identity). A mesh after the first
+  /// that shares a bound bone with those before is taken into their space by that bone's offsets.
+  Eigen::Matrix4d mesh_space(const RiggedModel& out, int node, const aiMesh* mesh) const {
+    for (unsigned b = 0; b < mesh->mNumBones; ++b) {
+      const int j = joint_of_bone(mesh->mBones[b]);
+      if (bound_by_[static_cast<std::size_t>(j)] >= 0)
+        return out.inverse_bind[static_cast<std::size_t>(j)].inverse() * matrix(mesh->mBones[b]->mOffsetMatrix);
+    }
+    const std::vector<Eigen::Affine3d> rest = out.skeleton.world(out.skeleton.rest_pose());
+    const auto misfit = [&](const Eigen::Matrix4d& space) {
+      const Eigen::Matrix4d back = space.inverse();
+      double sum = 0.0;
+      for (unsigned b = 0; b < mesh->mNumBones; ++b) {
+        const int j = joint_of_bone(mesh->mBones[b]);
+        if (joint_node_[static_cast<std::size_t>(j)] < 0) continue;  // a bone in no node has no rest frame
+        sum += (rest[static_cast<std::size_t>(j)].matrix() * matrix(mesh->mBones[b]->mOffsetMatrix) * back - Eigen::Matrix4d::Identity()).norm();
+      }
+      return sum;
+    };
+    const Eigen::Matrix4d& node_space = global_[static_cast<std::size_t>(node)];
+    return misfit(node_space) < misfit(Eigen::Matrix4d::Identity()) ? node_space : Eigen::Matrix4d::Identity();
+  }
+
+  /// Each skinned mesh's vertices in the model's space, its triangles, and each vertex's four strongest joints.
   void read_meshes(RiggedModel& out) {
     const std::size_t joints = joint_node_.size();
     out.inverse_bind.assign(joints, Eigen::Matrix4d::Identity());
-    std::vector<int> bound_by(joints, -1);  // the mesh (index into meshes_) that set each joint's inverse bind
+    std::vector<int>& bound_by = bound_by_;  // the mesh (index into meshes_) that set each joint's inverse bind
+    bound_by.assign(joints, -1);
     rig_build::SkinData data;
     auto& xyz = data.xyz;
     auto& jidx = data.jidx;
@@ -204,10 +232,10 @@ class SceneReader {
       const aiMesh* mesh = s_.mMeshes[m];
       const std::string mesh_name = name_of(mesh->mName);
       const std::string where = fmt::format("mesh \"{}\"", one_line(mesh_name));
-      // Mesh space → the root's space at rest; bone offsets (mesh space → bone space) follow.
-      const Eigen::Matrix4d to_root = global_[static_cast<std::size_t>(node)];
-      const Eigen::Matrix4d from_root = to_root.inverse();
-      if (!from_root.allFinite()) fail(fmt::format("{}: its node's transform cannot be inverted", where));
+      Eigen::Matrix4d to_common = mesh_space(out, node, mesh);
+      const Eigen::Matrix4d from_common = to_common.inverse();
+      if (!to_common.allFinite() || !from_common.allFinite())
+        fail(fmt::format("{}: its offset matrices cannot be related to the other meshes'", where));
       if (xyz.size() + mesh->mNumVertices > static_cast<std::size_t>(std::numeric_limits<int>::max() / 4))
         fail(fmt::format("{}: too many vertices", where));
       const int offset = static_cast<int>(xyz.size());
@@ -216,12 +244,12 @@ class SceneReader {
       // to the root's space as the positions are, where the mesh has them.
       data.all_uv = data.all_uv && mesh->mTextureCoords[0] != nullptr;
       data.all_normals = data.all_normals && mesh->mNormals != nullptr;
-      const Eigen::Matrix3d normal_map = to_root.topLeftCorner<3, 3>().inverse().transpose();
+      const Eigen::Matrix3d normal_map = from_common.topLeftCorner<3, 3>().transpose();
       std::vector<std::vector<std::pair<double, int>>> influences(nv);
       for (unsigned b = 0; b < mesh->mNumBones; ++b) {
         const aiBone* bone = mesh->mBones[b];
         const int j = joint_of_bone(bone);
-        const Eigen::Matrix4d ib = matrix(bone->mOffsetMatrix) * from_root;
+        const Eigen::Matrix4d ib = matrix(bone->mOffsetMatrix) * from_common;
         if (!ib.allFinite()) fail(fmt::format("{}: bone \"{}\" has an offset matrix that is not finite", where, one_line(name_of(bone->mName))));
         auto& set = bound_by[static_cast<std::size_t>(j)];
         Eigen::Matrix4d& stored = out.inverse_bind[static_cast<std::size_t>(j)];
@@ -248,7 +276,7 @@ class SceneReader {
       std::size_t unweighted = 0;
       for (std::size_t v = 0; v < nv; ++v) {
         const aiVector3D& p = mesh->mVertices[v];
-        const Eigen::Vector3d x = (to_root * Eigen::Vector4d(p.x, p.y, p.z, 1.0)).head<3>();
+        const Eigen::Vector3d x = (to_common * Eigen::Vector4d(p.x, p.y, p.z, 1.0)).head<3>();
         if (!x.allFinite()) fail(fmt::format("{}: vertex {} has a position that is not finite", where, v));
         auto [j, w, sum] = strongest_four(influences[v]);
         if (!(sum > 0.0)) {
@@ -384,6 +412,7 @@ class SceneReader {
   std::vector<int> joint_of_node_;        ///< per node: its joint, or −1
   std::vector<int> joint_node_;           ///< per joint: its node (−1 for a bone in no node)
   std::map<std::string, int> nodeless_;   ///< bones in no node: their joints
+  std::vector<int> bound_by_;             ///< per joint: the mesh that set its inverse bind, or −1
   std::vector<Eigen::Matrix4d> between_;  ///< per joint: the nodes' transforms folded into its rest transform
 };
 

@@ -13,10 +13,13 @@ namespace snh {
 ///   Joints  the nodes the bones name, and every animated ancestor of one (a hips node that moves the
 ///           skeleton but weighs no vertex), in depth-first order; the transforms of other nodes between a
 ///           joint and its parent joint (or the root) are folded into its rest transform and keys.
-///   Skin    each mesh's vertices taken to the root's space by its node's transform at rest, and each bone's
-///           offset matrix with them, so that all meshes share one inverse bind matrix per joint (two meshes
-///           that disagree on one are refused, naming both); a joint no bone names gets the inverse of its
-///           rest frame. A vertex no bone weighs follows the nearest joint above its mesh's node, or is refused.
+///   Skin    skinning takes a vertex v to Σ w · joint world · offset · v; at the bind pose the skin is where
+///           the bones were bound, which an FBX's offsets put in the mesh node's frame and a DirectX .x file's
+///           (as glTF's) in the model's: of the two, the one where the rest pose binds the bones best. A later
+///           mesh that shares a bone with those before is taken into their space by that bone's offsets, so that
+///           all share one inverse bind matrix per joint (meshes that cannot be are refused, naming both); a
+///           joint no bone names gets the inverse of its rest frame. A vertex no bone weighs follows the
+///           nearest joint above its mesh's node, or is refused.
 ///   Clips   each animation's node channels on joints, keys at tick / ticks-per-second seconds (25 ticks a
 ///           second where the file gives none), linear (rotations slerped).
 /// Throws RigError naming the file and the fault (assimp's own message when it cannot read the file).
