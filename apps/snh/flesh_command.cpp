@@ -74,7 +74,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
       "volume (NNN.vtu, frames.pvd), flesh.usda, the point caches flesh.pc2 and lbs.pc2 (Blender's Mesh Cache modifier reads them), "
       "stats.json and the report. A model without a clip runs from a scene "
       "file instead (snh run, with keyframes: see scenes/hand_fist.json). Exit code 0 when every frame converged, 1 "
-      "when the run stopped early, 2 for bad input.");
+      "when a frame did not converge (the run stopped there, or went on with --keep-going), 2 for bad input.");
   cmd->add_option("model", o->model, "Rigged model: .glb or .gltf (snh's glTF 2.0 reader), or FBX, COLLADA (.dae), DirectX .x and the other formats "
                   "assimp reads")->required();
   cmd->add_option("--animation", o->animation, "The clip to play, by name or 0-based index (default: the first that lasts and moves; --list shows them)");

@@ -51,8 +51,8 @@ std::uintmax_t check_file(const fs::path& path, std::string_view kind) {
   if (!fs::is_regular_file(st)) fail(path, "not a regular file");
   const std::uintmax_t n = fs::file_size(path, ec);
   if (ec) fail(path, fmt::format("cannot read its size ({})", ec.message()));
-  if (n == 0) fail(path, fmt::format("empty file, not {}", kind));
-  if (n > max_file_bytes) fail(path, fmt::format("too large for a {} model ({} bytes; at most {})", kind, n, max_file_bytes));
+  if (n == 0) fail(path, fmt::format("an empty file, not a {} file", kind));
+  if (n > max_file_bytes) fail(path, fmt::format("too large for a {} file ({} bytes; at most {})", kind, n, max_file_bytes));
   return n;
 }
 

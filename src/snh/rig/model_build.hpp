@@ -24,7 +24,7 @@ inline constexpr std::uintmax_t max_file_bytes = std::uintmax_t{1} << 30;
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what);
 
 /// Checks that `path` names a readable regular file of 1 byte to max_file_bytes (`kind` names what it should
-/// be in the messages: "a glTF file"); returns its size.
+/// be in the messages: "glTF", "model"); returns its size.
 std::uintmax_t check_file(const std::filesystem::path& path, std::string_view kind);
 
 /// A skin as a reader gathers it, mesh after mesh: positions, four joints and weights per vertex, triangles.
