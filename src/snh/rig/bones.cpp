@@ -28,23 +28,33 @@ double segment_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, cons
   return (a + s * d - p).norm();
 }
 
-std::vector<double> default_radii(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface) {
+BoneReach bone_reach(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface) {
   const int n = static_cast<int>(bones.size());
-  std::vector<double> sum(n, 0.0), nearest(n, std::numeric_limits<double>::infinity());
-  std::vector<int> count(n, 0);
+  BoneReach r{.closest_of = std::vector<int>(n, 0), .mean = std::vector<double>(n, 0.0),
+              .nearest = std::vector<double>(n, std::numeric_limits<double>::infinity())};
   for (Eigen::Index v = 0; v < surface.cols(); ++v) {
     int best = -1;
     double best_d = std::numeric_limits<double>::infinity();
     for (int b = 0; b < n; ++b) {
       const double d = segment_distance(bones[b].a, bones[b].b, surface.col(v));
-      nearest[b] = std::min(nearest[b], d);
+      r.nearest[b] = std::min(r.nearest[b], d);
       if (d < best_d) best_d = d, best = b;
     }
-    if (best >= 0) sum[best] += best_d, ++count[best];
+    if (best >= 0) r.mean[best] += best_d, ++r.closest_of[best];
   }
-  std::vector<double> radii(n);
-  for (int b = 0; b < n; ++b) radii[b] = 0.5 * (count[b] > 0 ? sum[b] / count[b] : nearest[b]);
+  for (int b = 0; b < n; ++b)
+    if (r.closest_of[b] > 0) r.mean[b] /= r.closest_of[b];
+  return r;
+}
+
+std::vector<double> default_radii(const BoneReach& reach) {
+  std::vector<double> radii(reach.mean.size());
+  for (std::size_t b = 0; b < radii.size(); ++b) radii[b] = 0.5 * (reach.closest_of[b] > 0 ? reach.mean[b] : reach.nearest[b]);
   return radii;
+}
+
+std::vector<double> default_radii(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface) {
+  return default_radii(bone_reach(bones, surface));
 }
 
 std::vector<int> Binding::count_per_bone(int bones) const {

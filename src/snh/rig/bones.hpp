@@ -28,9 +28,20 @@ struct Bone {
 /// Distance from p to the segment [a, b].
 [[nodiscard]] double segment_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& p);
 
+/// How a surface lies around the bones, per bone: the surface vertices whose closest bone it is (the first of
+/// equally close ones), how many and their mean distance to it, and its distance to the nearest surface vertex.
+struct BoneReach {
+  std::vector<int> closest_of;  ///< how many surface vertices have this bone as their closest
+  std::vector<double> mean;     ///< their mean distance to it (0 where there are none)
+  std::vector<double> nearest;  ///< the distance to the nearest surface vertex
+};
+///   surface  3 by #s surface vertices
+[[nodiscard]] BoneReach bone_reach(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface);
+
 /// The default capsule radius of every bone: half the mean distance from the bone to the surface vertices
 /// nearest to it (the vertices whose closest bone it is; a bone that is closest to none gets half the
 /// distance to the nearest surface vertex).
+[[nodiscard]] std::vector<double> default_radii(const BoneReach& reach);
 ///   surface  3 by #s surface vertices
 [[nodiscard]] std::vector<double> default_radii(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface);
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 #include <Eigen/SVD>
@@ -88,22 +87,15 @@ class BoneMotion final : public KinematicProvider {
 
 }  // namespace
 
-int flesh_resolution(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface, double surface_volume, std::string& reason) {
+int flesh_resolution(const std::vector<Bone>& bones, const BoneReach& reach, const Eigen::Matrix3Xd& surface, double surface_volume,
+                     std::string& reason) {
   constexpr int kLeast = 16, kMost = 1000;
   constexpr double kMostCells = 2e4;
   const double longest = (surface.rowwise().maxCoeff() - surface.rowwise().minCoeff()).maxCoeff();
-  // The bones nearest to some skin vertex, and the thinnest of their capsules.
-  std::vector<char> near(bones.size(), 0);
-  for (Eigen::Index v = 0; v < surface.cols(); ++v) {
-    int best = -1;
-    double best_d = std::numeric_limits<double>::infinity();
-    for (std::size_t b = 0; b < bones.size(); ++b)
-      if (const double d = segment_distance(bones[b].a, bones[b].b, surface.col(v)); d < best_d) best_d = d, best = static_cast<int>(b);
-    if (best >= 0) near[static_cast<std::size_t>(best)] = 1;
-  }
+  // The thinnest capsule among the bones nearest to some skin vertex.
   int thinnest = -1;
   for (std::size_t b = 0; b < bones.size(); ++b)
-    if (near[b] && bones[b].radius > 0.0 && (thinnest < 0 || bones[b].radius < bones[static_cast<std::size_t>(thinnest)].radius))
+    if (reach.closest_of[b] > 0 && bones[b].radius > 0.0 && (thinnest < 0 || bones[b].radius < bones[static_cast<std::size_t>(thinnest)].radius))
       thinnest = static_cast<int>(b);
   int n = kLeast;
   reason = fmt::format("the default {}", kLeast);
@@ -148,7 +140,8 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     throw RigError(fmt::format("{}: the surface encloses no volume ({:g}): is it flat?", m.source.string(), signed_volume));
 
   f.bones = bones_of(m.skeleton, f.bind_world);
-  const std::vector<double> radii = default_radii(f.bones, m.surface_vertices);
+  const BoneReach reach = bone_reach(f.bones, m.surface_vertices);
+  const std::vector<double> radii = default_radii(reach);
   for (std::size_t b = 0; b < f.bones.size(); ++b) f.bones[b].radius = radii[b];
   const double longest = (m.surface_vertices.rowwise().maxCoeff() - m.surface_vertices.rowwise().minCoeff()).maxCoeff();
   if (spec.cell_size > 0.0 && spec.resolution > 0)
@@ -164,7 +157,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     f.resolution = spec.resolution;
     f.resolution_reason = "given";
   } else {
-    f.resolution = flesh_resolution(f.bones, m.surface_vertices, f.surface_volume, f.resolution_reason);
+    f.resolution = flesh_resolution(f.bones, reach, m.surface_vertices, f.surface_volume, f.resolution_reason);
   }
 
   if (spec.volume == FleshVolume::lattice) {

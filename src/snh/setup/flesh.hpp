@@ -107,8 +107,9 @@ struct Flesh {
 /// capsule, which then binds flesh), at least 16; at most the resolution whose cells, estimated as twice the
 /// skin's volume over h³, stay under 20 000 (a default run takes seconds; more is asked for by name). `reason`
 /// says which rule chose it.
-[[nodiscard]] int flesh_resolution(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& surface, double surface_volume,
-                                   std::string& reason);
+///   reach  bone_reach of the bones and the skin (surface), which says which bones are closest to some skin
+[[nodiscard]] int flesh_resolution(const std::vector<Bone>& bones, const BoneReach& reach, const Eigen::Matrix3Xd& surface,
+                                   double surface_volume, std::string& reason);
 
 /// Reads the model and builds its flesh. Throws RigError (bad model, a surface that is not closed: the open
 /// and non-manifold edge counts; a joint of the spec that the model lacks), MeshError (tetgen failed) or
