@@ -163,13 +163,9 @@ class SceneReader {
       Joint j;
       j.name = name_of(nodes_[static_cast<std::size_t>(n)]->mName);
       if (j.name.empty()) j.name = fmt::format("joint{}", out.skeleton.joints.size());
-      Eigen::Matrix4d between = Eigen::Matrix4d::Identity();
-      int p = parent_[static_cast<std::size_t>(n)];
-      while (p >= 0 && joint_of_node_[static_cast<std::size_t>(p)] < 0) {
-        between = matrix(nodes_[static_cast<std::size_t>(p)]->mTransformation) * between;
-        p = parent_[static_cast<std::size_t>(p)];
-      }
-      j.parent = p >= 0 ? joint_of_node_[static_cast<std::size_t>(p)] : -1;
+      const auto [between, above] = rig_build::joint_above(
+          n, parent_, joint_of_node_, [&](int p) { return matrix(nodes_[static_cast<std::size_t>(p)]->mTransformation); });
+      j.parent = above;
       const Eigen::Matrix4d rest = between * matrix(nodes_[static_cast<std::size_t>(n)]->mTransformation);
       if (const std::string why = rig_build::decompose(rest, j.rest); !why.empty())
         fail(fmt::format("the rest transform of joint {} (its ancestors' transforms folded in) {}", node_label(n), why));

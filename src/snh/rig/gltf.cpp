@@ -352,13 +352,9 @@ class Builder {
       const std::string& name = m_.nodes[static_cast<std::size_t>(node)].name;
       joint.name = name.empty() ? fmt::format("joint{}", j) : name;
       // Nodes between the joint and its nearest joint ancestor (or the scene root) fold into its rest transform.
-      Eigen::Matrix4d between = Eigen::Matrix4d::Identity();
-      int p = parent_[static_cast<std::size_t>(node)];
-      while (p >= 0 && joint_of_node_[static_cast<std::size_t>(p)] < 0) {
-        between = node_transform(p).matrix().matrix() * between;
-        p = parent_[static_cast<std::size_t>(p)];
-      }
-      joint.parent = p >= 0 ? joint_of_node_[static_cast<std::size_t>(p)] : -1;
+      const auto [between, above] =
+          rig_build::joint_above(node, parent_, joint_of_node_, [&](int p) { return Eigen::Matrix4d(node_transform(p).matrix().matrix()); });
+      joint.parent = above;
       joint.rest = node_transform(node);
       between_.push_back(between);
       if (between != Eigen::Matrix4d::Identity())

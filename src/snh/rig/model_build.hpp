@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -48,6 +49,24 @@ struct SkinData {
 /// position (bitwise, +0 and −0 alike) merged in order of first appearance; triangles that lose a corner to
 /// the merge dropped from the welded surface.
 void weld(RiggedModel& model);
+
+/// Where a joint node hangs in a node tree whose other nodes are folded away: the product of the transforms
+/// of the nodes strictly between `node` and its nearest ancestor that is a joint (outermost first), and that
+/// ancestor's joint (−1 when none: the nodes up to the root are folded in).
+///   parent         per node, its parent node or −1
+///   joint_of_node  per node, its joint or −1
+///   local          local(n): node n's transform, a 4 by 4 matrix
+template <class Local>
+std::pair<Eigen::Matrix4d, int> joint_above(int node, const std::vector<int>& parent, const std::vector<int>& joint_of_node,
+                                            const Local& local) {
+  Eigen::Matrix4d between = Eigen::Matrix4d::Identity();
+  int p = parent[static_cast<std::size_t>(node)];
+  while (p >= 0 && joint_of_node[static_cast<std::size_t>(p)] < 0) {
+    between = local(p) * between;
+    p = parent[static_cast<std::size_t>(p)];
+  }
+  return {between, p >= 0 ? joint_of_node[static_cast<std::size_t>(p)] : -1};
+}
 
 /// A channel of a joint below non-joint nodes whose transforms `between` were folded into its rest transform:
 /// its keys made relative to the joint's parent (or the model) too. Those nodes must scale uniformly.
