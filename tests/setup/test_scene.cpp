@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -486,6 +487,20 @@ TEST(SceneRun, AStopKeepsTheCompletedFrames) {
   std::filesystem::remove_all(s.output.dir);
 }
 
+/// Runs `s` until its Newton iteration `stop_at`, where it gets SIGINT, then the same scene again with
+/// --resume into the same directory: the two results, the interrupted run's first.
+std::pair<SceneResult, SceneResult> interrupt_and_resume(Scene s, int stop_at, std::ostream& log) {
+  Scene again = s;
+  again.run.resume = true;
+  int calls = 0;
+  s.solver.newton.on_iteration = [&](int, double) {
+    if (++calls == stop_at) request_stop(SIGINT);
+  };
+  SceneResult cut = run_scene(s, log);
+  request_stop(0);
+  return {std::move(cut), run_scene(again, log)};
+}
+
 TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
   const json j = json::parse(R"({"mesh": {"box": {"res": 2}}, "gravity": [0, -9.8, 0], "frames": 12, "end_time": 1.2,
                                  "damping": {"mass": 0.5}, "pins": [{"region": {"min": [-1, 1, -1], "max": [1, 1, 1]}}]})");
@@ -496,18 +511,9 @@ TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
   std::ostringstream log;
   const SceneResult a = run_scene(full, log);
   ASSERT_TRUE(a.all_converged);
-  int calls = 0;
-  cut.solver.newton.on_iteration = [&](int, double) {
-    if (++calls == 50) request_stop(SIGINT);
-  };
-  const SceneResult b = run_scene(cut, log);
-  request_stop(0);
+  const auto [b, c] = interrupt_and_resume(cut, 50, log);
   ASSERT_EQ(b.interrupted_by, SIGINT);
   ASSERT_LT(b.frames.size(), 13u);
-  Scene again = parse_scene(j, "resume.json");
-  again.output.dir = cut.output.dir;
-  again.run.resume = true;
-  const SceneResult c = run_scene(again, log);
   ASSERT_TRUE(c.all_converged) << c.failure;
   ASSERT_EQ(c.frames.size(), 13u);
   EXPECT_EQ(c.frames[1].newton_iterations, a.frames[1].newton_iterations) << "the history before the stop is kept";
@@ -556,17 +562,8 @@ TEST(SceneRun, KeepGoingWritesFramesThatDoNotConvergeMarkedAndGoesOn) {
   Scene cut = parse_scene(j, "keep.json");
   cut.output.dir = base / "cut";
   cut.run.keep_going = true;
-  int calls = 0;
-  cut.solver.newton.on_iteration = [&](int, double) {
-    if (++calls == 4) request_stop(SIGINT);
-  };
-  const SceneResult c = run_scene(cut, log);
-  request_stop(0);
+  const auto [c, d] = interrupt_and_resume(cut, 4, log);
   ASSERT_EQ(c.interrupted_by, SIGINT);
-  Scene again = parse_scene(j, "keep.json");
-  again.output.dir = cut.output.dir;
-  again.run.keep_going = again.run.resume = true;
-  const SceneResult d = run_scene(again, log);
   EXPECT_EQ(d.unconverged, b.unconverged);
   EXPECT_FALSE(d.all_converged);
   EXPECT_LT((d.final_positions - b.final_positions).cwiseAbs().maxCoeff(), 1e-9);  // to rounding (the box is 2 wide)
