@@ -11,10 +11,15 @@
 
 namespace snh {
 
-std::string obj_faces(const Eigen::Matrix3Xi& triangles) {
+std::string obj_faces(const Eigen::Matrix3Xi& triangles, bool texcoords, bool normals) {
+  // A corner names its vertex, and its texture coordinate and normal by the same index: "i", "i/i", "i//i", "i/i/i".
+  const char* corner = texcoords && normals ? " {0}/{0}/{0}" : texcoords ? " {0}/{0}" : normals ? " {0}//{0}" : " {0}";
   fmt::memory_buffer buf;
-  for (Eigen::Index f = 0; f < triangles.cols(); ++f)
-    fmt::format_to(std::back_inserter(buf), "f {} {} {}\n", triangles(0, f) + 1, triangles(1, f) + 1, triangles(2, f) + 1);
+  for (Eigen::Index f = 0; f < triangles.cols(); ++f) {
+    buf.push_back('f');
+    for (int c = 0; c < 3; ++c) fmt::format_to(std::back_inserter(buf), fmt::runtime(corner), triangles(c, f) + 1);
+    buf.push_back('\n');
+  }
   return fmt::to_string(buf);
 }
 
@@ -57,17 +62,7 @@ void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positi
   append_rows<3>(buf, "v", positions, 10);
   if (st) append_rows<2>(buf, "vt", texcoords, 8);
   if (vn) append_rows<3>(buf, "vn", normals, 7);
-  for (Eigen::Index f = 0; f < triangles.cols(); ++f) {
-    buf += 'f';
-    for (int c = 0; c < 3; ++c) {
-      const int i = triangles(c, f) + 1;
-      if (st && vn) fmt::format_to(std::back_inserter(buf), " {}/{}/{}", i, i, i);
-      else if (st) fmt::format_to(std::back_inserter(buf), " {}/{}", i, i);
-      else if (vn) fmt::format_to(std::back_inserter(buf), " {}//{}", i, i);
-      else fmt::format_to(std::back_inserter(buf), " {}", i);
-    }
-    buf += '\n';
-  }
+  buf += obj_faces(triangles, st, vn);
   write_atomically(path, [&](std::ostream& out) { out.write(buf.data(), static_cast<std::streamsize>(buf.size())); });
 }
 

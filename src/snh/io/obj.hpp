@@ -15,8 +15,9 @@ namespace snh {
 ///   triangles  3 by #F, 0-based vertex indices (written 1-based)
 void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, const Eigen::Matrix3Xi& triangles);
 
-/// The `f a b c` lines of write_obj for triangles (3 by #F, 0-based), made once for frames that share them.
-[[nodiscard]] std::string obj_faces(const Eigen::Matrix3Xi& triangles);
+/// The `f a b c` lines of write_obj for triangles (3 by #F, 0-based), made once for frames that share them;
+/// with texture coordinates and/or normals of the same index per vertex, `f a/a/a`, `f a/a` or `f a//a`.
+[[nodiscard]] std::string obj_faces(const Eigen::Matrix3Xi& triangles, bool texcoords = false, bool normals = false);
 
 /// write_obj with the face lines made by obj_faces.
 void write_obj(const std::filesystem::path& path, const Eigen::Matrix3Xd& positions, std::string_view faces);
