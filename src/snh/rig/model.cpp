@@ -22,8 +22,6 @@ bool is_gltf(const std::filesystem::path& path) {
 }
 }  // namespace
 
-const char* model_reader(const std::filesystem::path& path) { return is_gltf(path) ? "glTF" : "assimp"; }
-
 RiggedModel read_model(const std::filesystem::path& path) { return is_gltf(path) ? read_gltf(path) : read_assimp(path); }
 
 int default_clip(const RiggedModel& model) {

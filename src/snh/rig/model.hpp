@@ -59,9 +59,6 @@ struct RiggedModel {
 /// Reads a rigged character: .gltf and .glb by read_gltf, every other file by read_assimp. Throws RigError.
 [[nodiscard]] RiggedModel read_model(const std::filesystem::path& path);
 
-/// The file's reader in words: "glTF" or "assimp".
-[[nodiscard]] const char* model_reader(const std::filesystem::path& path);
-
 /// The clip played when none is named: the first that lasts and moves (a zero-length or still "bind" clip
 /// skipped), else clip 0; −1 for a model without clips.
 [[nodiscard]] int default_clip(const RiggedModel& model);

@@ -1,7 +1,8 @@
 #include "snh/rig/normals.hpp"
 
 #include <cmath>
-#include <map>
+#include <utility>
+#include <vector>
 
 namespace snh {
 
@@ -11,10 +12,11 @@ NormalGroups normal_groups(const RiggedModel& model) {
   NormalGroups g;
   g.group.assign(static_cast<std::size_t>(n), -1);
   // Per welded vertex, the groups made so far and a normal of each.
-  std::map<int, std::vector<std::pair<int, Eigen::Vector3d>>> at;
+  const bool welded = model.weld.size() == static_cast<std::size_t>(n);
+  std::vector<std::vector<std::pair<int, Eigen::Vector3d>>> at(welded ? static_cast<std::size_t>(model.surface_vertices.cols())
+                                                                      : static_cast<std::size_t>(n));
   for (Eigen::Index v = 0; v < n; ++v) {
-    const int w = model.weld.empty() ? static_cast<int>(v) : model.weld[static_cast<std::size_t>(v)];
-    auto& here = at[w];
+    auto& here = at[welded ? static_cast<std::size_t>(model.weld[static_cast<std::size_t>(v)]) : static_cast<std::size_t>(v)];
     const Eigen::Vector3d normal = file_normals ? Eigen::Vector3d(model.normals.col(v)) : Eigen::Vector3d::Zero();
     int found = -1;
     for (const auto& [id, other] : here)
