@@ -122,6 +122,15 @@ class SceneReader {
     if (meshes_.empty()) fail("no skinned mesh (no mesh with bones and triangles)");
   }
 
+  /// The joints' world frames in the rest pose; a fault (a transform that overflows) names the file.
+  std::vector<Eigen::Affine3d> rest_world(const RiggedModel& out) const {
+    try {
+      return out.skeleton.world(out.skeleton.rest_pose());
+    } catch (const std::invalid_argument& e) {
+      fail(fmt::format("at rest, {}", one_line(e.what())));
+    }
+  }
+
   /// The joint a bone moves.
   int joint_of_bone(const aiBone* b) const {
     const std::string name = name_of(b->mName);
@@ -191,13 +200,14 @@ class SceneReader {
   /// glTF's the model's (M = identity, the node's transform unused). M is the one of the two under which the
   /// rest pose binds the bones best (rest world · offset · M⁻¹ nearest the identity). A mesh after the first
   /// that shares a bound bone with those before is taken into their space by that bone's offsets.
-  Eigen::Matrix4d mesh_space(const RiggedModel& out, int node, const aiMesh* mesh) const {
+  ///   rest      the joints' world frames at rest;  bound_by  per joint, the mesh that set its inverse bind, or −1
+  Eigen::Matrix4d mesh_space(const RiggedModel& out, const std::vector<Eigen::Affine3d>& rest, const std::vector<int>& bound_by, int node,
+                             const aiMesh* mesh) const {
     for (unsigned b = 0; b < mesh->mNumBones; ++b) {
       const int j = joint_of_bone(mesh->mBones[b]);
-      if (bound_by_[static_cast<std::size_t>(j)] >= 0)
+      if (bound_by[static_cast<std::size_t>(j)] >= 0)
         return out.inverse_bind[static_cast<std::size_t>(j)].inverse() * matrix(mesh->mBones[b]->mOffsetMatrix);
     }
-    const std::vector<Eigen::Affine3d> rest = out.skeleton.world(out.skeleton.rest_pose());
     const auto misfit = [&](const Eigen::Matrix4d& space) {
       const Eigen::Matrix4d back = space.inverse();
       double sum = 0.0;
@@ -216,8 +226,8 @@ class SceneReader {
   void read_meshes(RiggedModel& out) {
     const std::size_t joints = joint_node_.size();
     out.inverse_bind.assign(joints, Eigen::Matrix4d::Identity());
-    std::vector<int>& bound_by = bound_by_;  // the mesh (index into meshes_) that set each joint's inverse bind
-    bound_by.assign(joints, -1);
+    std::vector<int> bound_by(joints, -1);  // the mesh (index into meshes_) that set each joint's inverse bind
+    const std::vector<Eigen::Affine3d> rest = rest_world(out);  // (the joints in no node rest at identity until bound)
     rig_build::SkinData data;
     auto& xyz = data.xyz;
     auto& jidx = data.jidx;
@@ -228,7 +238,7 @@ class SceneReader {
       const aiMesh* mesh = s_.mMeshes[m];
       const std::string mesh_name = name_of(mesh->mName);
       const std::string where = fmt::format("mesh \"{}\"", one_line(mesh_name));
-      Eigen::Matrix4d to_common = mesh_space(out, node, mesh);
+      const Eigen::Matrix4d to_common = mesh_space(out, rest, bound_by, node, mesh);
       const Eigen::Matrix4d from_common = to_common.inverse();
       if (!to_common.allFinite() || !from_common.allFinite())
         fail(fmt::format("{}: its offset matrices cannot be related to the other meshes'", where));
@@ -321,12 +331,7 @@ class SceneReader {
           fail(fmt::format("bone \"{}\" (in no node): its bind frame {}", one_line(out.skeleton.joints[j].name), why));
       }
     // Joints no bone names (animated ancestors, a bone without weights): bound at their rest frame.
-    std::vector<Eigen::Affine3d> world;
-    try {
-      world = out.skeleton.world(out.skeleton.rest_pose());
-    } catch (const std::invalid_argument& e) {
-      fail(fmt::format("at rest, {}", one_line(e.what())));
-    }
+    const std::vector<Eigen::Affine3d> world = rest_world(out);
     for (std::size_t j = 0; j < joints; ++j)
       if (bound_by[j] < 0) out.inverse_bind[j] = world[j].matrix().inverse();
     data.store(out);
@@ -408,7 +413,6 @@ class SceneReader {
   std::vector<int> joint_of_node_;        ///< per node: its joint, or −1
   std::vector<int> joint_node_;           ///< per joint: its node (−1 for a bone in no node)
   std::map<std::string, int> nodeless_;   ///< bones in no node: their joints
-  std::vector<int> bound_by_;             ///< per joint: the mesh that set its inverse bind, or −1
   std::vector<Eigen::Matrix4d> between_;  ///< per joint: the nodes' transforms folded into its rest transform
 };
 
