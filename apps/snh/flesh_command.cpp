@@ -61,7 +61,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness;
     std::string joint_cells = to_string(FleshSpec{}.joint_cells);
     int threads = 0;
-    bool self_contact = false, list = false;
+    bool self_contact = false, list = false, no_split_cells = false;
     double ground = 0.0, dhat = 0.0, contact_stiffness = 0.0, friction = 0.0;
   };
   auto o = std::make_shared<Options>();
@@ -99,6 +99,9 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                   "(released to the solve, so the joint's cells can give: a sharply bent fine lattice then converges), or "
                   "soft (released, and bound by springs of --soft-stiffness instead)")
       ->check(CLI::IsMember({"soft", "free", "hard"}));
+  cmd->add_flag("--no-split-cells", o->no_split_cells,
+                "One lattice cell per cube even where the skin separates its material (parts closer than a cube, such as "
+                "two fingers, are then glued together there); by default such a cube gets a cell per piece");
   cmd->add_flag("--self-contact", o->self_contact,
                 "Self-contact of the render surface (IPC barrier on the welded skin, embedded in the volume: no two of its "
                 "triangles pass through each other)");
@@ -143,6 +146,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     if (cmd->count("--soft-shell")) j["flesh"]["soft_binding"]["shell"] = o->soft_shell;
     if (cmd->count("--soft-stiffness")) j["flesh"]["soft_binding"]["stiffness"] = o->soft_stiffness;
     j["flesh"]["joint_cells"] = o->joint_cells;
+    if (o->no_split_cells) j["flesh"]["split_cells"] = false;
     nlohmann::json material = {{"name", o->material}};
     if (cmd->count("--youngs") || cmd->count("--poisson")) {
       (void)o->params.lame();  // checks that they go together

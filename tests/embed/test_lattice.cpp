@@ -126,35 +126,38 @@ void check_lattice(const Lattice& L, const Surface& s, const InsideTest& inside)
   int previous = -1;
   int count = 0;
   std::vector<int> uses(static_cast<std::size_t>(L.mesh.vertex_count()), 0);
+  // A cube split into pieces has consecutive cells, one per piece.
   for (int c = 0; c < L.dims.prod(); ++c) {
-    const int cell = L.cell_at[static_cast<std::size_t>(c)];
-    if (cell < 0) continue;
-    ASSERT_EQ(cell, previous + 1);
-    previous = cell;
-    ++count;
-    const Eigen::Vector3i ijk = cube_of(L, c);
-    for (int a = 0; a < 8; ++a) {
-      const Eigen::Vector3d expected =
-          grid_point(L, (ijk + Eigen::Vector3i(a & 1, (a >> 1) & 1, (a >> 2) & 1)).cast<double>());
-      ASSERT_LE((L.mesh.vertices.col(L.mesh.cells(a, cell)) - expected).norm(), 1e-12 * (1.0 + expected.norm()));
-      ++uses[static_cast<std::size_t>(L.mesh.cells(a, cell))];
+    const auto [first, last] = L.cells_of_cube(c);
+    for (int cell = first; cell < last; ++cell) {
+      ASSERT_EQ(cell, previous + 1);
+      ASSERT_EQ(L.cube_of_cell[static_cast<std::size_t>(cell)], c);
+      previous = cell;
+      ++count;
+      const Eigen::Vector3i ijk = cube_of(L, c);
+      for (int a = 0; a < 8; ++a) {
+        const Eigen::Vector3d expected =
+            grid_point(L, (ijk + Eigen::Vector3i(a & 1, (a >> 1) & 1, (a >> 2) & 1)).cast<double>());
+        ASSERT_LE((L.mesh.vertices.col(L.mesh.cells(a, cell)) - expected).norm(), 1e-12 * (1.0 + expected.norm()));
+        ++uses[static_cast<std::size_t>(L.mesh.cells(a, cell))];
+      }
+      Eigen::Matrix3d J;
+      J.col(0) = L.mesh.vertices.col(L.mesh.cells(1, cell)) - L.mesh.vertices.col(L.mesh.cells(0, cell));
+      J.col(1) = L.mesh.vertices.col(L.mesh.cells(2, cell)) - L.mesh.vertices.col(L.mesh.cells(0, cell));
+      J.col(2) = L.mesh.vertices.col(L.mesh.cells(4, cell)) - L.mesh.vertices.col(L.mesh.cells(0, cell));
+      ASSERT_NEAR(J.determinant(), h * h * h, 1e-9 * h * h * h);
     }
-    Eigen::Matrix3d J;
-    J.col(0) = L.mesh.vertices.col(L.mesh.cells(1, cell)) - L.mesh.vertices.col(L.mesh.cells(0, cell));
-    J.col(1) = L.mesh.vertices.col(L.mesh.cells(2, cell)) - L.mesh.vertices.col(L.mesh.cells(0, cell));
-    J.col(2) = L.mesh.vertices.col(L.mesh.cells(4, cell)) - L.mesh.vertices.col(L.mesh.cells(0, cell));
-    ASSERT_NEAR(J.determinant(), h * h * h, 1e-9 * h * h * h);
   }
   EXPECT_EQ(count, L.mesh.cell_count());
   for (int u : uses) ASSERT_GT(u, 0);  // only the vertices the cells use
-  // Vertices numbered in grid order (z, then y, then x).
+  // Vertices numbered in grid order (z, then y, then x; the copies of a split node together).
   for (Eigen::Index v = 1; v < L.mesh.vertex_count(); ++v) {
     const Eigen::Vector3d a = L.grid_coordinates(L.mesh.vertices.col(v - 1)), b = L.grid_coordinates(L.mesh.vertices.col(v));
     const bool increasing = std::round(a.z()) < std::round(b.z()) ||
                             (std::round(a.z()) == std::round(b.z()) &&
                              (std::round(a.y()) < std::round(b.y()) ||
                               (std::round(a.y()) == std::round(b.y()) && std::round(a.x()) < std::round(b.x()))));
-    ASSERT_TRUE(increasing) << "vertex " << v;
+    ASSERT_TRUE(increasing || (a - b).norm() < 1e-9) << "vertex " << v;
   }
   // The surface's vertices (those the triangles use).
   std::vector<char> used(static_cast<std::size_t>(s.V.cols()), 0);
@@ -454,6 +457,146 @@ TEST(Lattice, RejectsBadInput) {
   EXPECT_NE(message(s.V, out, 8).find("triangle 5"), std::string::npos);
   const Eigen::Matrix3Xd point = Eigen::Matrix3Xd::Ones(3, s.V.cols());
   EXPECT_NE(message(point, s.F, 8).find("no extent"), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Pieces: cubes the surface splits (the virtual node algorithm)
+
+namespace pieces {
+
+Surface join(const Surface& a, const Surface& b) {
+  Surface s;
+  s.V.resize(3, a.V.cols() + b.V.cols());
+  s.V << a.V, b.V;
+  s.F.resize(3, a.F.cols() + b.F.cols());
+  s.F << a.F, (b.F.array() + static_cast<int>(a.V.cols())).matrix();
+  return s;
+}
+
+/// The cells' components when cells sharing a vertex are connected: the component of each cell.
+std::vector<int> components(const Lattice& L, int& count) {
+  const auto n = static_cast<int>(L.mesh.cell_count());
+  std::vector<int> parent(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) parent[static_cast<std::size_t>(i)] = i;
+  const auto root = [&](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
+    return i;
+  };
+  std::vector<int> cell_of_vertex(static_cast<std::size_t>(L.mesh.vertex_count()), -1);
+  for (int c = 0; c < n; ++c)
+    for (int k = 0; k < 8; ++k) {
+      int& first = cell_of_vertex[static_cast<std::size_t>(L.mesh.cells(k, c))];
+      if (first < 0) first = c;
+      else parent[static_cast<std::size_t>(root(c))] = root(first);
+    }
+  std::vector<int> id(static_cast<std::size_t>(n), -1), out(static_cast<std::size_t>(n));
+  count = 0;
+  for (int c = 0; c < n; ++c) {
+    int& r = id[static_cast<std::size_t>(root(c))];
+    if (r < 0) r = count++;
+    out[static_cast<std::size_t>(c)] = r;
+  }
+  return out;
+}
+
+/// Two boxes 1.0 × 1.0 × 2.0 side by side along x, `gap` apart, tilted a little so no face lies on the grid.
+Surface two_boxes(double gap) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.13, Eigen::Vector3d(0.2, 1.0, 0.4).normalized()).toRotationMatrix();
+  Surface a = test::axis_box(Eigen::Vector3d(-1.0 - 0.5 * gap, -0.5, -1.0), Eigen::Vector3d(-0.5 * gap, 0.5, 1.0));
+  Surface b = test::axis_box(Eigen::Vector3d(0.5 * gap, -0.5, -1.0), Eigen::Vector3d(1.0 + 0.5 * gap, 0.5, 1.0));
+  a.V = R * a.V;
+  b.V = R * b.V;
+  return join(a, b);
+}
+
+}  // namespace pieces
+
+TEST(LatticePieces, NothingToSeparateGivesTheLatticeWithoutPieces) {
+  // Solids whose every cube holds one piece: the lattice is the same with pieces sought as without.
+  const std::array<Surface, 3> shapes = {test::icosphere(3, 1.3, Eigen::Vector3d(0.1, 0.2, -0.3)),
+                                         test::box_solid(4, [](int i, int j, int) { return i != 1 || j != 2; }),  // a hole through
+                                         pieces::two_boxes(0.9)};
+  for (std::size_t s = 0; s < shapes.size(); ++s)
+    for (int res : {5, 11, 17}) {
+      SCOPED_TRACE("shape " + std::to_string(s) + ", resolution " + std::to_string(res));
+      const Lattice with = lattice_for_surface(shapes[s].V, shapes[s].F, res);
+      const Lattice without = lattice_for_surface(shapes[s].V, shapes[s].F, res, 0);
+      EXPECT_EQ(with.split_cubes, 0);
+      EXPECT_TRUE(with.mesh.cells == without.mesh.cells);
+      EXPECT_TRUE(with.mesh.vertices == without.mesh.vertices);
+      EXPECT_TRUE(with.cell_at == without.cell_at);
+      EXPECT_TRUE(std::all_of(with.copies.begin(), with.copies.end(), [](int c) { return c == 1; }));
+    }
+}
+
+TEST(LatticePieces, PartsCloserThanACubeAreNotJoined) {
+  // Two boxes a third of a cube apart: without pieces the cubes over the gap glue them into one solid; with
+  // them the lattice falls apart into two, each cell of a split cube standing for one box.
+  const Surface s = pieces::two_boxes(0.1);
+  const Lattice glued = lattice_for_surface(s.V, s.F, 8, 0);
+  ASSERT_GT(glued.spacing, 0.25);  // the gap, 0.1, under a third of a cube (and over a sample's spacing)
+  int count = 0;
+  (void)pieces::components(glued, count);
+  EXPECT_EQ(count, 1);
+  const Lattice L = lattice_for_surface(s.V, s.F, 8);
+  EXPECT_GT(L.split_cubes, 0);
+  const std::vector<int> part = pieces::components(L, count);
+  EXPECT_EQ(count, 2);
+  EXPECT_EQ(L.mesh.cell_count(), glued.mesh.cell_count() + L.split_cubes);  // two pieces per split cube
+  check_lattice(L, s, by_winding_number(s));
+  // Each box's surface points lie in cells of one component, a different one for each box.
+  Eigen::Matrix3Xd points(3, s.V.cols());
+  points = s.V;
+  std::vector<int> vertex(static_cast<std::size_t>(s.V.cols()));
+  for (std::size_t v = 0; v < vertex.size(); ++v) vertex[v] = static_cast<int>(v);
+  const Embedding e = embed_surface_in_lattice(L, s.V, s.F, points, vertex);
+  const Eigen::Index half = s.V.cols() / 2;
+  for (Eigen::Index v = 0; v < s.V.cols(); ++v)
+    EXPECT_EQ(part[static_cast<std::size_t>(e.cell[static_cast<std::size_t>(v)])],
+              part[static_cast<std::size_t>(e.cell[v < half ? 0 : static_cast<std::size_t>(half)])])
+        << "vertex " << v;
+  EXPECT_NE(part[static_cast<std::size_t>(e.cell[0])], part[static_cast<std::size_t>(e.cell[static_cast<std::size_t>(half)])]);
+  // Points strewn over each box (inside) go with it: the piece of their nearest sample.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.45, 0.45);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.13, Eigen::Vector3d(0.2, 1.0, 0.4).normalized()).toRotationMatrix();
+  Eigen::Matrix3Xd inner(3, 200);
+  for (Eigen::Index p = 0; p < inner.cols(); ++p)
+    inner.col(p) = R * Eigen::Vector3d((p % 2 ? 1.0 : -1.0) * (0.5 + 0.05 + u(rng) + 0.0), u(rng), 2.0 * u(rng));
+  const Embedding ei = embed_in_lattice(L, inner);
+  for (Eigen::Index p = 0; p < inner.cols(); ++p)
+    EXPECT_EQ(part[static_cast<std::size_t>(ei.cell[static_cast<std::size_t>(p)])],
+              part[static_cast<std::size_t>(e.cell[p % 2 ? static_cast<std::size_t>(half) : 0])])
+        << "point " << p;
+  // Every vertex of a split cube's cells at a node holds its copies: the node is doubled there.
+  EXPECT_TRUE(std::any_of(L.copies.begin(), L.copies.end(), [](int c) { return c == 2; }));
+}
+
+TEST(LatticePieces, ThinAndDiagonalMaterialIsOnePiece) {
+  // Material thinner than a sample's spacing, or running diagonally across a cube, leaves its samples
+  // unconnected along the axes: it is still one piece (the slab and rod of ThinSlabAndRodAreCovered), and
+  // a convex solid never splits.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1.0, 0.3, -0.2).normalized()).toRotationMatrix();
+  const Surface slab = test::box_solid(3, [](int, int, int) { return true; }, R * Eigen::Vector3d(1.0, 0.8, 0.02).asDiagonal(),
+                                       Eigen::Vector3d(0.0123, -0.0456, 0.0789));
+  for (int res : {4, 9, 12}) {
+    const Lattice L = lattice_for_surface(slab.V, slab.F, res);
+    EXPECT_EQ(L.split_cubes, 0) << "resolution " << res;
+    int count = 0;
+    (void)pieces::components(L, count);
+    EXPECT_EQ(count, 1) << "resolution " << res;
+  }
+}
+
+TEST(LatticePieces, SegmentMeetsTriangle) {
+  const Eigen::Vector3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_TRUE(segment_meets_triangle({0.2, 0.2, -1}, {0.2, 0.2, 1}, a, b, c));
+  EXPECT_TRUE(segment_meets_triangle({0.2, 0.2, 1}, {0.2, 0.2, -1}, a, c, b));  // either orientation
+  EXPECT_FALSE(segment_meets_triangle({0.7, 0.7, -1}, {0.7, 0.7, 1}, a, b, c));  // beyond the hypotenuse
+  EXPECT_FALSE(segment_meets_triangle({0.2, 0.2, 0.1}, {0.2, 0.2, 1}, a, b, c));  // short of the plane
+  EXPECT_TRUE(segment_meets_triangle({0.5, 0.5, -1}, {0.5, 0.5, 1}, a, b, c));   // through an edge: touching
+  EXPECT_TRUE(segment_meets_triangle({0.2, 0.2, 0}, {0.2, 0.2, 1}, a, b, c));    // an end on the triangle
+  EXPECT_FALSE(segment_meets_triangle({-1, 0.2, 0}, {2, 0.2, 0}, a, b, c));      // in its plane
 }
 
 }  // namespace

@@ -33,41 +33,56 @@ struct LimbOptions {
   /// Two mesh nodes sharing the skin and the vertices, each with half of the triangles (a character in parts).
   bool two_meshes = false;
   bool still_clip_first = false;  ///< a one-key "bind" clip before "bend" (as FBX conversions write)
+  /// > 0: a second, still limb beside the first (the same cylinder moved by 2 radius + gap along z), skinned to
+  /// a chain of its own (a second root joint "still" → "still_tip"), so the gap between them is that wide.
+  double beside_gap = 0.0;
 };
 
 inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions& o = {}) {
   std::vector<float> pos, weights;
   std::vector<std::uint16_t> joints;
   std::vector<std::uint32_t> idx;
+  bool still = false;   // the vertices made now belong to the still limb
+  double offset = 0.0;  // its z offset
   auto vertex = [&](double x, double y, double z) {
-    pos.insert(pos.end(), {float(x), float(y), float(z)});
+    pos.insert(pos.end(), {float(x), float(y), float(z + offset)});
     const double s = std::clamp((x - (1.0 - o.blend)) / (2.0 * o.blend), 0.0, 1.0);  // elbow's share
-    joints.insert(joints.end(), {0, 1, 0, 0});
-    weights.insert(weights.end(), {float(1.0 - s), float(s), 0.0f, 0.0f});
+    joints.insert(joints.end(), {std::uint16_t(still ? 3 : 0), 1, 0, 0});
+    weights.insert(weights.end(), {float(still ? 1.0 : 1.0 - s), float(still ? 0.0 : s), 0.0f, 0.0f});
     return static_cast<std::uint32_t>(pos.size() / 3 - 1);
   };
-  for (int i = 0; i < o.along; ++i) {
-    const double x = 2.0 * i / (o.along - 1);
-    for (int k = 0; k < o.around; ++k) {
-      const double a = 2.0 * std::numbers::pi * k / o.around;
-      vertex(x, o.radius * std::cos(a), o.radius * std::sin(a));
+  const auto cylinder = [&] {
+    const auto base = static_cast<std::uint32_t>(pos.size() / 3);
+    for (int i = 0; i < o.along; ++i) {
+      const double x = 2.0 * i / (o.along - 1);
+      for (int k = 0; k < o.around; ++k) {
+        const double a = 2.0 * std::numbers::pi * k / o.around;
+        vertex(x, o.radius * std::cos(a), o.radius * std::sin(a));
+      }
     }
-  }
-  const std::uint32_t c0 = vertex(0, 0, 0), c1 = vertex(2, 0, 0);
-  auto ring = [&](int i, int k) { return static_cast<std::uint32_t>(i * o.around + (k % o.around)); };
-  for (int i = 0; i + 1 < o.along; ++i)
-    for (int k = 0; k < o.around; ++k)  // outward: counter-clockwise seen from outside
-      idx.insert(idx.end(), {ring(i, k), ring(i, k + 1), ring(i + 1, k + 1), ring(i, k), ring(i + 1, k + 1), ring(i + 1, k)});
-  for (int k = 0; k < o.around && o.caps; ++k) {
-    idx.insert(idx.end(), {c0, ring(0, k + 1), ring(0, k)});
-    idx.insert(idx.end(), {c1, ring(o.along - 1, k), ring(o.along - 1, k + 1)});
+    const std::uint32_t c0 = vertex(0, 0, 0), c1 = vertex(2, 0, 0);
+    auto ring = [&](int i, int k) { return base + static_cast<std::uint32_t>(i * o.around + (k % o.around)); };
+    for (int i = 0; i + 1 < o.along; ++i)
+      for (int k = 0; k < o.around; ++k)  // outward: counter-clockwise seen from outside
+        idx.insert(idx.end(), {ring(i, k), ring(i, k + 1), ring(i + 1, k + 1), ring(i, k), ring(i + 1, k + 1), ring(i + 1, k)});
+    for (int k = 0; k < o.around && o.caps; ++k) {
+      idx.insert(idx.end(), {c0, ring(0, k + 1), ring(0, k)});
+      idx.insert(idx.end(), {c1, ring(o.along - 1, k), ring(o.along - 1, k + 1)});
+    }
+  };
+  cylinder();
+  if (o.beside_gap > 0.0) {
+    still = true;
+    offset = 2.0 * o.radius + o.beside_gap;
+    cylinder();
   }
   if (o.inside_out)
     for (std::size_t t = 0; t + 2 < idx.size(); t += 3) std::swap(idx[t + 1], idx[t + 2]);
   // Inverse bind matrices (column-major): translations by −x of each joint.
   std::vector<float> ibm;
-  for (double x : {0.0, 1.0, 2.0}) {
-    const float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, float(-x), 0, 0, 1};
+  const double z_still = 2.0 * o.radius + o.beside_gap;
+  for (const auto& [x, z] : std::initializer_list<std::pair<double, double>>{{0.0, 0.0}, {1.0, 0.0}, {2.0, 0.0}, {0.0, z_still}, {2.0, z_still}}) {
+    const float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, float(-x), 0, float(0.0 - z), 1};
     ibm.insert(ibm.end(), m, m + 16);
   }
   const double half = 0.5 * o.degrees * std::numbers::pi / 180.0;
@@ -87,13 +102,14 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
   };
   const int a_pos = add(pos.data(), pos.size() * 4, 5126, pos.size() / 3, "VEC3", 34962);
   accessors[a_pos]["min"] = {0.0, -o.radius, -o.radius};
-  accessors[a_pos]["max"] = {2.0, o.radius, o.radius};
+  accessors[a_pos]["max"] = {2.0, o.radius, o.radius + (o.beside_gap > 0.0 ? z_still : 0.0)};
   const int a_joints = add(joints.data(), joints.size() * 2, 5123, joints.size() / 4, "VEC4", 34962);
   const int a_weights = add(weights.data(), weights.size() * 4, 5126, weights.size() / 4, "VEC4", 34962);
   const std::size_t first_half = o.two_meshes ? idx.size() / 6 * 3 : idx.size();
   const int a_idx = add(idx.data(), first_half * 4, 5125, first_half, "SCALAR", 34963);
   const int a_idx2 = o.two_meshes ? add(idx.data() + first_half, (idx.size() - first_half) * 4, 5125, idx.size() - first_half, "SCALAR", 34963) : -1;
-  const int a_ibm = add(ibm.data(), ibm.size() * 4, 5126, 3, "MAT4", 0);
+  const int joint_count = o.beside_gap > 0.0 ? 5 : 3;
+  const int a_ibm = add(ibm.data(), static_cast<std::size_t>(joint_count) * 64, 5126, static_cast<std::size_t>(joint_count), "MAT4", 0);
   const int a_t = add(times.data(), times.size() * 4, 5126, 2, "SCALAR", 0);
   accessors[a_t]["min"] = {0.0};
   accessors[a_t]["max"] = {float(o.duration)};
@@ -127,6 +143,13 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
     g["nodes"].push_back({{"name", "limb_far"}, {"mesh", 1}, {"skin", 0}});
   }
   g["skins"] = nlohmann::json::array({nlohmann::json{{"joints", {1, 2, 3}}, {"inverseBindMatrices", a_ibm}}});
+  if (o.beside_gap > 0.0) {
+    const int first = static_cast<int>(g["nodes"].size());
+    g["nodes"].push_back({{"name", "still"}, {"translation", {0.0, 0.0, z_still}}, {"children", {first + 1}}});
+    g["nodes"].push_back({{"name", "still_tip"}, {"translation", {2.0, 0.0, 0.0}}});
+    g["scenes"][0]["nodes"].push_back(first);
+    g["skins"][0]["joints"] = {1, 2, 3, first, first + 1};
+  }
   nlohmann::json channel = {{"sampler", 0}, {"target", {{"node", 2}, {"path", "rotation"}}}};
   nlohmann::json sampler = {{"input", a_t}, {"output", a_r}, {"interpolation", "LINEAR"}};
   g["animations"] = nlohmann::json::array({nlohmann::json{{"name", "bend"},

@@ -41,6 +41,7 @@ class Character : public ::testing::Test {
     test::write_limb_gltf(dir_ / "inward.gltf", {.inside_out = true});
     test::write_limb_gltf(dir_ / "parts.gltf", {.two_meshes = true});
     test::write_limb_gltf(dir_ / "still.gltf", {.still_clip_first = true});
+    test::write_limb_gltf(dir_ / "beside.gltf", {.beside_gap = 0.04});
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 
@@ -233,6 +234,32 @@ TEST_F(Character, OpenInsideOutAndManyPartSkinsRun) {
   const int open_cells = stats("open")["cells"].get<int>(), whole_cells = stats("whole")["cells"].get<int>();
   EXPECT_GE(open_cells, whole_cells * 9 / 10);
   EXPECT_LE(open_cells, whole_cells);
+}
+
+// Parts closer than a cell are not glued together (the virtual node algorithm): a limb bends beside a still
+// one 0.04 away, a third of a cell. With one cell per cube the cells over the gap drag the still limb along;
+// with a cell per piece it stays where it is, and the header and stats.json say how many cubes were split.
+TEST_F(Character, PartsCloserThanACellAreNotGluedTogether) {
+  std::string log;
+  json j = scene("beside.gltf", "beside", 16);
+  (void)run(j, &log);
+  EXPECT_NE(log.find("the skin separates material closer than a cube"), std::string::npos) << log;
+  EXPECT_GT(stats("beside")["copied_vertices"].get<int>(), 0);
+  j["flesh"]["split_cells"] = false;
+  j["output"]["dir"] = (dir_ / "glued").string();
+  (void)run(j);
+  EXPECT_EQ(stats("glued")["copied_vertices"].get<int>(), 0);
+  EXPECT_LT(stats("beside")["cell_size"].get<double>(), 0.14);  // the gap is under a third of a cell
+  // The still limb: the second half of the model's vertices. How far its skin moved by the last frame.
+  const auto moved = [&](const std::string& out) {
+    const Eigen::Matrix3Xd rest = read_surface(dir_ / out / "surface" / "000.obj").vertices;
+    const Eigen::Matrix3Xd last = read_surface(dir_ / out / "surface" / "004.obj").vertices;
+    const Eigen::Index half = rest.cols() / 2;
+    return (last.rightCols(half) - rest.rightCols(half)).colwise().norm().maxCoeff();
+  };
+  const double apart = moved("beside"), glued = moved("glued");
+  EXPECT_GT(glued, 0.05) << "glued, the still limb follows the bending one";
+  EXPECT_LT(apart, 1e-3) << "apart, it stays (glued: " << glued << ")";
 }
 
 // The clip played by default is the first that lasts and moves: a one-key "bind" clip, as FBX conversions

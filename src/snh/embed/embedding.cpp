@@ -177,7 +177,36 @@ Eigen::Matrix3Xd Embedding::apply(const Eigen::VectorXd& x) const {
   return apply_to(*this, Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3));
 }
 
-Embedding embed_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& points) {
+namespace {
+
+/// The cell of a split cube (cells first .. last − 1) that point p goes with: the piece of the nearest inside
+/// sample that `sees` accepts (the segment from p to it), else of the nearest inside sample.
+template <class Sees>
+int choose_piece(const Lattice& L, int cube, int first, const Eigen::Vector3d& p, Sees&& sees) {
+  const int s = L.samples, n = s * s * s, slot = L.touched_slot(cube);
+  if (slot < 0 || s == 0) return first;
+  const Eigen::Vector3i ijk(cube % L.dims.x(), (cube / L.dims.x()) % L.dims.y(), cube / (L.dims.x() * L.dims.y()));
+  std::vector<std::pair<double, int>> order;  // (distance², sample)
+  for (int i = 0; i < n; ++i)
+    if (L.sample_piece[static_cast<std::size_t>(slot) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i)] >= 0) {
+      const Eigen::Vector3d abc(i % s + 0.5, (i / s) % s + 0.5, i / (s * s) + 0.5);
+      order.emplace_back((L.origin + L.spacing * (ijk.cast<double>() + abc / s) - p).squaredNorm(), i);
+    }
+  if (order.empty()) return first;
+  std::sort(order.begin(), order.end());
+  int chosen = order.front().second;
+  for (const auto& [d2, i] : order) {
+    const Eigen::Vector3d abc(i % s + 0.5, (i / s) % s + 0.5, i / (s * s) + 0.5);
+    if (sees(slot, L.origin + L.spacing * (ijk.cast<double>() + abc / s))) {
+      chosen = i;
+      break;
+    }
+  }
+  return first + L.sample_piece[static_cast<std::size_t>(slot) * static_cast<std::size_t>(n) + static_cast<std::size_t>(chosen)];
+}
+
+template <class Sees>
+Embedding embed_in_lattice_as(const Lattice& lattice, const Eigen::Matrix3Xd& points, Sees&& sees) {
   const Eigen::Vector3i& dims = lattice.dims;
   if (dims.minCoeff() < 1 || static_cast<double>(lattice.cell_at.size()) != static_cast<double>(dims.x()) * dims.y() * dims.z())
     throw std::invalid_argument(fmt::format("lattice of {} by {} by {} cubes has {} cube entries", dims.x(), dims.y(),
@@ -220,6 +249,12 @@ Embedding embed_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& point
             cube = {choices[0][a], choices[1][b], choices[2][c]};
             cell = lattice.cell_at[static_cast<std::size_t>(lattice.cube_index(cube[0], cube[1], cube[2]))];
           }
+      if (cell >= 0 && cell < lattice.mesh.cell_count()) {
+        const int c = lattice.cube_index(cube[0], cube[1], cube[2]);
+        if (const auto [first, last] = lattice.cells_of_cube(c); last - first > 1)
+          cell = choose_piece(lattice, c, first, points.col(p),
+                              [&](int slot, const Eigen::Vector3d& target) { return sees(p, slot, target); });
+      }
       if (cell < 0 || cell >= lattice.mesh.cell_count()) {
         failed[static_cast<std::size_t>(p)] = 1;
         e.cell[static_cast<std::size_t>(p)] = -1;
@@ -242,6 +277,28 @@ Embedding embed_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& point
   errors.rethrow();
   throw_first_failure(failed, points, "in no cell of the lattice");
   return e;
+}
+
+}  // namespace
+
+Embedding embed_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& points) {
+  return embed_in_lattice_as(lattice, points, [](Eigen::Index, int, const Eigen::Vector3d&) { return false; });
+}
+
+Embedding embed_surface_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F,
+                                   const Eigen::Matrix3Xd& points, const std::vector<int>& vertex) {
+  if (static_cast<Eigen::Index>(vertex.size()) != points.cols())
+    throw std::invalid_argument(fmt::format("embedding: {} points but {} surface vertex ids", points.cols(), vertex.size()));
+  return embed_in_lattice_as(lattice, points, [&](Eigen::Index p, int slot, const Eigen::Vector3d& target) {
+    const int own = vertex[static_cast<std::size_t>(p)];
+    const Eigen::Vector3d from = points.col(p);
+    for (std::int64_t k = lattice.triangle_start[static_cast<std::size_t>(slot)]; k < lattice.triangle_start[static_cast<std::size_t>(slot) + 1]; ++k) {
+      const int f = lattice.triangle[static_cast<std::size_t>(k)];
+      if (F(0, f) == own || F(1, f) == own || F(2, f) == own) continue;
+      if (segment_meets_triangle(from, target, V.col(F(0, f)), V.col(F(1, f)), V.col(F(2, f)))) return false;
+    }
+    return true;
+  });
 }
 
 Embedding embed_in_tets(const VolumeMesh& tets, const Eigen::Matrix3Xd& points) {

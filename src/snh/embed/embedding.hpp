@@ -26,7 +26,13 @@ struct Embedding {
 /// face the point is on (within 1e-6 of the spacing), e.g. a neighbour kept where that cube is not. Throws
 /// std::invalid_argument naming the first point that lies in no cube of the lattice (or is not finite).
 ///   points  3 by #p
+/// In a cube the surface splits into pieces (Lattice), a point goes with the piece of its nearest inside sample.
 [[nodiscard]] Embedding embed_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& points);
+/// The same for points on the surface (V, F) the lattice was built from, point p being its vertex vertex[p]:
+/// in a split cube, the piece of the nearest inside sample that the point sees (the segment to it meets no
+/// triangle but the vertex's own), so that a fingertip's skin goes with its finger, not the one beside it.
+[[nodiscard]] Embedding embed_surface_in_lattice(const Lattice& lattice, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F,
+                                                 const Eigen::Matrix3Xd& points, const std::vector<int>& vertex);
 
 /// Barycentric weights of points in a tet mesh: the tet containing each point (on a shared face, the one
 /// whose smallest barycentric coordinate is largest); a point outside every tet by more than 1e-6 of the

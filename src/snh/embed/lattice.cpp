@@ -73,18 +73,18 @@ Lattice empty_grid(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int res
   return L;
 }
 
-/// The cubes a triangle overlaps (1), in cube units (L.grid_coordinates, as embed_in_lattice), each cube grown
-/// by δ: 1e-9 of its edge, more for grids so long that rounding of the coordinates could exceed that.
-std::vector<unsigned char> touched_cubes(const Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F) {
+/// The (cube, triangle) pairs of every cube a triangle overlaps, by cube then triangle, in cube units
+/// (L.grid_coordinates, as embed_in_lattice), each cube grown by δ: 1e-9 of its edge, more for grids so long
+/// that rounding of the coordinates could exceed that.
+std::vector<std::pair<int, int>> cube_triangle_pairs(const Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F) {
   const Eigen::Vector3i& dims = L.dims;
-  const auto n_cubes = static_cast<std::size_t>(std::int64_t{dims.x()} * dims.y() * dims.z());
   const double delta = 1e-9 + 16.0 * std::numeric_limits<double>::epsilon() * dims.maxCoeff();
   Eigen::Matrix3Xd Q(3, V.cols());
   for (Eigen::Index v = 0; v < V.cols(); ++v) Q.col(v) = L.grid_coordinates(V.col(v));
-  std::vector<unsigned char> touched(n_cubes, 0);
   const auto cube_range = [&](double x, int a) {
     return std::clamp(static_cast<int>(std::floor(std::clamp(x, -1.0, dims[a] + 1.0))), 0, dims[a] - 1);
   };
+  std::vector<std::vector<std::pair<int, int>>> found(static_cast<std::size_t>(F.cols()));
   ParallelErrors overlap_errors;
 #pragma omp parallel for schedule(dynamic, 64) if (F.cols() >= 256)
   for (Eigen::Index f = 0; f < F.cols(); ++f) {
@@ -99,21 +99,23 @@ std::vector<unsigned char> touched_cubes(const Lattice& L, const Eigen::Matrix3X
       for (int k = first[2]; k <= last[2]; ++k)
         for (int j = first[1]; j <= last[1]; ++j)
           for (int i = first[0]; i <= last[0]; ++i) {
-            const std::size_t c = static_cast<std::size_t>(L.cube_index(i, j, k));
-            unsigned char seen;
-#pragma omp atomic read
-            seen = touched[c];
-            if (seen) continue;
             const Eigen::Vector3d centre(i + 0.5, j + 0.5, k + 0.5);
-            if (triangle_overlaps_cube({q[0] - centre, q[1] - centre, q[2] - centre}, 0.5 + delta)) {
-#pragma omp atomic write
-              touched[c] = 1;
-            }
+            if (triangle_overlaps_cube({q[0] - centre, q[1] - centre, q[2] - centre}, 0.5 + delta))
+              found[static_cast<std::size_t>(f)].emplace_back(L.cube_index(i, j, k), static_cast<int>(f));
           }
     });
   }
   overlap_errors.rethrow();
-  return touched;
+  std::size_t total = 0;
+  for (const auto& v : found) total += v.size();
+  std::vector<std::pair<int, int>> pairs;
+  pairs.reserve(total);
+  for (auto& v : found) {
+    pairs.insert(pairs.end(), v.begin(), v.end());
+    std::vector<std::pair<int, int>>().swap(v);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
 }
 
 /// Whether each untouched cube is inside, |winding number| > ½ (either orientation): untouched cubes, grouped
@@ -169,56 +171,469 @@ std::vector<unsigned char> inside_cubes(const Lattice& L, const Eigen::Matrix3Xd
   return out;
 }
 
-/// The hex mesh of the kept cubes: cells in grid order, and the grid nodes they use, numbered in grid order.
-void build_cells(Lattice& L, const std::vector<unsigned char>& keep) {
-  const Eigen::Vector3i& dims = L.dims;
-  const std::size_t n_cubes = keep.size();
-  L.cell_at.assign(n_cubes, -1);
-  int cells = 0;
-  for (std::size_t c = 0; c < n_cubes; ++c)
-    if (keep[c]) L.cell_at[c] = cells++;
-  const Eigen::Vector3i nd = dims + Eigen::Vector3i::Ones();
-  const auto node_index = [&](int i, int j, int k) {
-    return static_cast<std::size_t>(i) + static_cast<std::size_t>(nd.x()) * (static_cast<std::size_t>(j) +
-                                                                            static_cast<std::size_t>(nd.y()) * k);
-  };
-  const auto corner = [&](int c, int a) {  // grid node of corner a of cube c, VolumeMesh's corner order
-    const int i = c % dims.x(), j = (c / dims.x()) % dims.y(), k = c / (dims.x() * dims.y());
-    return node_index(i + (a & 1), j + ((a >> 1) & 1), k + ((a >> 2) & 1));
-  };
-  std::vector<int> node(static_cast<std::size_t>(nd.x()) * nd.y() * nd.z(), -1);
-  for (std::size_t c = 0; c < n_cubes; ++c)
-    if (L.cell_at[c] >= 0)
-      for (int a = 0; a < 8; ++a) node[corner(static_cast<int>(c), a)] = 0;
-  int vertices = 0;
-  for (int& n : node)
-    if (n == 0) n = vertices++;
+/// A small union-find over 0 .. n − 1.
+class Groups {
+ public:
+  explicit Groups(int n) : parent_(static_cast<std::size_t>(n)) {
+    for (int i = 0; i < n; ++i) parent_[static_cast<std::size_t>(i)] = i;
+  }
+  int root(int i) {
+    while (parent_[static_cast<std::size_t>(i)] != i) i = parent_[static_cast<std::size_t>(i)] = parent_[static_cast<std::size_t>(parent_[static_cast<std::size_t>(i)])];
+    return i;
+  }
+  void join(int a, int b) {
+    a = root(a), b = root(b);
+    if (a != b) parent_[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+  }
 
+ private:
+  std::vector<int> parent_;
+};
+
+/// What the pieces are made of: the surface in cube units, the kept and touched cubes, and the samples.
+struct PieceContext {
+  const Lattice& L;
+  const Eigen::Matrix3Xd& Q;  ///< the vertices in cube units
+  const Eigen::Matrix3Xi& F;
+  const std::vector<unsigned char>& keep;
+  int s;  ///< samples per edge
+  /// Sample (a, b, c) of cube (i, j, k) in cube units.
+  [[nodiscard]] Eigen::Vector3d sample(const Eigen::Vector3i& cube, const Eigen::Vector3i& abc) const {
+    return cube.cast<double>() + (abc.cast<double>() + Eigen::Vector3d::Constant(0.5)) / s;
+  }
+  [[nodiscard]] Eigen::Vector3i cube_of(int c) const {
+    return {c % L.dims.x(), (c / L.dims.x()) % L.dims.y(), c / (L.dims.x() * L.dims.y())};
+  }
+  [[nodiscard]] int sample_index(const Eigen::Vector3i& abc) const { return abc.x() + s * (abc.y() + s * abc.z()); }
+  /// Whether the segment p → q (cube units) meets a triangle of touched slot t (t < 0: none).
+  [[nodiscard]] bool blocked(int t, const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {
+    if (t < 0) return false;
+    for (std::int64_t k = L.triangle_start[static_cast<std::size_t>(t)]; k < L.triangle_start[static_cast<std::size_t>(t) + 1]; ++k) {
+      const int f = L.triangle[static_cast<std::size_t>(k)];
+      if (segment_meets_triangle(p, q, Q.col(F(0, f)), Q.col(F(1, f)), Q.col(F(2, f)))) return true;
+    }
+    return false;
+  }
+};
+
+/// The pieces of touched slot t: its samples grouped by connections the surface does not block; each group
+/// is inside or outside as a whole, taken from an untouched neighbour cube it reaches unblocked (or the space
+/// beyond the grid: outside), else from the winding number at its first sample. Writes sample_piece and
+/// returns the number of pieces (groups inside).
+int find_pieces(const PieceContext& P, const Eigen::Matrix3Xd& V, int t, signed char* label) {
+  const Lattice& L = P.L;
+  const int s = P.s, n = s * s * s;
+  const int c = L.touched[static_cast<std::size_t>(t)];
+  const Eigen::Vector3i cube = P.cube_of(c);
+  Groups groups(n);
+  for (int z = 0; z < s; ++z)
+    for (int y = 0; y < s; ++y)
+      for (int x = 0; x < s; ++x) {
+        const Eigen::Vector3i abc(x, y, z);
+        for (int a = 0; a < 3; ++a) {
+          if (abc[a] + 1 >= s) continue;
+          const Eigen::Vector3i next = abc + Eigen::Vector3i::Unit(a);
+          if (!P.blocked(t, P.sample(cube, abc), P.sample(cube, next))) groups.join(P.sample_index(abc), P.sample_index(next));
+        }
+      }
+  std::vector<signed char> inside(static_cast<std::size_t>(n), -1);  // per root: −1 unknown, 0, 1
+  // Untouched neighbours (or beyond the grid) reached from a face sample without crossing the surface.
+  for (int z = 0; z < s; ++z)
+    for (int y = 0; y < s; ++y)
+      for (int x = 0; x < s; ++x) {
+        const Eigen::Vector3i abc(x, y, z);
+        const int r = groups.root(P.sample_index(abc));
+        if (inside[static_cast<std::size_t>(r)] >= 0) continue;
+        for (int a = 0; a < 3 && inside[static_cast<std::size_t>(r)] < 0; ++a)
+          for (const int step : {-1, 1}) {
+            if ((step < 0 && abc[a] != 0) || (step > 0 && abc[a] != s - 1)) continue;
+            const Eigen::Vector3i nb = cube + step * Eigen::Vector3i::Unit(a);
+            signed char flag = 0;  // beyond the grid: outside
+            if (nb[a] >= 0 && nb[a] < L.dims[a]) {
+              const int m = L.cube_index(nb.x(), nb.y(), nb.z());
+              if (L.touched_slot(m) >= 0) continue;
+              flag = P.keep[static_cast<std::size_t>(m)] ? 1 : 0;
+            }
+            const Eigen::Vector3d p = P.sample(cube, abc);
+            if (P.blocked(t, p, p + static_cast<double>(step) / s * Eigen::Vector3d::Unit(a))) continue;
+            inside[static_cast<std::size_t>(r)] = flag;
+            break;
+          }
+      }
+  const auto position = [&](int i) { return P.sample(cube, Eigen::Vector3i(i % s, (i / s) % s, i / (s * s))); };
+  std::vector<int> inside_roots;
+  for (int i = 0; i < n; ++i) {
+    const int r = groups.root(i);
+    signed char& in = inside[static_cast<std::size_t>(r)];
+    if (in < 0) in = std::abs(winding_number(V, P.F, L.origin + L.spacing * position(i))) > 0.5 ? 1 : 0;
+    if (in && r == i) inside_roots.push_back(r);
+  }
+  // Inside groups that a straight segment joins without meeting the surface are one piece: material thinner
+  // than a sample's spacing, or running diagonally, leaves its samples unconnected along the axes.
+  for (std::size_t a = 0; a < inside_roots.size(); ++a)
+    for (std::size_t b = a + 1; b < inside_roots.size(); ++b) {
+      if (groups.root(inside_roots[a]) == groups.root(inside_roots[b])) continue;
+      bool joined = false;
+      for (int i = 0; i < n && !joined; ++i) {
+        if (groups.root(i) != groups.root(inside_roots[a])) continue;
+        for (int k = 0; k < n && !joined; ++k)
+          if (groups.root(k) == groups.root(inside_roots[b]) && !P.blocked(t, position(i), position(k))) {
+            groups.join(i, k);
+            joined = true;
+          }
+      }
+    }
+  std::vector<int> piece(static_cast<std::size_t>(n), -1);
+  int pieces = 0;
+  for (int i = 0; i < n; ++i) {
+    const int r = groups.root(i);
+    // A joined group's root may be an inside group's former member: inside is kept per former root.
+    const bool in = std::find_if(inside_roots.begin(), inside_roots.end(), [&](int q) { return groups.root(q) == r; }) !=
+                    inside_roots.end();
+    if (in && piece[static_cast<std::size_t>(r)] < 0) piece[static_cast<std::size_t>(r)] = pieces++;
+    label[i] = in ? static_cast<signed char>(std::min(piece[static_cast<std::size_t>(r)], 127)) : -1;
+  }
+  return pieces;
+}
+
+/// The connections across the face between cube c and its neighbour c + e_axis (both kept): pairs (piece of
+/// c, piece of the neighbour). `pieces` per cube: the number of inside pieces its samples found (an untouched
+/// cube: 1). `separated` is set when two cubes of at most one piece each both reach the face and nothing
+/// connects them there.
+std::vector<std::pair<int, int>> face_links(const PieceContext& P, const std::vector<int>& pieces_of, int c, int axis,
+                                            bool& separated) {
+  const Lattice& L = P.L;
+  const int s = P.s;
+  const Eigen::Vector3i cube = P.cube_of(c), next = cube + Eigen::Vector3i::Unit(axis);
+  const int d = L.cube_index(next.x(), next.y(), next.z());
+  const int tc = L.touched_slot(c), td = L.touched_slot(d);
+  const int n = s * s * s;
+  const auto label = [&](int slot, const Eigen::Vector3i& abc) -> int {
+    return slot < 0 ? 0 : L.sample_piece[static_cast<std::size_t>(slot) * static_cast<std::size_t>(n) + static_cast<std::size_t>(P.sample_index(abc))];
+  };
+  const int pc = pieces_of[static_cast<std::size_t>(c)], pd = pieces_of[static_cast<std::size_t>(d)];
+  separated = false;
+  if (tc < 0 && td < 0) return {{0, 0}};  // no triangle in either: one solid
+  std::vector<std::pair<int, int>> links;
+  // The inside samples of each cube (piece, position), and the pieces with a sample on the face's layer.
+  std::vector<std::pair<int, Eigen::Vector3d>> in_c, in_d;
+  std::vector<int> facing_c, facing_d;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3i abc(i % s, (i / s) % s, i / (s * s));
+    if (const int l = label(tc, abc); l >= 0) {
+      in_c.emplace_back(l, P.sample(cube, abc));
+      if (abc[axis] == s - 1 && std::find(facing_c.begin(), facing_c.end(), l) == facing_c.end()) facing_c.push_back(l);
+    }
+    if (const int l = label(td, abc); l >= 0) {
+      in_d.emplace_back(l, P.sample(next, abc));
+      if (abc[axis] == 0 && std::find(facing_d.begin(), facing_d.end(), l) == facing_d.end()) facing_d.push_back(l);
+    }
+  }
+  // Two pieces are connected across the face when a segment between an inside sample of each meets no
+  // triangle: the samples facing each other across the face are tried first, then every pair.
+  const auto connected = [&](int la, int lb) {
+    const auto unblocked = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) { return !P.blocked(tc, p, q) && !P.blocked(td, p, q); };
+    const double across = 1.0 / s + 1e-9;
+    for (const auto& [pa, xa] : in_c)
+      if (pa == la)
+        for (const auto& [pb, xb] : in_d)
+          if (pb == lb && (xa - xb).norm() <= across && unblocked(xa, xb)) return true;
+    for (const auto& [pa, xa] : in_c)
+      if (pa == la)
+        for (const auto& [pb, xb] : in_d)
+          if (pb == lb && (xa - xb).norm() > across && unblocked(xa, xb)) return true;
+    return false;
+  };
+  for (int la = 0; la < pc; ++la)
+    for (int lb = 0; lb < pd; ++lb)
+      if (connected(la, lb)) links.emplace_back(la, lb);
+  if (pc <= 1 && pd <= 1) {  // no split: shared unless both hold material and nothing connects it across
+    separated = links.empty() && pc == 1 && pd == 1;
+    if (separated) return {};
+    return {{0, 0}};
+  }
+  // A sliver (a touched cube whose samples are all outside: one cell) joins the pieces that reach the face,
+  // else the piece of the sample nearest to it, so that it never floats free.
+  const auto sliver_links = [&](int slot_other, const std::vector<int>& facing, bool sliver_is_c) {
+    std::vector<int> join = facing;
+    if (join.empty()) {
+      for (int layer = 0; layer < s && join.empty(); ++layer)
+        for (int i = 0; i < n && join.empty(); ++i) {
+          const Eigen::Vector3i abc(i % s, (i / s) % s, i / (s * s));
+          if (abc[axis] != (sliver_is_c ? layer : s - 1 - layer)) continue;
+          if (const int l = label(slot_other, abc); l >= 0) join.push_back(l);
+        }
+    }
+    for (const int l : join) links.emplace_back(sliver_is_c ? 0 : l, sliver_is_c ? l : 0);
+  };
+  if (pc == 0) sliver_links(td, facing_d, true);
+  if (pd == 0) sliver_links(tc, facing_c, false);
+  return links;
+}
+
+/// The number of pieces of every cube: 0 for a cube not kept or a touched one whose samples are all outside, 1
+/// for a kept cube no triangle meets; the touched cubes' samples labelled (L.sample_piece) on the way.
+std::vector<int> count_pieces(Lattice& L, const PieceContext& P, const Eigen::Matrix3Xd& V) {
+  const std::vector<unsigned char>& keep = P.keep;
+  const int s = L.samples;
+  std::vector<int> pieces_of(keep.size(), 0);
+  for (std::size_t c = 0; c < keep.size(); ++c) pieces_of[c] = keep[c] ? 1 : 0;
+  if (s == 0) return pieces_of;
+  const int touched = static_cast<int>(L.touched.size());
+  const auto per_cube = static_cast<std::size_t>(s * s * s);
+  L.sample_piece.assign(static_cast<std::size_t>(touched) * per_cube, -1);
+  std::vector<int> count(static_cast<std::size_t>(touched), 0);
+  ParallelErrors errors;
+#pragma omp parallel for schedule(dynamic, 16) if (touched >= 64)
+  for (int t = 0; t < touched; ++t)
+    errors.run(t, [&] { count[static_cast<std::size_t>(t)] = find_pieces(P, V, t, L.sample_piece.data() + static_cast<std::size_t>(t) * per_cube); });
+  errors.rethrow();
+  for (int t = 0; t < touched; ++t) pieces_of[static_cast<std::size_t>(L.touched[static_cast<std::size_t>(t)])] = count[static_cast<std::size_t>(t)];
+  return pieces_of;
+}
+
+/// Cells in grid order: one per piece, at least one per kept cube.
+void number_cells(Lattice& L, const std::vector<unsigned char>& keep, const std::vector<int>& pieces_of) {
+  L.cell_at.assign(keep.size(), -1);
+  L.cube_of_cell.clear();
+  L.piece_of_cell.clear();
+  L.split_cubes = 0;
+  for (std::size_t c = 0; c < keep.size(); ++c) {
+    if (!keep[c]) continue;
+    L.cell_at[c] = static_cast<int>(L.cube_of_cell.size());
+    const int copies = std::max(1, pieces_of[c]);
+    if (copies > 1) ++L.split_cubes;
+    for (int p = 0; p < copies; ++p) {
+      L.cube_of_cell.push_back(static_cast<int>(c));
+      L.piece_of_cell.push_back(p);
+    }
+  }
+}
+
+/// The connections across the +x, +y and +z faces of each kept cube (by its first cell), and the cubes near a
+/// split or a separation (where cubes that meet only along an edge or at a corner are not joined).
+struct FaceLinks {
+  std::vector<std::array<std::vector<std::pair<int, int>>, 3>> links;
+  std::vector<unsigned char> near_split;
+  [[nodiscard]] bool joined(const Lattice& L, int low_cube, int axis, int piece_low, int piece_high) const {
+    const auto& face = links[static_cast<std::size_t>(L.cell_at[static_cast<std::size_t>(low_cube)])][static_cast<std::size_t>(axis)];
+    return std::find(face.begin(), face.end(), std::pair{piece_low, piece_high}) != face.end();
+  }
+};
+
+FaceLinks link_faces(const Lattice& L, const PieceContext& P, const std::vector<int>& pieces_of) {
+  const std::vector<unsigned char>& keep = P.keep;
+  const Eigen::Vector3i& dims = L.dims;
+  FaceLinks out;
+  out.near_split.assign(keep.size(), 0);
+  if (L.samples == 0) return out;
+  out.links.resize(L.cube_of_cell.size());
+  std::vector<int> kept;
+  for (std::size_t c = 0; c < keep.size(); ++c)
+    if (keep[c]) kept.push_back(static_cast<int>(c));
+  const auto above = [&](int c, int a) {  // the kept cube after c along axis a, or −1
+    if (P.cube_of(c)[a] + 1 >= dims[a]) return -1;
+    const int d = c + (a == 0 ? 1 : a == 1 ? dims.x() : dims.x() * dims.y());
+    return keep[static_cast<std::size_t>(d)] ? d : -1;
+  };
+  std::vector<unsigned char> separated(keep.size() * 3, 0);
+  ParallelErrors errors;
+#pragma omp parallel for schedule(dynamic, 64) if (kept.size() >= 256)
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    errors.run(static_cast<std::int64_t>(i), [&] {
+      const int c = kept[i];
+      for (int a = 0; a < 3; ++a) {
+        if (above(c, a) < 0) continue;
+        bool sep = false;
+        out.links[static_cast<std::size_t>(L.cell_at[static_cast<std::size_t>(c)])][static_cast<std::size_t>(a)] =
+            face_links(P, pieces_of, c, a, sep);
+        separated[static_cast<std::size_t>(c) * 3 + static_cast<std::size_t>(a)] = sep ? 1 : 0;
+      }
+    });
+  }
+  errors.rethrow();
+  for (const int c : kept) {
+    if (pieces_of[static_cast<std::size_t>(c)] > 1) out.near_split[static_cast<std::size_t>(c)] = 1;
+    for (int a = 0; a < 3; ++a) {
+      const int d = above(c, a);
+      if (d < 0) continue;
+      if (separated[static_cast<std::size_t>(c) * 3 + static_cast<std::size_t>(a)] || pieces_of[static_cast<std::size_t>(c)] > 1 ||
+          pieces_of[static_cast<std::size_t>(d)] > 1)
+        out.near_split[static_cast<std::size_t>(c)] = out.near_split[static_cast<std::size_t>(d)] = 1;
+    }
+  }
+  return out;
+}
+
+/// The cells at one grid node: each with the corner it meets the node by and its cube's offset bit there
+/// (dx + 2 dy + 4 dz from the node's lower cube).
+struct NodeCells {
+  std::vector<int> cell, corner, bit;
+  std::array<int, 8> cube_at{};  ///< by offset bit: the cube, or −1
+  bool clean = true;             ///< no cube near a split: one vertex, as without pieces
+};
+
+/// The groups of the cells at a node that are connected (through a face's links, or meeting along an edge or
+/// at a corner with nothing split nearby); each group's root.
+Groups group_at_node(const Lattice& L, const FaceLinks& F, const NodeCells& at) {
+  const int n = static_cast<int>(at.cell.size());
+  Groups groups(n);
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      const int ba = at.bit[static_cast<std::size_t>(a)], bb = at.bit[static_cast<std::size_t>(b)];
+      if (ba == bb) continue;  // two pieces of one cube
+      const int differ = ba ^ bb;
+      const int ca = at.cube_at[static_cast<std::size_t>(ba)], cb = at.cube_at[static_cast<std::size_t>(bb)];
+      if (differ == 1 || differ == 2 || differ == 4) {
+        const bool a_low = (ba & differ) == 0;
+        const int pa = L.piece_of_cell[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(a)])];
+        const int pb = L.piece_of_cell[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(b)])];
+        if (F.joined(L, a_low ? ca : cb, differ == 1 ? 0 : differ == 2 ? 1 : 2, a_low ? pa : pb, a_low ? pb : pa)) groups.join(a, b);
+      } else if (!F.near_split[static_cast<std::size_t>(ca)] && !F.near_split[static_cast<std::size_t>(cb)]) {
+        groups.join(a, b);
+      }
+    }
+  return groups;
+}
+
+/// The hex mesh of the kept cubes: a cell per piece of each cube (one for a cube without pieces sought, or
+/// whose samples are all outside), in grid order; a vertex per group of connected cells at each grid node,
+/// numbered in grid order.
+void build_cells(Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, const std::vector<unsigned char>& keep) {
+  const Eigen::Vector3i& dims = L.dims;
+  Eigen::Matrix3Xd Q(3, V.cols());
+  for (Eigen::Index v = 0; v < V.cols(); ++v) Q.col(v) = L.grid_coordinates(V.col(v));
+  const PieceContext P{L, Q, F, keep, L.samples};
+  const std::vector<int> pieces_of = count_pieces(L, P, V);
+  number_cells(L, keep, pieces_of);
+  const FaceLinks links = link_faces(L, P, pieces_of);
+
+  // Vertices: at each grid node, one per group of connected cells around it.
+  const Eigen::Vector3i nd = dims + Eigen::Vector3i::Ones();
   L.mesh.type = CellType::hex8;
-  L.mesh.vertices.resize(3, vertices);
+  L.mesh.cells.resize(8, static_cast<Eigen::Index>(L.cube_of_cell.size()));
+  std::vector<Eigen::Vector3d> position;
+  L.copies.clear();
+  NodeCells at;
+  std::vector<int> vertex_of_root;
   for (int k = 0; k < nd.z(); ++k)
     for (int j = 0; j < nd.y(); ++j)
-      for (int i = 0; i < nd.x(); ++i)
-        if (const int n = node[node_index(i, j, k)]; n >= 0)
-          L.mesh.vertices.col(n) = L.origin + L.spacing * Eigen::Vector3d(i, j, k);
-  L.mesh.cells.resize(8, cells);
-  for (std::size_t c = 0; c < n_cubes; ++c)
-    if (const int cell = L.cell_at[c]; cell >= 0)
-      for (int a = 0; a < 8; ++a) L.mesh.cells(a, cell) = node[corner(static_cast<int>(c), a)];
+      for (int i = 0; i < nd.x(); ++i) {
+        at.cell.clear();
+        at.corner.clear();
+        at.bit.clear();
+        at.clean = true;
+        for (int b = 0; b < 8; ++b) {
+          const int ci = i - 1 + (b & 1), cj = j - 1 + ((b >> 1) & 1), ck = k - 1 + ((b >> 2) & 1);
+          int& c = at.cube_at[static_cast<std::size_t>(b)];
+          c = -1;
+          if (ci < 0 || cj < 0 || ck < 0 || ci >= dims.x() || cj >= dims.y() || ck >= dims.z()) continue;
+          if (!keep[static_cast<std::size_t>(L.cube_index(ci, cj, ck))]) continue;
+          c = L.cube_index(ci, cj, ck);
+          at.clean = at.clean && !links.near_split[static_cast<std::size_t>(c)];
+          const auto [first, last] = L.cells_of_cube(c);
+          for (int cell = first; cell < last; ++cell) {
+            at.cell.push_back(cell);
+            at.corner.push_back(7 - b);  // the node is the cube's corner opposite its offset
+            at.bit.push_back(b);
+          }
+        }
+        if (at.cell.empty()) continue;
+        const Eigen::Vector3d x = L.origin + L.spacing * Eigen::Vector3d(i, j, k);
+        const int n = static_cast<int>(at.cell.size());
+        const std::size_t first_vertex = position.size();
+        if (at.clean) {
+          for (int a = 0; a < n; ++a)
+            L.mesh.cells(at.corner[static_cast<std::size_t>(a)], at.cell[static_cast<std::size_t>(a)]) = static_cast<int>(first_vertex);
+          position.push_back(x);
+        } else {
+          Groups groups = group_at_node(L, links, at);
+          vertex_of_root.assign(static_cast<std::size_t>(n), -1);
+          for (int a = 0; a < n; ++a) {
+            int& v = vertex_of_root[static_cast<std::size_t>(groups.root(a))];
+            if (v < 0) {
+              v = static_cast<int>(position.size());
+              position.push_back(x);
+            }
+            L.mesh.cells(at.corner[static_cast<std::size_t>(a)], at.cell[static_cast<std::size_t>(a)]) = v;
+          }
+        }
+        const int here = static_cast<int>(position.size() - first_vertex);
+        L.copies.insert(L.copies.end(), static_cast<std::size_t>(here), here);
+      }
+  L.mesh.vertices.resize(3, static_cast<Eigen::Index>(position.size()));
+  for (std::size_t v = 0; v < position.size(); ++v) L.mesh.vertices.col(static_cast<Eigen::Index>(v)) = position[v];
 }
 
 }  // namespace
 
-Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution) {
+int Lattice::touched_slot(int cube) const {
+  const auto it = std::lower_bound(touched.begin(), touched.end(), cube);
+  return it != touched.end() && *it == cube ? static_cast<int>(it - touched.begin()) : -1;
+}
+
+std::pair<int, int> Lattice::cells_of_cube(int cube) const {
+  const int first = cell_at[static_cast<std::size_t>(cube)];
+  if (first < 0) return {0, 0};
+  int last = first + 1;
+  while (last < static_cast<int>(cube_of_cell.size()) && cube_of_cell[static_cast<std::size_t>(last)] == cube) ++last;
+  return {first, last};
+}
+
+Eigen::Matrix3Xd Lattice::cell_samples(int cell) const {
+  const int c = cube_of_cell[static_cast<std::size_t>(cell)], piece = piece_of_cell[static_cast<std::size_t>(cell)];
+  const Eigen::Vector3i cube(c % dims.x(), (c / dims.x()) % dims.y(), c / (dims.x() * dims.y()));
+  const int s = std::max(samples, 1), n = s * s * s, slot = touched_slot(c);
+  std::vector<Eigen::Vector3d> out;
+  for (int i = 0; i < n; ++i) {
+    if (slot >= 0 && samples > 0 &&
+        sample_piece[static_cast<std::size_t>(slot) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i)] != piece)
+      continue;
+    const Eigen::Vector3d abc(i % s + 0.5, (i / s) % s + 0.5, i / (s * s) + 0.5);
+    out.push_back(origin + spacing * (cube.cast<double>() + abc / s));
+  }
+  Eigen::Matrix3Xd m(3, static_cast<Eigen::Index>(out.size()));
+  for (std::size_t i = 0; i < out.size(); ++i) m.col(static_cast<Eigen::Index>(i)) = out[i];
+  return m;
+}
+
+bool segment_meets_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& a,
+                            const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  // The endpoints on either side of (or on) the plane, and the line through the triangle: the signed volumes
+  // of (p, q) with each edge share a sign (zeros allowed: touching counts).
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  const double dp = n.dot(p - a), dq = n.dot(q - a);
+  if ((dp > 0.0 && dq > 0.0) || (dp < 0.0 && dq < 0.0) || (dp == 0.0 && dq == 0.0)) return false;
+  const Eigen::Vector3d d = q - p;
+  const double u = d.dot((a - p).cross(b - p)), v = d.dot((b - p).cross(c - p)), w = d.dot((c - p).cross(a - p));
+  return (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0);
+}
+
+Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution, int samples) {
   if (resolution < 1) throw std::invalid_argument(fmt::format("lattice resolution must be >= 1, got {}", resolution));
+  if (samples < 0 || samples > 16)
+    throw std::invalid_argument(fmt::format("lattice samples per cube edge must be 0 .. 16, got {}", samples));
   if (F.cols() == 0) throw std::invalid_argument("lattice of a surface with no triangles");
   check_triangles(V, F);
   Lattice L = empty_grid(V, F, resolution);
+  L.samples = samples;
   // Every cube a triangle meets (exact separating-axis tests), and every cube wholly inside.
-  std::vector<unsigned char> keep = touched_cubes(L, V, F);
+  const std::vector<std::pair<int, int>> pairs = cube_triangle_pairs(L, V, F);
+  std::vector<unsigned char> keep(static_cast<std::size_t>(L.dims.x()) * static_cast<std::size_t>(L.dims.y()) * static_cast<std::size_t>(L.dims.z()), 0);
+  L.triangle.resize(pairs.size());
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const int c = pairs[i].first;
+    if (L.touched.empty() || L.touched.back() != c) {
+      L.touched.push_back(c);
+      L.triangle_start.push_back(static_cast<std::int64_t>(i));
+    }
+    keep[static_cast<std::size_t>(c)] = 1;
+    L.triangle[i] = pairs[i].second;
+  }
+  L.triangle_start.push_back(static_cast<std::int64_t>(pairs.size()));
   const std::vector<unsigned char> inside = inside_cubes(L, V, F, keep, edge_counts(F).open > 0);
   for (std::size_t c = 0; c < keep.size(); ++c) keep[c] = keep[c] || inside[c];
-  build_cells(L, keep);
+  build_cells(L, V, F, keep);
   return L;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 #include <Eigen/SVD>
@@ -27,6 +28,34 @@ int joint_named(const RiggedModel& model, const std::string& name, const std::st
   for (int k = 0; k < model.skeleton.size() && k < 6; ++k) known += (k ? ", " : "") + model.skeleton.joints[k].name;
   if (model.skeleton.size() > 6) known += ", ...";
   throw RigError(fmt::format("{}: the model {} has no joint \"{}\" (its joints: {})", where, model.source.string(), name, known));
+}
+
+/// The binding without the vertices at a split grid node (one of several vertices there) whose cells' material
+/// lies outside their bone's capsule: where two fingers share a cube, the copy of a node that belongs to the
+/// other finger's piece is not carried by this finger's bone.
+Binding keep_bound_material(const Binding& binding, const std::vector<Bone>& bones, const Lattice& lattice) {
+  std::vector<std::vector<int>> cells_of(static_cast<std::size_t>(lattice.mesh.vertex_count()));
+  for (Eigen::Index c = 0; c < lattice.mesh.cell_count(); ++c)
+    for (int k = 0; k < 8; ++k)
+      if (const int v = lattice.mesh.cells(k, c); lattice.copies[static_cast<std::size_t>(v)] > 1)
+        cells_of[static_cast<std::size_t>(v)].push_back(static_cast<int>(c));
+  Binding out;
+  for (std::size_t i = 0; i < binding.vertex.size(); ++i) {
+    const int v = binding.vertex[i];
+    bool keep = lattice.copies[static_cast<std::size_t>(v)] <= 1;
+    const Bone& bone = bones[static_cast<std::size_t>(binding.bone[i])];
+    for (const int c : cells_of[static_cast<std::size_t>(v)]) {
+      const Eigen::Matrix3Xd samples = lattice.cell_samples(c);
+      for (Eigen::Index k = 0; k < samples.cols() && !keep; ++k)
+        keep = segment_distance(bone.a, bone.b, samples.col(k)) <= bone.radius;
+      if (keep) break;
+    }
+    if (keep) {
+      out.vertex.push_back(v);
+      out.bone.push_back(binding.bone[i]);
+    }
+  }
+  return out;
 }
 
 Clip choose_clip(const FleshSpec& spec, const RiggedModel& model, const std::string& where) {
@@ -160,12 +189,18 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     f.resolution = flesh_resolution(f.bones, reach, m.surface_vertices, f.surface_volume, f.resolution_reason);
   }
 
+  std::unique_ptr<Lattice> split_lattice;  // the lattice, where a cube is split into pieces
   if (spec.volume == FleshVolume::lattice) {
-    const Lattice lattice = lattice_for_surface(m.surface_vertices, m.surface_triangles, f.resolution);
+    const Lattice lattice = lattice_for_surface(m.surface_vertices, m.surface_triangles, f.resolution,
+                                                 spec.split_cells ? 4 : 0);
     f.volume = lattice.mesh;
     f.cell_size = lattice.spacing;
     f.volume_of_cells = static_cast<double>(f.volume.cell_count()) * std::pow(lattice.spacing, 3);
-    f.embedding = embed_in_lattice(lattice, m.vertices);
+    f.embedding = embed_surface_in_lattice(lattice, m.surface_vertices, m.surface_triangles, m.vertices, m.weld);
+    f.split_cubes = lattice.split_cubes;
+    f.copied_vertices = 0;
+    for (const int c : lattice.copies) f.copied_vertices += c > 1 ? 1 : 0;
+    split_lattice = lattice.split_cubes > 0 ? std::make_unique<Lattice>(lattice) : nullptr;
   } else {
     f.cell_size = longest / f.resolution;
     // No tet larger than a sixth of a cube of the lattice's size (the five or six tets a cube splits into).
@@ -185,6 +220,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
       if (f.bones[b].joint == j) f.bones[b].radius = r.radius, radius_given[b] = true;
   }
   f.binding = bind_to_bones(f.bones, f.volume.vertices);
+  if (split_lattice) f.binding = keep_bound_material(f.binding, f.bones, *split_lattice);
   f.bound_per_bone = f.binding.count_per_bone(static_cast<int>(f.bones.size()));
   for (std::size_t b = 0; b < f.bones.size(); ++b)
     if (radius_given[b] && f.bound_per_bone[b] == 0)

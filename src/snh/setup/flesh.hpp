@@ -68,6 +68,9 @@ struct FleshSpec {
   double soft_shell = 0.0;
   double soft_stiffness = 1.0;
   JointCells joint_cells = JointCells::hard;
+  /// A lattice cube whose material the skin separates (fingers closer than a cube) becomes a cell per piece,
+  /// joined only where the material is (the virtual node algorithm); false: one cell per cube, pieces glued.
+  bool split_cells = true;
   // Defaults of a flesh run (the paper's: nu = 0.488) where the scene or command gives none:
   static constexpr double youngs = 1e5, poisson = 0.488;  ///< Pa; with quasi-static bones only nu matters
   static constexpr double density = 1000.0;               ///< kg/m³ (dynamics)
@@ -87,6 +90,8 @@ struct Flesh {
   double cell_size = 0.0;                    ///< the lattice's cube edge (tets: the edge of the cube whose volume bounds a tet)
   int resolution = 0;                        ///< cubes along the longest side: given, from cell_size, or chosen
   std::string resolution_reason;             ///< why this resolution (one clause for the header)
+  int split_cubes = 0;                       ///< lattice cubes the surface splits into pieces (a cell per piece)
+  int copied_vertices = 0;                   ///< vertices at a grid node with more than one (the split cubes' nodes)
   double volume_of_cells = 0.0;              ///< the volume mesh's rest volume
   double surface_volume = 0.0;               ///< enclosed by the render surface at rest (its magnitude; for an
                                              ///< open surface the volume its triangles and the origin span)

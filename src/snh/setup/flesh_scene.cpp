@@ -33,12 +33,16 @@ void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& setting
   settings["volume"] = spec.volume == FleshVolume::lattice ? "lattice" : "tets";
   settings["resolution"] = flesh.resolution;
   settings["resolution_reason"] = flesh.resolution_reason;
+  settings["cell_size"] = flesh.cell_size;
   settings["animation"] = flesh.clip.name;
   settings["model_vertices"] = m.vertices.cols();
   settings["model_triangles"] = m.triangles.cols();
   settings["joints"] = m.skeleton.size();
   settings["bound_vertices"] = flesh.binding.vertex.size();
   settings["volume_of_cells"] = flesh.volume_of_cells;
+  settings["split_cells"] = spec.split_cells;
+  settings["split_cubes"] = flesh.split_cubes;
+  settings["copied_vertices"] = flesh.copied_vertices;
   settings["surface_volume"] = flesh.surface_volume;
   settings["bones"] = bones;
   settings["joint_cells"] = to_string(spec.joint_cells);
@@ -99,6 +103,10 @@ void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream&
                    spec.volume == FleshVolume::lattice ? "cubes" : "tets no larger than a sixth of a cube", flesh.cell_size,
                    flesh.volume.cell_count(), flesh.volume.vertex_count(), flesh.volume_of_cells, flesh.surface_volume,
                    flesh.volume_of_cells / flesh.surface_volume);
+  if (flesh.copied_vertices > 0)
+    o << fmt::format("volume: the skin separates material closer than a cube ({} cubes split into a cell per piece); {} vertices "
+                     "at shared grid nodes keep the parts apart, so they are not glued together\n",
+                     flesh.split_cubes, flesh.copied_vertices);
   if (const std::string bind = describe(flesh.bind); !bind.empty()) o << bind << "\n";
   std::string counts;
   for (std::size_t b = 0; b < flesh.bones.size(); ++b)
