@@ -118,13 +118,13 @@ std::vector<std::pair<int, int>> cube_triangle_pairs(const Lattice& L, const Eig
   return pairs;
 }
 
-/// Whether each untouched cube is inside, |winding number| > ½ (either orientation): untouched cubes, grouped
+/// The winding number of each untouched cube (inside: |w| > ½, either orientation): untouched cubes, grouped
 /// by face neighbours into regions the surface does not cross; on a closed surface each region is inside or
 /// outside as a whole (the winding number is constant off the surface), asked at its first cube; on an open
 /// one (`open`: holes let a region reach from inside to outside, where the generalized winding number varies
 /// smoothly) every cube is asked. Touched cubes come back 0.
-std::vector<unsigned char> inside_cubes(const Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F,
-                                        const std::vector<unsigned char>& touched, bool open) {
+std::vector<float> cube_windings(const Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F,
+                                 const std::vector<unsigned char>& touched, bool open) {
   const Eigen::Vector3i& dims = L.dims;
   const std::size_t n_cubes = touched.size();
   std::vector<int> region(n_cubes, -1);
@@ -153,7 +153,7 @@ std::vector<unsigned char> inside_cubes(const Lattice& L, const Eigen::Matrix3Xd
     }
   }
   const int regions = static_cast<int>(seed.size());
-  std::vector<unsigned char> inside(seed.size(), 0);
+  std::vector<float> inside(seed.size(), 0.0f);
   ParallelErrors errors;
 #pragma omp parallel for schedule(dynamic, 1) if (regions > 1)
   for (int r = 0; r < regions; ++r) {
@@ -161,11 +161,11 @@ std::vector<unsigned char> inside_cubes(const Lattice& L, const Eigen::Matrix3Xd
       const int c = seed[static_cast<std::size_t>(r)];
       const int i = c % dims.x(), j = (c / dims.x()) % dims.y(), k = c / (dims.x() * dims.y());
       const Eigen::Vector3d centre = L.origin + L.spacing * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
-      inside[static_cast<std::size_t>(r)] = std::abs(winding_number(V, F, centre)) > 0.5 ? 1 : 0;
+      inside[static_cast<std::size_t>(r)] = static_cast<float>(winding_number(V, F, centre));
     });
   }
   errors.rethrow();
-  std::vector<unsigned char> out(n_cubes, 0);
+  std::vector<float> out(n_cubes, 0.0f);
   for (std::size_t c = 0; c < n_cubes; ++c)
     if (!touched[c]) out[c] = inside[static_cast<std::size_t>(region[c])];
   return out;
@@ -196,6 +196,7 @@ struct PieceContext {
   const Eigen::Matrix3Xd& Q;  ///< the vertices in cube units
   const Eigen::Matrix3Xi& F;
   const std::vector<unsigned char>& keep;
+  const std::vector<float>& winding;  ///< per cube not touched: its winding number
   int s;  ///< samples per edge
   /// Sample (a, b, c) of cube (i, j, k) in cube units.
   [[nodiscard]] Eigen::Vector3d sample(const Eigen::Vector3i& cube, const Eigen::Vector3i& abc) const {
@@ -214,86 +215,122 @@ struct PieceContext {
     }
     return false;
   }
+  /// Whether the segment p → q (cube units) stays inside the solid, starting from winding number w at p: the
+  /// winding number jumps by ±1 at each triangle of slots t and u (either may be −1; a triangle in both counts
+  /// once) that the segment crosses, and must stay above ½ in magnitude. A segment through a triangle's edge
+  /// or vertex, or ending on one, does not count as inside (the jump there is not well defined).
+  [[nodiscard]] bool through_solid(int t, int u, const Eigen::Vector3d& p, const Eigen::Vector3d& q, double w) const {
+    std::array<std::pair<double, int>, 64> small{};
+    std::vector<std::pair<double, int>> crossings;
+    int count = 0;
+    const auto slot_has = [&](int slot, int f) {
+      const auto first = L.triangle.begin() + L.triangle_start[static_cast<std::size_t>(slot)];
+      const auto last = L.triangle.begin() + L.triangle_start[static_cast<std::size_t>(slot) + 1];
+      return std::binary_search(first, last, f);
+    };
+    const Eigen::Vector3d d = q - p;
+    for (const int slot : {t, u}) {
+      if (slot < 0) continue;
+      for (std::int64_t k = L.triangle_start[static_cast<std::size_t>(slot)]; k < L.triangle_start[static_cast<std::size_t>(slot) + 1]; ++k) {
+        const int f = L.triangle[static_cast<std::size_t>(k)];
+        if (slot == u && t >= 0 && slot_has(t, f)) continue;
+        const Eigen::Vector3d a = Q.col(F(0, f)), b = Q.col(F(1, f)), c = Q.col(F(2, f));
+        const Eigen::Vector3d n = (b - a).cross(c - a);
+        const double dp = n.dot(p - a), dq = n.dot(q - a);
+        if ((dp > 0.0 && dq > 0.0) || (dp < 0.0 && dq < 0.0) || (dp == 0.0 && dq == 0.0)) continue;
+        const double e0 = d.dot((a - p).cross(b - p)), e1 = d.dot((b - p).cross(c - p)), e2 = d.dot((c - p).cross(a - p));
+        const bool hit = (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
+        if (!hit) continue;
+        if (dp == 0.0 || dq == 0.0 || e0 == 0.0 || e1 == 0.0 || e2 == 0.0) return false;  // on an edge, a vertex or an end
+        const std::pair<double, int> x{dp / (dp - dq), d.dot(n) < 0.0 ? 1 : -1};
+        if (count < 64) small[static_cast<std::size_t>(count)] = x;
+        else crossings.push_back(x);
+        ++count;
+      }
+    }
+    if (count > 64) crossings.insert(crossings.end(), small.begin(), small.end());
+    else crossings.assign(small.begin(), small.begin() + count);
+    std::sort(crossings.begin(), crossings.end());
+    for (const auto& [at, jump] : crossings) {
+      w += jump;
+      if (std::abs(w) <= 0.5) return false;
+    }
+    return true;
+  }
 };
 
-/// The pieces of touched slot t: its samples grouped by connections the surface does not block; each group
-/// is inside or outside as a whole, taken from an untouched neighbour cube it reaches unblocked (or the space
-/// beyond the grid: outside), else from the winding number at its first sample. Writes sample_piece and
-/// returns the number of pieces (groups inside).
-int find_pieces(const PieceContext& P, const Eigen::Matrix3Xd& V, int t, signed char* label) {
+/// The pieces of touched slot t. Its samples are first grouped into regions that no triangle separates; each
+/// region's winding number is taken from an untouched neighbour cube it reaches unblocked (beyond the grid: 0),
+/// else computed at its first sample. Inside samples (|w| > ½) then form a piece when a segment joins them
+/// through the solid (through_solid: a surface inside the solid, as where two meshes overlap, does not
+/// separate; the skin between two fingers does). Writes each sample's piece (−1 outside) and winding number,
+/// and returns the number of pieces.
+int find_pieces(const PieceContext& P, const Eigen::Matrix3Xd& V, int t, signed char* label, float* winding) {
   const Lattice& L = P.L;
   const int s = P.s, n = s * s * s;
   const int c = L.touched[static_cast<std::size_t>(t)];
   const Eigen::Vector3i cube = P.cube_of(c);
-  Groups groups(n);
-  for (int z = 0; z < s; ++z)
-    for (int y = 0; y < s; ++y)
-      for (int x = 0; x < s; ++x) {
-        const Eigen::Vector3i abc(x, y, z);
-        for (int a = 0; a < 3; ++a) {
-          if (abc[a] + 1 >= s) continue;
-          const Eigen::Vector3i next = abc + Eigen::Vector3i::Unit(a);
-          if (!P.blocked(t, P.sample(cube, abc), P.sample(cube, next))) groups.join(P.sample_index(abc), P.sample_index(next));
-        }
-      }
-  std::vector<signed char> inside(static_cast<std::size_t>(n), -1);  // per root: −1 unknown, 0, 1
-  // Untouched neighbours (or beyond the grid) reached from a face sample without crossing the surface.
-  for (int z = 0; z < s; ++z)
-    for (int y = 0; y < s; ++y)
-      for (int x = 0; x < s; ++x) {
-        const Eigen::Vector3i abc(x, y, z);
-        const int r = groups.root(P.sample_index(abc));
-        if (inside[static_cast<std::size_t>(r)] >= 0) continue;
-        for (int a = 0; a < 3 && inside[static_cast<std::size_t>(r)] < 0; ++a)
-          for (const int step : {-1, 1}) {
-            if ((step < 0 && abc[a] != 0) || (step > 0 && abc[a] != s - 1)) continue;
-            const Eigen::Vector3i nb = cube + step * Eigen::Vector3i::Unit(a);
-            signed char flag = 0;  // beyond the grid: outside
-            if (nb[a] >= 0 && nb[a] < L.dims[a]) {
-              const int m = L.cube_index(nb.x(), nb.y(), nb.z());
-              if (L.touched_slot(m) >= 0) continue;
-              flag = P.keep[static_cast<std::size_t>(m)] ? 1 : 0;
-            }
-            const Eigen::Vector3d p = P.sample(cube, abc);
-            if (P.blocked(t, p, p + static_cast<double>(step) / s * Eigen::Vector3d::Unit(a))) continue;
-            inside[static_cast<std::size_t>(r)] = flag;
-            break;
-          }
-      }
   const auto position = [&](int i) { return P.sample(cube, Eigen::Vector3i(i % s, (i / s) % s, i / (s * s))); };
-  std::vector<int> inside_roots;
+  const auto axis_pairs = [&](auto&& visit) {
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3i abc(i % s, (i / s) % s, i / (s * s));
+      for (int a = 0; a < 3; ++a)
+        if (abc[a] + 1 < s) visit(i, P.sample_index(abc + Eigen::Vector3i::Unit(a)));
+    }
+  };
+  Groups regions(n);
+  axis_pairs([&](int i, int k) {
+    if (!P.blocked(t, position(i), position(k))) regions.join(i, k);
+  });
+  std::vector<double> w(static_cast<std::size_t>(n), std::numeric_limits<double>::quiet_NaN());  // per root
   for (int i = 0; i < n; ++i) {
-    const int r = groups.root(i);
-    signed char& in = inside[static_cast<std::size_t>(r)];
-    if (in < 0) in = std::abs(winding_number(V, P.F, L.origin + L.spacing * position(i))) > 0.5 ? 1 : 0;
-    if (in && r == i) inside_roots.push_back(r);
-  }
-  // Inside groups that a straight segment joins without meeting the surface are one piece: material thinner
-  // than a sample's spacing, or running diagonally, leaves its samples unconnected along the axes.
-  for (std::size_t a = 0; a < inside_roots.size(); ++a)
-    for (std::size_t b = a + 1; b < inside_roots.size(); ++b) {
-      if (groups.root(inside_roots[a]) == groups.root(inside_roots[b])) continue;
-      bool joined = false;
-      for (int i = 0; i < n && !joined; ++i) {
-        if (groups.root(i) != groups.root(inside_roots[a])) continue;
-        for (int k = 0; k < n && !joined; ++k)
-          if (groups.root(k) == groups.root(inside_roots[b]) && !P.blocked(t, position(i), position(k))) {
-            groups.join(i, k);
-            joined = true;
-          }
+    const int r = regions.root(i);
+    if (!std::isnan(w[static_cast<std::size_t>(r)])) continue;
+    const Eigen::Vector3i abc(i % s, (i / s) % s, i / (s * s));
+    for (int a = 0; a < 3 && std::isnan(w[static_cast<std::size_t>(r)]); ++a)
+      for (const int step : {-1, 1}) {
+        if ((step < 0 && abc[a] != 0) || (step > 0 && abc[a] != s - 1)) continue;
+        const Eigen::Vector3i nb = cube + step * Eigen::Vector3i::Unit(a);
+        double there = 0.0;  // beyond the grid: outside
+        if (nb[a] >= 0 && nb[a] < L.dims[a]) {
+          const int m = L.cube_index(nb.x(), nb.y(), nb.z());
+          if (L.touched_slot(m) >= 0) continue;
+          there = P.winding[static_cast<std::size_t>(m)];
+        }
+        if (P.blocked(t, position(i), position(i) + static_cast<double>(step) / s * Eigen::Vector3d::Unit(a))) continue;
+        w[static_cast<std::size_t>(r)] = there;
+        break;
       }
+  }
+  std::vector<int> inside_samples;
+  for (int i = 0; i < n; ++i) {
+    double& wr = w[static_cast<std::size_t>(regions.root(i))];
+    if (std::isnan(wr)) wr = winding_number(V, P.F, L.origin + L.spacing * position(i));
+    winding[i] = static_cast<float>(wr);
+    if (std::abs(wr) > 0.5) inside_samples.push_back(i);
+  }
+  // Pieces: inside samples joined through the solid, along the axes, then any two groups a segment joins
+  // (material thinner than a sample's spacing, or running diagonally, leaves its samples apart along the axes).
+  Groups pieces(n);
+  axis_pairs([&](int i, int k) {
+    if (std::abs(winding[i]) <= 0.5f || std::abs(winding[k]) <= 0.5f) return;
+    if (regions.root(i) == regions.root(k) || P.through_solid(t, -1, position(i), position(k), winding[i])) pieces.join(i, k);
+  });
+  for (std::size_t a = 0; a < inside_samples.size(); ++a)
+    for (std::size_t b = a + 1; b < inside_samples.size(); ++b) {
+      const int i = inside_samples[a], k = inside_samples[b];
+      if (pieces.root(i) != pieces.root(k) && P.through_solid(t, -1, position(i), position(k), winding[i])) pieces.join(i, k);
     }
   std::vector<int> piece(static_cast<std::size_t>(n), -1);
-  int pieces = 0;
+  int count = 0;
   for (int i = 0; i < n; ++i) {
-    const int r = groups.root(i);
-    // A joined group's root may be an inside group's former member: inside is kept per former root.
-    const bool in = std::find_if(inside_roots.begin(), inside_roots.end(), [&](int q) { return groups.root(q) == r; }) !=
-                    inside_roots.end();
-    if (in && piece[static_cast<std::size_t>(r)] < 0) piece[static_cast<std::size_t>(r)] = pieces++;
-    label[i] = in ? static_cast<signed char>(std::min(piece[static_cast<std::size_t>(r)], 127)) : -1;
+    label[i] = -1;
+    if (std::abs(winding[i]) <= 0.5f) continue;
+    int& p = piece[static_cast<std::size_t>(pieces.root(i))];
+    if (p < 0) p = count++;
+    label[i] = static_cast<signed char>(std::min(p, 127));
   }
-  return pieces;
+  return count;
 }
 
 /// The connections across the face between cube c and its neighbour c + e_axis (both kept): pairs (piece of
@@ -315,33 +352,39 @@ std::vector<std::pair<int, int>> face_links(const PieceContext& P, const std::ve
   separated = false;
   if (tc < 0 && td < 0) return {{0, 0}};  // no triangle in either: one solid
   std::vector<std::pair<int, int>> links;
-  // The inside samples of each cube (piece, position), and the pieces with a sample on the face's layer.
-  std::vector<std::pair<int, Eigen::Vector3d>> in_c, in_d;
+  // The inside samples of each cube (piece, position, winding number), and the pieces with a sample on the
+  // face's layer.
+  struct Inside {
+    int piece;
+    Eigen::Vector3d x;
+    double w;
+  };
+  const auto winding_at = [&](int slot, int cube_index, int i) -> double {
+    return slot < 0 ? P.winding[static_cast<std::size_t>(cube_index)]
+                    : L.sample_winding[static_cast<std::size_t>(slot) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i)];
+  };
+  std::vector<Inside> in_c, in_d;
   std::vector<int> facing_c, facing_d;
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3i abc(i % s, (i / s) % s, i / (s * s));
     if (const int l = label(tc, abc); l >= 0) {
-      in_c.emplace_back(l, P.sample(cube, abc));
+      in_c.push_back({l, P.sample(cube, abc), winding_at(tc, c, i)});
       if (abc[axis] == s - 1 && std::find(facing_c.begin(), facing_c.end(), l) == facing_c.end()) facing_c.push_back(l);
     }
     if (const int l = label(td, abc); l >= 0) {
-      in_d.emplace_back(l, P.sample(next, abc));
+      in_d.push_back({l, P.sample(next, abc), winding_at(td, d, i)});
       if (abc[axis] == 0 && std::find(facing_d.begin(), facing_d.end(), l) == facing_d.end()) facing_d.push_back(l);
     }
   }
-  // Two pieces are connected across the face when a segment between an inside sample of each meets no
-  // triangle: the samples facing each other across the face are tried first, then every pair.
+  // Two pieces are connected across the face when a segment between an inside sample of each stays inside the
+  // solid: the samples facing each other across the face are tried first, then every pair.
   const auto connected = [&](int la, int lb) {
-    const auto unblocked = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) { return !P.blocked(tc, p, q) && !P.blocked(td, p, q); };
     const double across = 1.0 / s + 1e-9;
-    for (const auto& [pa, xa] : in_c)
-      if (pa == la)
-        for (const auto& [pb, xb] : in_d)
-          if (pb == lb && (xa - xb).norm() <= across && unblocked(xa, xb)) return true;
-    for (const auto& [pa, xa] : in_c)
-      if (pa == la)
-        for (const auto& [pb, xb] : in_d)
-          if (pb == lb && (xa - xb).norm() > across && unblocked(xa, xb)) return true;
+    for (const bool near : {true, false})
+      for (const Inside& a : in_c)
+        if (a.piece == la)
+          for (const Inside& b : in_d)
+            if (b.piece == lb && ((a.x - b.x).norm() <= across) == near && P.through_solid(tc, td, a.x, b.x, a.w)) return true;
     return false;
   };
   for (int la = 0; la < pc; ++la)
@@ -382,11 +425,15 @@ std::vector<int> count_pieces(Lattice& L, const PieceContext& P, const Eigen::Ma
   const int touched = static_cast<int>(L.touched.size());
   const auto per_cube = static_cast<std::size_t>(s * s * s);
   L.sample_piece.assign(static_cast<std::size_t>(touched) * per_cube, -1);
+  L.sample_winding.assign(static_cast<std::size_t>(touched) * per_cube, 0.0f);
   std::vector<int> count(static_cast<std::size_t>(touched), 0);
   ParallelErrors errors;
 #pragma omp parallel for schedule(dynamic, 16) if (touched >= 64)
   for (int t = 0; t < touched; ++t)
-    errors.run(t, [&] { count[static_cast<std::size_t>(t)] = find_pieces(P, V, t, L.sample_piece.data() + static_cast<std::size_t>(t) * per_cube); });
+    errors.run(t, [&] {
+      count[static_cast<std::size_t>(t)] = find_pieces(P, V, t, L.sample_piece.data() + static_cast<std::size_t>(t) * per_cube,
+                                                       L.sample_winding.data() + static_cast<std::size_t>(t) * per_cube);
+    });
   errors.rethrow();
   for (int t = 0; t < touched; ++t) pieces_of[static_cast<std::size_t>(L.touched[static_cast<std::size_t>(t)])] = count[static_cast<std::size_t>(t)];
   return pieces_of;
@@ -499,11 +546,12 @@ Groups group_at_node(const Lattice& L, const FaceLinks& F, const NodeCells& at) 
 /// The hex mesh of the kept cubes: a cell per piece of each cube (one for a cube without pieces sought, or
 /// whose samples are all outside), in grid order; a vertex per group of connected cells at each grid node,
 /// numbered in grid order.
-void build_cells(Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, const std::vector<unsigned char>& keep) {
+void build_cells(Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, const std::vector<unsigned char>& keep,
+                 const std::vector<float>& winding) {
   const Eigen::Vector3i& dims = L.dims;
   Eigen::Matrix3Xd Q(3, V.cols());
   for (Eigen::Index v = 0; v < V.cols(); ++v) Q.col(v) = L.grid_coordinates(V.col(v));
-  const PieceContext P{L, Q, F, keep, L.samples};
+  const PieceContext P{L, Q, F, keep, winding, L.samples};
   const std::vector<int> pieces_of = count_pieces(L, P, V);
   number_cells(L, keep, pieces_of);
   const FaceLinks links = link_faces(L, P, pieces_of);
@@ -631,9 +679,9 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
     L.triangle[i] = pairs[i].second;
   }
   L.triangle_start.push_back(static_cast<std::int64_t>(pairs.size()));
-  const std::vector<unsigned char> inside = inside_cubes(L, V, F, keep, edge_counts(F).open > 0);
-  for (std::size_t c = 0; c < keep.size(); ++c) keep[c] = keep[c] || inside[c];
-  build_cells(L, V, F, keep);
+  const std::vector<float> winding = cube_windings(L, V, F, keep, edge_counts(F).open > 0);
+  for (std::size_t c = 0; c < keep.size(); ++c) keep[c] = keep[c] || std::abs(winding[c]) > 0.5f;
+  build_cells(L, V, F, keep, winding);
   return L;
 }
 

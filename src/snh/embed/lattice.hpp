@@ -21,16 +21,19 @@ struct Lattice {
   double spacing = 0.0;       ///< the cubes' edge length
   Eigen::Vector3i dims;       ///< cubes along x, y, z
   std::vector<int> cell_at;   ///< dims.prod(): the (first) cell of cube (i, j, k) at i + dims.x · (j + dims.y · k), or −1
-  // The pieces (virtual node algorithm). Each cube is sampled at samples³ points (the centres of its
-  // sub-cubes); two neighbouring samples are connected unless a surface triangle meets the segment between
-  // them, and a piece of a cube is a connected set of its samples that lie inside. A cube with several
-  // pieces has a cell per piece (cells of one cube are consecutive, in order of their pieces' first samples).
+  // The pieces (virtual node algorithm). Each cube the surface meets is sampled at samples³ points (the
+  // centres of its sub-cubes); two inside samples are connected when the segment between them stays inside
+  // the solid (the winding number, which jumps by ±1 at each triangle it crosses, stays above ½ in magnitude:
+  // a surface inside the solid, where two meshes overlap, does not separate), and a piece of a cube is a
+  // connected set of its inside samples. A cube with several pieces has a cell per piece (cells of one cube
+  // are consecutive, in order of their pieces' first samples).
   int samples = 0;                       ///< samples per cube edge (0: pieces not sought, one cell per cube)
   std::vector<int> cube_of_cell;         ///< per cell: its cube
   std::vector<int> piece_of_cell;        ///< per cell: its piece in the cube (0 in a cube of one cell)
   std::vector<int> copies;               ///< per vertex: how many vertices sit at its grid node (1 but at a split)
   std::vector<int> touched;              ///< the cubes a triangle meets, ascending
   std::vector<signed char> sample_piece; ///< samples³ per touched cube (sample a + s(b + s c)): piece, or −1 outside
+  std::vector<float> sample_winding;     ///< the same samples' winding numbers
   std::vector<std::int64_t> triangle_start;  ///< per touched cube: its triangles in triangle[start[t] .. start[t+1])
   std::vector<int> triangle;
   int split_cubes = 0;                   ///< cubes with more than one cell
