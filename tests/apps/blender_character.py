@@ -148,5 +148,8 @@ bpy.ops.object.select_all(action="SELECT")
 bpy.ops.export_scene.gltf(filepath=os.path.join(out, "character.glb"), export_format="GLB", export_animations=True,
                           export_skins=True)
 bpy.ops.export_scene.fbx(filepath=os.path.join(out, "character.fbx"), bake_anim=True, add_leaf_bones=False)
+# The same with Blender's own axes kept (Z up), as some pipelines ask for.
+bpy.ops.export_scene.fbx(filepath=os.path.join(out, "character_zup.fbx"), bake_anim=True, add_leaf_bones=False,
+                         axis_up="Z", axis_forward="Y")
 bpy.ops.wm.collada_export(filepath=os.path.join(out, "character.dae"), include_animations=True)
 print("blender_character: wrote", out)

@@ -163,6 +163,12 @@ def main():
         meta, prims = Parser(text).layer()
         if meta.get('defaultPrim') not in [p['name'] for p in prims]:
             raise ParseError(f'defaultPrim {meta.get("defaultPrim")!r} names no root prim')
+        if meta.get('upAxis') not in ('Y', 'Z'):
+            raise ParseError(f'upAxis {meta.get("upAxis")!r} is not "Y" or "Z"')
+        unit = meta.get('metersPerUnit', 0.01)  # USD's fallback: centimetres
+        if not (isinstance(unit, (int, float)) and unit > 0 and math.isfinite(unit)):
+            raise ParseError(f'metersPerUnit {unit!r} is not a positive number')
+        print(f'stage: metersPerUnit {unit:g}, upAxis {meta["upAxis"]}')
         found = list(meshes(prims))
         sample_counts = set()
         for m in found:

@@ -11,6 +11,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -111,6 +112,11 @@ class BlenderCharacter : public ::testing::Test {
     }
     const Similarity s = fit_similarity(ours, theirs);
     EXPECT_LT((s.affine() * ours - theirs).cwiseAbs().maxCoeff(), 1e-5) << file << ": the joints do not fit Blender's by a similarity";
+    // Blender works in metres, Z up: the unit and up axis the model says are the similarity's scale and the
+    // axis its rotation takes to +Z.
+    EXPECT_NEAR(s.scale, m.meters_per_unit, 1e-6 * m.meters_per_unit) << file;
+    const Eigen::Vector3d up = m.up_sign * Eigen::Vector3d::Unit(m.up_axis);
+    EXPECT_GT((s.rotation * up).z(), 1.0 - 1e-6) << file << ": its up axis " << up.transpose();
     for (const auto& [frame, points] : truth_["frames"].items()) {
       const int f = std::stoi(frame);
       Eigen::Matrix3Xd blender(3, static_cast<Eigen::Index>(points.size()));
@@ -131,10 +137,20 @@ class BlenderCharacter : public ::testing::Test {
 
 TEST_F(BlenderCharacter, GltfExportSkinsAsBlenderDoes) { expect_blender_skinning("character.glb", ""); }
 
+// Blender's FBX exporter writes centimetres (UnitScaleFactor 1, the armature scaled by 100) and, by
+// default, Y up; asked to keep Blender's axes, Z up. Both skin as Blender does, and say so.
 TEST_F(BlenderCharacter, FbxExportReadThroughAssimpSkinsAsBlenderDoes) {
   const RiggedModel m = read_model(dir_ / "character.fbx");
   EXPECT_NE(m.format.find("FBX"), std::string::npos) << m.format;
+  EXPECT_EQ(m.meters_per_unit, 0.01);
+  EXPECT_EQ(m.up_axis, 1);
   expect_blender_skinning("character.fbx", "");
+  const RiggedModel z = read_model(dir_ / "character_zup.fbx");
+  EXPECT_EQ(z.up_axis, 2);
+  EXPECT_EQ(z.up_sign, 1);
+  EXPECT_NE(std::find_if(z.notes.begin(), z.notes.end(), [](const std::string& n) { return n.find("up axis: the file says +Z") == 0; }),
+            z.notes.end());
+  expect_blender_skinning("character_zup.fbx", "");
 }
 
 TEST_F(BlenderCharacter, ColladaExportReadThroughAssimpSkinsAsBlenderDoes) { expect_blender_skinning("character.dae", "rig_"); }
@@ -213,6 +229,31 @@ TEST_F(BlenderCharacter, FleshFramesAndStageCarryTextureCoordinatesAndNormals) {
   EXPECT_EQ(code, 0) << checked;
   EXPECT_NE(checked.find("flesh: " + std::to_string(m.triangles.cols()) + " faces"), std::string::npos) << checked;
   EXPECT_NE(checked.find("(extent, normals, primvars:st)"), std::string::npos) << checked;
+  EXPECT_NE(checked.find("stage: metersPerUnit 1, upAxis Y"), std::string::npos) << checked;
+  fs::remove_all(out);
+}
+
+// The stage of a character in centimetres, Z up (Blender's FBX with its own axes) says so.
+TEST_F(BlenderCharacter, TheStageSaysTheFilesUnitAndUpAxis) {
+  const fs::path out = fs::temp_directory_path() / ("snh-test-blender-zup-" + std::to_string(::getpid()));
+  const json scene = {{"flesh", {{"model", (dir_ / "character_zup.fbx").string()}, {"resolution", 10}}},
+                      {"frames", 2},
+                      {"output", {{"dir", out.string()}}}};
+  std::ostringstream log;
+  const SceneResult r = run_scene(parse_scene(scene, dir_ / "scene.json"), log);
+  ASSERT_TRUE(r.all_converged) << log.str();
+  EXPECT_NE(log.str().find("model: units: the file says 1 unit = 1 cm"), std::string::npos) << log.str();
+  const std::string check = fmt::format("python3 '{}/apps/check_usda.py' '{}' 2 3 > '{}' 2>&1", SNH_TESTS_DIR, (out / "flesh.usda").string(),
+                                        (out / "usda.log").string());
+  const int code = std::system(check.c_str());
+  std::ifstream usda_log(out / "usda.log");
+  const std::string checked(std::istreambuf_iterator<char>(usda_log), {});
+  EXPECT_EQ(code, 0) << checked;
+  EXPECT_NE(checked.find("stage: metersPerUnit 0.01, upAxis Z"), std::string::npos) << checked;
+  std::ifstream stats_in(out / "stats.json");
+  const json stats = json::parse(stats_in);
+  EXPECT_EQ(stats["model_meters_per_unit"].get<double>(), 0.01);
+  EXPECT_EQ(stats["model_up_axis"].get<std::string>(), "+Z");
   fs::remove_all(out);
 }
 
@@ -231,22 +272,26 @@ TEST_F(AssimpTestModels, EachCharacterIsReadWithItsJointsClipsAndMeshes) {
     const char* clip;  // the clip played by default
     std::size_t notes;
     bool rest_is_bind;  // the file's rest pose is its bind pose, once the skin is in the right space
+    double meters_per_unit;  // as the file says (FBX: UnitScaleFactor 1, centimetres, said in a note); .x: none
   };
   // huesitos' offsets are in its mesh node's frame (FBX), Testwuson's in the model's although its mesh node
   // turns a quarter (.x): read in the other space, each seemed bound in another pose, and Testwuson's first
   // frame failed. animation_with_skeleton is bound in another pose; anim_test's hierarchy lacks two bones.
-  for (const Expect& e : {Expect{"FBX/huesitos.fbx", 10, 1, 1, "Armature|Action", 0, true},
-                          Expect{"FBX/animation_with_skeleton.fbx", 15, 1, 1, "Armature|ArmatureAction", 0, false},
-                          Expect{"X/Testwuson.X", 38, 3, 1, "Wuson_Run", 0, true},
-                          Expect{"X/BCN_Epileptic.X", 54, 1, 3, "Epileptisch", 0, true},
+  for (const Expect& e : {Expect{"FBX/huesitos.fbx", 10, 1, 1, "Armature|Action", 1, true, 0.01},
+                          Expect{"FBX/animation_with_skeleton.fbx", 15, 1, 1, "Armature|ArmatureAction", 1, false, 0.01},
+                          Expect{"X/Testwuson.X", 38, 3, 1, "Wuson_Run", 0, true, 1.0},
+                          Expect{"X/BCN_Epileptic.X", 54, 1, 3, "Epileptisch", 0, true, 1.0},
                           // Its authors' note: the mesh names four bones, the hierarchy holds two.
-                          Expect{"X/anim_test.x", 4, 1, 1, "cylinder_test", 2, false}}) {
+                          Expect{"X/anim_test.x", 4, 1, 1, "cylinder_test", 2, false, 1.0}}) {
     SCOPED_TRACE(e.file);
     const RiggedModel m = read_model(kAssimpModels / e.file);
     EXPECT_EQ(m.skeleton.size(), e.joints);
     EXPECT_EQ(static_cast<int>(m.clips.size()), e.clips);
     EXPECT_EQ(static_cast<int>(m.parts.size()), e.parts);
     EXPECT_EQ(m.notes.size(), e.notes);
+    EXPECT_EQ(m.meters_per_unit, e.meters_per_unit);
+    EXPECT_EQ(m.up_axis, 1);  // all Y up
+    EXPECT_EQ(m.up_sign, 1);
     ASSERT_GE(default_clip(m), 0);
     EXPECT_EQ(m.clips[static_cast<std::size_t>(default_clip(m))].name, e.clip);
     // Every vertex bound to real joints by weights summing to 1, and the skin at the bind pose where the file

@@ -35,7 +35,10 @@ void points(Out& o, const Eigen::Matrix3Xd& P) {
 }  // namespace
 
 void write_usda(const std::filesystem::path& path, const std::string& root, const std::vector<UsdMesh>& meshes,
-                double frames_per_second) {
+                double frames_per_second, double meters_per_unit, char up_axis) {
+  if (!(meters_per_unit > 0.0) || !std::isfinite(meters_per_unit))
+    throw std::invalid_argument(fmt::format("USD stage: metersPerUnit must be a positive number, got {}", meters_per_unit));
+  if (up_axis != 'Y' && up_axis != 'Z') throw std::invalid_argument(fmt::format("USD stage: upAxis must be Y or Z, got '{}'", up_axis));
   if (!is_identifier(root)) throw std::invalid_argument(fmt::format("USD prim name \"{}\" is not an identifier", root));
   if (!(frames_per_second > 0.0) || !std::isfinite(frames_per_second))
     throw std::invalid_argument(fmt::format("USD frames per second {} is not a positive number", frames_per_second));
@@ -65,9 +68,9 @@ void write_usda(const std::filesystem::path& path, const std::string& root, cons
   }
 
   Out o;
-  put(o, "#usda 1.0\n(\n    defaultPrim = \"{}\"\n    doc = \"written by snh\"\n    endTimeCode = {}\n    metersPerUnit = 1\n"
-      "    framesPerSecond = {:.17g}\n    startTimeCode = 0\n    timeCodesPerSecond = {:.17g}\n    upAxis = \"Y\"\n)\n\n",
-      root, frames ? frames - 1 : 0, frames_per_second, frames_per_second);
+  put(o, "#usda 1.0\n(\n    defaultPrim = \"{}\"\n    doc = \"written by snh\"\n    endTimeCode = {}\n    metersPerUnit = {:.17g}\n"
+      "    framesPerSecond = {:.17g}\n    startTimeCode = 0\n    timeCodesPerSecond = {:.17g}\n    upAxis = \"{}\"\n)\n\n",
+      root, frames ? frames - 1 : 0, meters_per_unit, frames_per_second, frames_per_second, up_axis);
   put(o, "def Xform \"{}\"\n{{\n", root);
   for (const UsdMesh& m : meshes) {
     put(o, "    def Mesh \"{}\"\n    {{\n", m.name);

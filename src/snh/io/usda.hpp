@@ -20,10 +20,11 @@ struct UsdMesh {
 };
 
 /// Writes the stage atomically: one Xform prim `root` (the default prim) holding each mesh, time codes 0 …
-/// frames − 1 played at `frames_per_second`, Y up, metres. Throws std::invalid_argument for a bad prim
-/// name, meshes without frames, frames of differing sizes or a non-finite point; WriteError when the file
-/// cannot be written.
+/// frames − 1 played at `frames_per_second`, with the stage's metersPerUnit and upAxis ('Y' or 'Z', as USD
+/// has them). Throws std::invalid_argument for a bad prim name, meshes without frames, frames of differing
+/// sizes, a non-finite point, a unit that is not a positive number or another axis; WriteError when the
+/// file cannot be written.
 void write_usda(const std::filesystem::path& path, const std::string& root, const std::vector<UsdMesh>& meshes,
-                double frames_per_second);
+                double frames_per_second, double meters_per_unit = 1.0, char up_axis = 'Y');
 
 }  // namespace snh

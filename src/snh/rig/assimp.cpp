@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -77,10 +79,50 @@ class SceneReader {
     rig_build::weld(out);
     read_animations(out);
     rig_build::check_rest(out);
+    read_units(out);
     return out;
   }
 
  private:
+  /// A number of the scene's metadata (FBX's global settings), if it is there.
+  std::optional<double> meta_number(const char* key) const {
+    const aiMetadata* m = s_.mMetaData;
+    if (m == nullptr) return std::nullopt;
+    for (unsigned k = 0; k < m->mNumProperties; ++k) {
+      if (std::string(m->mKeys[k].C_Str()) != key) continue;
+      const aiMetadataEntry& e = m->mValues[k];
+      switch (e.mType) {
+        case AI_BOOL: return *static_cast<const bool*>(e.mData) ? 1.0 : 0.0;
+        case AI_INT32: return *static_cast<const std::int32_t*>(e.mData);
+        case AI_UINT64: return static_cast<double>(*static_cast<const std::uint64_t*>(e.mData));
+        case AI_FLOAT: return *static_cast<const float*>(e.mData);
+        case AI_DOUBLE: return *static_cast<const double*>(e.mData);
+        default: return std::nullopt;
+      }
+    }
+    return std::nullopt;
+  }
+
+  /// The unit and up axis the file declares (FBX), said in a note when they are not metres and +Y.
+  void read_units(RiggedModel& out) const {
+    if (const auto f = meta_number("UnitScaleFactor"); f && std::isfinite(*f) && *f > 0.0) {
+      out.meters_per_unit = *f / 100.0;
+      if (*f != 100.0)
+        out.notes.push_back(fmt::format("units: the file says 1 unit = {:g} cm (UnitScaleFactor): {:g} m per unit, kept as they are "
+                                        "(flesh.usda says so; a dynamic run's E, density and gravity are in these units)",
+                                        *f, out.meters_per_unit));
+    }
+    if (const auto axis = meta_number("UpAxis"); axis && (*axis == 0.0 || *axis == 1.0 || *axis == 2.0)) {
+      out.up_axis = static_cast<int>(*axis);
+      const auto sign = meta_number("UpAxisSign");
+      out.up_sign = sign && *sign < 0.0 ? -1 : 1;
+      if (out.up_axis != 1 || out.up_sign != 1)
+        out.notes.push_back(fmt::format("up axis: the file says {}{} (UpAxis), kept as it is (flesh.usda says so where USD can: +Y or +Z; "
+                                        "--ground and --dynamic's gravity act along y)",
+                                        out.up_sign < 0 ? "-" : "+", "XYZ"[out.up_axis]));
+    }
+  }
+
   [[noreturn]] void fail(const std::string& what) const { rig_build::fail(path_, what); }
 
   std::string node_label(int n) const { return fmt::format("node \"{}\"", one_line(name_of(nodes_[static_cast<std::size_t>(n)]->mName))); }

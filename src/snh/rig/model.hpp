@@ -33,6 +33,12 @@ struct RiggedModel {
   std::vector<ModelPart> parts;    ///< the skinned meshes read, in the model's vertex order
   std::vector<std::string> skipped;  ///< skinned meshes of another skin than the first one's, not read
   std::vector<std::string> notes;    ///< what the reader made of faults it could work around, one line each
+  /// The file's length unit in metres and up axis, where it says (FBX: UnitScaleFactor, in centimetres, and
+  /// UpAxis with its sign); else metres and +Y, as glTF has them. snh keeps the file's coordinates; these say
+  /// what they mean (flesh.usda's metersPerUnit and upAxis, the header).
+  double meters_per_unit = 1.0;
+  int up_axis = 1;                 ///< 0, 1, 2: x, y, z
+  int up_sign = 1;                 ///< +1 or −1
   // The render surface as the file has it (its vertex order, seams and all):
   Eigen::Matrix3Xd vertices;       ///< 3 by #v, model space, at the bind pose
   Eigen::Matrix3Xi triangles;      ///< 3 by #t, 0-based, counter-clockwise seen from outside

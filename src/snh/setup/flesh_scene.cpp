@@ -53,6 +53,8 @@ void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& setting
   settings["skipped_meshes"] = m.skipped;
   settings["model_format"] = m.format;
   settings["model_notes"] = m.notes;
+  settings["model_meters_per_unit"] = m.meters_per_unit;
+  settings["model_up_axis"] = std::string(m.up_sign < 0 ? "-" : "+") + "XYZ"[m.up_axis];
   settings["open_edges"] = flesh.edges.open;
   settings["non_manifold_edges"] = flesh.edges.non_manifold;
   settings["inside_out"] = flesh.inside_out;
@@ -154,7 +156,8 @@ void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, dou
     add(meshes[1], out / "lbs" / frame_name(i));
   }
   if (meshes[0].frames.empty()) return;
-  write_usda(out / "flesh.usda", "character", meshes, fps);
+  const RiggedModel& m = flesh.model;
+  write_usda(out / "flesh.usda", "character", meshes, fps, m.meters_per_unit, m.up_axis == 2 && m.up_sign > 0 ? 'Z' : 'Y');
   stats["usd"] = "flesh.usda";
   // The same frames as point caches for tools without USD (Blender's Mesh Cache modifier): sample k at frame k.
   write_pc2(out / "flesh.pc2", meshes[0].frames);
