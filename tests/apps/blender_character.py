@@ -13,6 +13,7 @@ import os
 import sys
 
 import bpy
+from mathutils import Matrix
 
 out = sys.argv[sys.argv.index("--") + 1]
 os.makedirs(out, exist_ok=True)
@@ -152,4 +153,26 @@ bpy.ops.export_scene.fbx(filepath=os.path.join(out, "character.fbx"), bake_anim=
 bpy.ops.export_scene.fbx(filepath=os.path.join(out, "character_zup.fbx"), bake_anim=True, add_leaf_bones=False,
                          axis_up="Z", axis_forward="Y")
 bpy.ops.wm.collada_export(filepath=os.path.join(out, "character.dae"), include_animations=True)
+
+# A prop without a skin parented to the hand bone (a ring at the wrist, 0.03 beyond the skin), exported again
+# as character_prop.glb and character_prop.fbx; truth_prop.json holds its vertices in Blender's world per frame.
+bpy.ops.object.select_all(action="DESELECT")
+bpy.ops.mesh.primitive_cube_add(size=0.06, location=(0.0, 0.3, 1.0))
+prop = bpy.context.active_object
+prop.name = "prop"
+prop.parent = rig
+prop.parent_type = "BONE"
+prop.parent_bone = "hand"
+prop.matrix_parent_inverse = (rig.matrix_world @ rig.pose.bones["hand"].matrix @ Matrix.Translation((0.0, rig.data.bones["hand"].length, 0.0))).inverted()
+prop_truth = {"frames": {}}
+for frame in (1, 12, 24):
+    scene.frame_set(frame)
+    prop_truth["frames"][str(frame)] = [list(prop.matrix_world @ v.co) for v in prop.data.vertices]
+scene.frame_set(1)
+with open(os.path.join(out, "truth_prop.json"), "w") as f:
+    json.dump(prop_truth, f)
+bpy.ops.object.select_all(action="SELECT")
+bpy.ops.export_scene.gltf(filepath=os.path.join(out, "character_prop.glb"), export_format="GLB", export_animations=True,
+                          export_skins=True)
+bpy.ops.export_scene.fbx(filepath=os.path.join(out, "character_prop.fbx"), bake_anim=True, add_leaf_bones=False)
 print("blender_character: wrote", out)

@@ -90,6 +90,35 @@ class BlenderCharacter : public ::testing::Test {
     ASSERT_TRUE(made_) << "Blender failed to make the character:\n" << log_;
   }
 
+  /// The similarity that maps the file's joint heads at the clip's first key onto Blender's bone heads (and
+  /// that first key's time).
+  static Similarity to_blender(const RiggedModel& m, const std::string& file, const std::string& prefix, double& t0) {
+    const Clip& clip = m.clips[0];
+    t0 = first_key(clip);
+    const std::vector<Eigen::Affine3d> first = m.skeleton.world(sample(clip, m.skeleton, t0));
+    Eigen::Matrix3Xd ours(3, 3), theirs(3, 3);
+    int k = 0;
+    for (const char* name : {"upper", "lower", "hand"}) {
+      const int j = m.skeleton.find(prefix + name);
+      EXPECT_GE(j, 0) << file << ": no joint " << prefix + name;
+      if (j < 0) return {};
+      ours.col(k) = first[static_cast<std::size_t>(j)].translation();
+      const auto h = truth_["heads"][name];
+      theirs.col(k++) = Eigen::Vector3d(h[0].get<double>(), h[1].get<double>(), h[2].get<double>());
+    }
+    const Similarity s = fit_similarity(ours, theirs);
+    EXPECT_LT((s.affine() * ours - theirs).cwiseAbs().maxCoeff(), 1e-5) << file << ": the joints do not fit Blender's by a similarity";
+    return s;
+  }
+
+  /// Points per Blender frame ("1", "12", "24") from a truth file's "frames".
+  static Eigen::Matrix3Xd blender_points(const json& points) {
+    Eigen::Matrix3Xd out(3, static_cast<Eigen::Index>(points.size()));
+    for (std::size_t i = 0; i < points.size(); ++i)
+      for (int c = 0; c < 3; ++c) out(c, static_cast<Eigen::Index>(i)) = points[i][static_cast<std::size_t>(c)].get<double>();
+    return out;
+  }
+
   /// The file's skin at Blender's frames 1, 12 and 24, taken to Blender's world by the similarity that maps
   /// the file's joint heads at the first frame onto Blender's bone heads; compared with Blender's own skin.
   static void expect_blender_skinning(const std::string& file, const std::string& prefix) {
@@ -98,20 +127,9 @@ class BlenderCharacter : public ::testing::Test {
     EXPECT_TRUE(bind.rest_is_bind) << file << ": " << bind.worst_joint << " by " << bind.worst_offset;
     ASSERT_EQ(m.clips.size(), 1u);
     const Clip& clip = m.clips[0];
-    const double t0 = first_key(clip), fps = truth_["fps"].get<double>();
-    // Joint heads at the first frame against Blender's bone heads.
-    const std::vector<Eigen::Affine3d> first = m.skeleton.world(sample(clip, m.skeleton, t0));
-    Eigen::Matrix3Xd ours(3, 3), theirs(3, 3);
-    int k = 0;
-    for (const char* name : {"upper", "lower", "hand"}) {
-      const int j = m.skeleton.find(prefix + name);
-      ASSERT_GE(j, 0) << file << ": no joint " << prefix + name;
-      ours.col(k) = first[static_cast<std::size_t>(j)].translation();
-      const auto h = truth_["heads"][name];
-      theirs.col(k++) = Eigen::Vector3d(h[0].get<double>(), h[1].get<double>(), h[2].get<double>());
-    }
-    const Similarity s = fit_similarity(ours, theirs);
-    EXPECT_LT((s.affine() * ours - theirs).cwiseAbs().maxCoeff(), 1e-5) << file << ": the joints do not fit Blender's by a similarity";
+    double t0 = 0.0;
+    const Similarity s = to_blender(m, file, prefix, t0);
+    const double fps = truth_["fps"].get<double>();
     // Blender works in metres, Z up: the unit and up axis the model says are the similarity's scale and the
     // axis its rotation takes to +Z.
     EXPECT_NEAR(s.scale, m.meters_per_unit, 1e-6 * m.meters_per_unit) << file;
@@ -119,13 +137,10 @@ class BlenderCharacter : public ::testing::Test {
     EXPECT_GT((s.rotation * up).z(), 1.0 - 1e-6) << file << ": its up axis " << up.transpose();
     for (const auto& [frame, points] : truth_["frames"].items()) {
       const int f = std::stoi(frame);
-      Eigen::Matrix3Xd blender(3, static_cast<Eigen::Index>(points.size()));
-      for (std::size_t i = 0; i < points.size(); ++i)
-        for (int c = 0; c < 3; ++c) blender(c, static_cast<Eigen::Index>(i)) = points[i][static_cast<std::size_t>(c)].get<double>();
       const double t = t0 + (f - truth_["first_frame"].get<int>()) / fps;
       const Eigen::Matrix3Xd skin = s.affine() * skin_vertices(m, m.skeleton.world(sample(clip, m.skeleton, t)));
       // The arm is 1.2 long; files store single precision.
-      EXPECT_LT(hausdorff(skin, blender), 1e-4) << file << " at Blender's frame " << f << " (t = " << t << ")";
+      EXPECT_LT(hausdorff(skin, blender_points(points)), 1e-4) << file << " at Blender's frame " << f << " (t = " << t << ")";
     }
   }
 
@@ -154,6 +169,28 @@ TEST_F(BlenderCharacter, FbxExportReadThroughAssimpSkinsAsBlenderDoes) {
 }
 
 TEST_F(BlenderCharacter, ColladaExportReadThroughAssimpSkinsAsBlenderDoes) { expect_blender_skinning("character.dae", "rig_"); }
+
+// A prop parented to the hand bone, without a skin: read from glTF and FBX as a part of the character bound
+// wholly to the hand, it moves as Blender moves it.
+TEST_F(BlenderCharacter, APropParentedToABoneFollowsItAsInBlender) {
+  std::ifstream in(dir_ / "truth_prop.json");
+  const json prop = json::parse(in);
+  for (const std::string file : {"character_prop.glb", "character_prop.fbx"}) {
+    SCOPED_TRACE(file);
+    const RiggedModel m = read_model(dir_ / file);
+    ASSERT_EQ(m.parts.size(), 2u);
+    EXPECT_NE(std::find_if(m.notes.begin(), m.notes.end(), [](const std::string& n) { return n.find("it follows joint \"hand\" rigidly") != std::string::npos; }),
+              m.notes.end());
+    double t0 = 0.0;
+    const Similarity s = to_blender(m, file, "", t0);
+    const ModelPart& part = m.parts[1];
+    for (const auto& [frame, points] : prop["frames"].items()) {
+      const double t = t0 + (std::stoi(frame) - 1) / truth_["fps"].get<double>();
+      const Eigen::Matrix3Xd skin = s.affine() * skin_vertices(m, m.skeleton.world(sample(m.clips[0], m.skeleton, t)));
+      EXPECT_LT(hausdorff(skin.middleCols(part.first_vertex, part.vertices), blender_points(points)), 1e-4) << "frame " << frame;
+    }
+  }
+}
 
 // The arm is smooth-shaded with a cylindrical UV map: each file's texture coordinates lie in the map's square
 // (v up, as OBJ and USD have it: the arm's root at v = 0), and the normals computed from the skin's triangles,

@@ -36,6 +36,8 @@ struct LimbOptions {
   /// > 0: a second, still limb beside the first (the same cylinder moved by 2 radius + gap along z), skinned to
   /// a chain of its own (a second root joint "still" → "still_tip"), so the gap between them is that wide.
   double beside_gap = 0.0;
+  /// > 0: a box of side 0.2 without a skin, a child of the tip's node this far beyond it (a prop held at the tip).
+  double rigid_cap = 0.0;
 };
 
 inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions& o = {}) {
@@ -143,6 +145,20 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
     g["nodes"].push_back({{"name", "limb_far"}, {"mesh", 1}, {"skin", 0}});
   }
   g["skins"] = nlohmann::json::array({nlohmann::json{{"joints", {1, 2, 3}}, {"inverseBindMatrices", a_ibm}}});
+  if (o.rigid_cap > 0.0) {
+    std::vector<float> box;
+    for (int c = 0; c < 8; ++c) box.insert(box.end(), {c & 1 ? 0.1f : -0.1f, c & 2 ? 0.1f : -0.1f, c & 4 ? 0.1f : -0.1f});
+    const std::vector<std::uint16_t> faces = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                                              2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    const int a_box = add(box.data(), box.size() * 4, 5126, 8, "VEC3", 34962);
+    accessors[a_box]["min"] = {-0.1, -0.1, -0.1};
+    accessors[a_box]["max"] = {0.1, 0.1, 0.1};
+    const int a_faces = add(faces.data(), faces.size() * 2, 5123, faces.size(), "SCALAR", 34963);
+    g["meshes"].push_back({{"primitives", nlohmann::json::array({{{"attributes", {{"POSITION", a_box}}}, {"indices", a_faces}}})}});
+    const int cap = static_cast<int>(g["nodes"].size());
+    g["nodes"].push_back({{"name", "cap"}, {"mesh", g["meshes"].size() - 1}, {"translation", {o.rigid_cap, 0.0, 0.0}}});
+    g["nodes"][3]["children"] = {cap};
+  }
   if (o.beside_gap > 0.0) {
     const int first = static_cast<int>(g["nodes"].size());
     g["nodes"].push_back({{"name", "still"}, {"translation", {0.0, 0.0, z_still}}, {"children", {first + 1}}});

@@ -42,6 +42,7 @@ class Character : public ::testing::Test {
     test::write_limb_gltf(dir_ / "parts.gltf", {.two_meshes = true});
     test::write_limb_gltf(dir_ / "still.gltf", {.still_clip_first = true});
     test::write_limb_gltf(dir_ / "beside.gltf", {.beside_gap = 0.04});
+    test::write_limb_gltf(dir_ / "cap.gltf", {.rigid_cap = 0.6});
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 
@@ -260,6 +261,37 @@ TEST_F(Character, PartsCloserThanACellAreNotGluedTogether) {
   const double apart = moved("beside"), glued = moved("glued");
   EXPECT_GT(glued, 0.05) << "glued, the still limb follows the bending one";
   EXPECT_LT(apart, 1e-3) << "apart, it stays (glued: " << glued << ")";
+}
+
+// A mesh without a skin under a joint (a prop held 0.5 beyond the tip) is read as part of the character, bound
+// wholly to that joint: at the end of the clip it has turned with the forearm, a quarter turn about the elbow.
+// In a flesh run it is a part of the volume of its own that no bone's capsule reaches: it follows its joint whole.
+TEST_F(Character, AMeshWithoutASkinUnderAJointFollowsIt) {
+  const RiggedModel m = read_model(dir_ / "cap.gltf");
+  ASSERT_EQ(m.parts.size(), 2u);
+  EXPECT_EQ(m.parts[1].name, "cap");
+  EXPECT_EQ(m.parts[1].vertices, 8);
+  ASSERT_EQ(m.notes.size(), 1u);
+  EXPECT_EQ(m.notes[0], "mesh \"cap\" has no skin: it follows joint \"tip\" rigidly");
+  const Eigen::Index first = m.parts[1].first_vertex;
+  const Eigen::Matrix3Xd rest = m.vertices.middleCols(first, 8);
+  EXPECT_NEAR(rest.row(0).mean(), 2.6, 1e-6);  // 0.6 beyond the tip at x = 2
+  EXPECT_LT(rest.bottomRows(2).cwiseAbs().maxCoeff(), 0.1 + 1e-6);
+  const Eigen::Matrix3Xd end = skin_vertices(m, m.skeleton.world(sample(m.clips[0], m.skeleton, 1.0)));
+  const Eigen::Matrix3d quarter = Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3d elbow(1.0, 0.0, 0.0);
+  for (Eigen::Index v = 0; v < 8; ++v)
+    EXPECT_LT((end.col(first + v) - (quarter * (rest.col(v) - elbow) + elbow)).norm(), 1e-6) << "cap vertex " << v;
+  // A flesh run carries it: the prop is its own solid, moved whole by its joint.
+  std::string log;
+  (void)run(scene("cap.gltf", "cap", 16), &log);
+  EXPECT_NE(log.find("model: mesh \"cap\" has no skin"), std::string::npos) << log;
+  EXPECT_NE(log.find("bones: 1 parts of the volume hold no bone's capsule and follow the joint their skin is weighted to, whole"),
+            std::string::npos) << log;
+  EXPECT_NE(log.find(" vertices to tip)"), std::string::npos) << log;
+  EXPECT_EQ(stats("cap")["free_parts"].size(), 1u);
+  const Eigen::Matrix3Xd last = read_surface(dir_ / "cap" / "surface" / "004.obj").vertices;
+  EXPECT_LT((last.middleCols(first, 8) - end.middleCols(first, 8)).cwiseAbs().maxCoeff(), 1e-3);
 }
 
 // The clip played by default is the first that lasts and moves: a one-key "bind" clip, as FBX conversions

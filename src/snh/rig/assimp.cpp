@@ -158,8 +158,8 @@ class SceneReader {
         if (seen[m]) continue;
         seen[m] = 1;
         const aiMesh* mesh = s_.mMeshes[m];
-        if (mesh->mNumBones == 0 || (mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
-        meshes_.push_back({static_cast<int>(n), m});
+        if ((mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
+        (mesh->mNumBones == 0 ? rigid_ : meshes_).push_back({static_cast<int>(n), m});
       }
     if (meshes_.empty()) fail("no skinned mesh (no mesh with bones and triangles)");
   }
@@ -275,12 +275,34 @@ class SceneReader {
     auto& jidx = data.jidx;
     auto& jw = data.jw;
     auto& tri = data.tri;
-    for (std::size_t k = 0; k < meshes_.size(); ++k) {
-      const auto [node, m] = meshes_[k];
+    // The skinned meshes, then the meshes without bones under a joint that a skinned mesh binds (an eye, a
+    // prop parented to a bone), placed at that joint's bind frame and following it rigidly.
+    std::vector<std::pair<int, unsigned>> todo = meshes_;
+    todo.insert(todo.end(), rigid_.begin(), rigid_.end());
+    for (std::size_t k = 0; k < todo.size(); ++k) {
+      const auto [node, m] = todo[k];
       const aiMesh* mesh = s_.mMeshes[m];
       const std::string mesh_name = name_of(mesh->mName);
       const std::string where = fmt::format("mesh \"{}\"", one_line(mesh_name));
-      const Eigen::Matrix4d to_common = mesh_space(out, rest, bound_by, node, mesh);
+      const bool rigid = k >= meshes_.size();
+      int rigid_joint = -1;
+      Eigen::Matrix4d to_common;
+      if (rigid) {
+        const int own = joint_of_node_[static_cast<std::size_t>(node)];
+        Eigen::Matrix4d chain = Eigen::Matrix4d::Identity();
+        int joint = own;
+        if (own < 0) {
+          const auto [between, above] = rig_build::joint_above(
+              node, parent_, joint_of_node_, [&](int p) { return matrix(nodes_[static_cast<std::size_t>(p)]->mTransformation); });
+          chain = between * matrix(nodes_[static_cast<std::size_t>(node)]->mTransformation);
+          joint = above;
+        }
+        if (joint < 0 || bound_by[static_cast<std::size_t>(joint)] < 0) continue;  // not part of the character
+        to_common = out.inverse_bind[static_cast<std::size_t>(joint)].inverse() * chain;
+        rigid_joint = joint;
+      } else {
+        to_common = mesh_space(out, rest, bound_by, node, mesh);
+      }
       const Eigen::Matrix4d from_common = to_common.inverse();
       if (!to_common.allFinite() || !from_common.allFinite())
         fail(fmt::format("{}: its offset matrices cannot be related to the other meshes'", where));
@@ -364,6 +386,9 @@ class SceneReader {
       out.parts.push_back({.name = one_line(!mesh_name.empty() ? mesh_name : !node_name.empty() ? node_name : fmt::format("mesh{}", m)),
                            .first_vertex = offset,
                            .vertices = static_cast<Eigen::Index>(nv)});
+      if (rigid_joint >= 0)
+        out.notes.push_back(fmt::format("mesh \"{}\" has no bones: it follows joint \"{}\" rigidly", out.parts.back().name,
+                                        one_line(out.skeleton.joints[static_cast<std::size_t>(rigid_joint)].name)));
     }
     // A joint without a node rests where its bone was bound.
     for (std::size_t j = 0; j < joints; ++j)
@@ -452,6 +477,7 @@ class SceneReader {
   std::vector<Eigen::Matrix4d> global_;   ///< per node: to the root's space, at rest
   std::map<std::string, int> by_name_;    ///< the first node of each name
   std::vector<std::pair<int, unsigned>> meshes_;  ///< skinned meshes: (node, mesh)
+  std::vector<std::pair<int, unsigned>> rigid_;   ///< meshes without bones: (node, mesh), read where a joint is above them
   std::vector<int> joint_of_node_;        ///< per node: its joint, or −1
   std::vector<int> joint_node_;           ///< per joint: its node (−1 for a bone in no node)
   std::map<std::string, int> nodeless_;   ///< bones in no node: their joints

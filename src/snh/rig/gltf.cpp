@@ -226,6 +226,30 @@ class Builder {
       read_mesh(n.mesh, out.skeleton.size(), data);
       out.parts.push_back({.name = name, .first_vertex = first, .vertices = static_cast<Eigen::Index>(data.xyz.size()) - first});
     }
+    // Meshes without a skin that hang under a joint (eyes, teeth, props parented to a bone) follow it rigidly.
+    for (const int node : rigid_nodes()) {
+      const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(node)];
+      if (n.mesh >= static_cast<int>(m_.meshes.size()))
+        fail(fmt::format("node {} refers to mesh {}, which does not exist", node_name(node), n.mesh));
+      int joint = joint_of_node_[static_cast<std::size_t>(node)];
+      Eigen::Matrix4d chain = node_transform(node).matrix().matrix();
+      if (joint >= 0) {
+        chain.setIdentity();
+      } else {
+        const auto [between, above] =
+            rig_build::joint_above(node, parent_, joint_of_node_, [&](int p) { return Eigen::Matrix4d(node_transform(p).matrix().matrix()); });
+        joint = above;
+        chain = between * chain;
+      }
+      if (joint < 0) continue;
+      const std::string name = n.name.empty() ? fmt::format("mesh{}", n.mesh) : one_line(n.name);
+      const Eigen::Matrix4d place = out.inverse_bind[static_cast<std::size_t>(joint)].inverse() * chain;
+      const auto first = static_cast<Eigen::Index>(data.xyz.size());
+      read_mesh(n.mesh, out.skeleton.size(), data, joint, place);
+      out.parts.push_back({.name = name, .first_vertex = first, .vertices = static_cast<Eigen::Index>(data.xyz.size()) - first});
+      out.notes.push_back(fmt::format("mesh \"{}\" has no skin: it follows joint \"{}\" rigidly", name,
+                                      one_line(out.skeleton.joints[static_cast<std::size_t>(joint)].name)));
+    }
     data.store(out);
     rig_build::weld(out);
     read_animations(out);
@@ -291,6 +315,30 @@ class Builder {
       stack.insert(stack.end(), n.children.rbegin(), n.children.rend());
     }
     if (found.empty()) fail("no skinned mesh (a mesh node with a skin)");
+    return found;
+  }
+
+  /// The nodes with a mesh and no skin in the default scene (as skinned_nodes walks it), in its order.
+  std::vector<int> rigid_nodes() const {
+    std::vector<int> roots;
+    if (!m_.scenes.empty()) {
+      const int s = m_.defaultScene >= 0 && m_.defaultScene < static_cast<int>(m_.scenes.size()) ? m_.defaultScene : 0;
+      roots = m_.scenes[static_cast<std::size_t>(s)].nodes;
+    } else {
+      for (int i = 0; i < static_cast<int>(m_.nodes.size()); ++i)
+        if (parent_[static_cast<std::size_t>(i)] < 0) roots.push_back(i);
+    }
+    std::vector<int> stack(roots.rbegin(), roots.rend()), found;
+    std::vector<char> seen(m_.nodes.size(), 0);
+    while (!stack.empty()) {
+      const int i = stack.back();
+      stack.pop_back();
+      if (i < 0 || i >= static_cast<int>(m_.nodes.size()) || seen[static_cast<std::size_t>(i)]) continue;
+      seen[static_cast<std::size_t>(i)] = 1;
+      const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(i)];
+      if (n.mesh >= 0 && n.skin < 0) found.push_back(i);
+      stack.insert(stack.end(), n.children.rbegin(), n.children.rend());
+    }
     return found;
   }
 
@@ -415,7 +463,10 @@ class Builder {
   }
 
   /// Appends a mesh's triangle primitives to `data`.
-  void read_mesh(int mesh_index, int joints, rig_build::SkinData& data) const {
+  /// Appends a mesh's primitives to `data`; a rigid mesh (rigid_joint ≥ 0: no skin of its own) is placed by
+  /// `place` (its vertices into the model at the bind pose) and bound wholly to that joint.
+  void read_mesh(int mesh_index, int joints, rig_build::SkinData& data, int rigid_joint = -1,
+                 const Eigen::Matrix4d& place = Eigen::Matrix4d::Identity()) const {
     const tinygltf::Mesh& mesh = m_.meshes[static_cast<std::size_t>(mesh_index)];
     if (mesh.primitives.empty()) fail(fmt::format("mesh {} has no primitives", mesh_index));
     auto& xyz = data.xyz;
@@ -435,12 +486,19 @@ class Builder {
       };
       const Eigen::MatrixXd pos = accessor(attribute("POSITION"), where + " POSITION", TINYGLTF_TYPE_VEC3,
                                            {TINYGLTF_COMPONENT_TYPE_FLOAT}, false);
-      const Eigen::MatrixXd jnt = accessor(attribute("JOINTS_0"), where + " JOINTS_0", TINYGLTF_TYPE_VEC4,
-                                           {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT}, false);
+      const Eigen::Index n = pos.cols();
+      const bool rigid = rigid_joint >= 0;
       const std::initializer_list<int> weight_types{TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
                                                     TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT};
-      const Eigen::MatrixXd wgt = accessor(attribute("WEIGHTS_0"), where + " WEIGHTS_0", TINYGLTF_TYPE_VEC4, weight_types, true);
-      const Eigen::Index n = pos.cols();
+      Eigen::MatrixXd jnt = Eigen::MatrixXd::Zero(4, n), wgt = Eigen::MatrixXd::Zero(4, n);
+      if (rigid) {
+        jnt.row(0).setConstant(rigid_joint);
+        wgt.row(0).setOnes();
+      } else {
+        jnt = accessor(attribute("JOINTS_0"), where + " JOINTS_0", TINYGLTF_TYPE_VEC4,
+                       {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT}, false);
+        wgt = accessor(attribute("WEIGHTS_0"), where + " WEIGHTS_0", TINYGLTF_TYPE_VEC4, weight_types, true);
+      }
       if (jnt.cols() != n || wgt.cols() != n)
         fail(fmt::format("{}: {} positions, {} JOINTS_0 and {} WEIGHTS_0", where, n, jnt.cols(), wgt.cols()));
       if (const auto it = prim.attributes.find("WEIGHTS_1"); it != prim.attributes.end()) {
@@ -467,7 +525,9 @@ class Builder {
       data.all_uv = data.all_uv && st.size() > 0;
       data.all_normals = data.all_normals && nrm.size() > 0;
       for (Eigen::Index v = 0; data.all_uv && v < n; ++v) data.uv.emplace_back(st(0, v), 1.0 - st(1, v));
-      for (Eigen::Index v = 0; data.all_normals && v < n; ++v) data.normal.emplace_back(nrm(0, v), nrm(1, v), nrm(2, v));
+      const Eigen::Matrix3d normal_map = place.topLeftCorner<3, 3>().inverse().transpose();
+      for (Eigen::Index v = 0; data.all_normals && v < n; ++v)
+        data.normal.emplace_back(rigid ? Eigen::Vector3d((normal_map * nrm.col(v)).normalized()) : Eigen::Vector3d(nrm.col(v)));
       const int offset = static_cast<int>(xyz.size());
       for (Eigen::Index v = 0; v < n; ++v) {
         if (!pos.col(v).allFinite()) fail(fmt::format("{}: vertex {} has a position that is not finite", where, v));
@@ -485,7 +545,8 @@ class Builder {
                              static_cast<long long>(jk), joints));
           j(k) = static_cast<int>(jk);
         }
-        xyz.emplace_back(pos.col(v));
+        xyz.emplace_back(rigid ? Eigen::Vector3d(place.topLeftCorner<3, 3>() * pos.col(v) + place.topRightCorner<3, 1>())
+                               : Eigen::Vector3d(pos.col(v)));
         jidx.push_back(j);
         jw.emplace_back(w / sum);
       }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <stdexcept>
 
@@ -54,6 +55,59 @@ Binding keep_bound_material(const Binding& binding, const std::vector<Bone>& bon
       out.vertex.push_back(v);
       out.bone.push_back(binding.bone[i]);
     }
+  }
+  return out;
+}
+
+/// Parts of the volume (cells joined through shared vertices) that no bone binds would float free: each is bound
+/// whole to the bone of the joint its embedded skin is weighted to most (a prop or an eye that only its joint
+/// carries). Returns one "N vertices to JOINT" entry per part so bound.
+std::vector<std::string> bind_free_parts(Flesh& f) {
+  const VolumeMesh& vol = f.volume;
+  const auto n = static_cast<int>(vol.vertex_count());
+  std::vector<int> parent(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) parent[static_cast<std::size_t>(i)] = i;
+  const auto root = [&](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+    return i;
+  };
+  for (Eigen::Index c = 0; c < vol.cell_count(); ++c)
+    for (Eigen::Index k = 1; k < vol.cells.rows(); ++k) {
+      const int a = root(vol.cells(0, c)), b = root(vol.cells(k, c));
+      if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    }
+  std::vector<char> held(static_cast<std::size_t>(n), 0);
+  for (const int v : f.binding.vertex) held[static_cast<std::size_t>(root(v))] = 1;
+  const int joints = f.model.skeleton.size();
+  std::map<int, std::vector<double>> weight;  // per free part's root: the skin's weight per joint
+  for (Eigen::Index p = 0; p < f.embedding.vertex.cols(); ++p) {
+    const int r = root(f.embedding.vertex(0, p));
+    if (held[static_cast<std::size_t>(r)]) continue;
+    std::vector<double>& w = weight[r];
+    w.resize(static_cast<std::size_t>(joints), 0.0);
+    for (int k = 0; k < 4; ++k) w[static_cast<std::size_t>(f.model.joint_index(k, p))] += f.model.joint_weight(k, p);
+  }
+  std::vector<std::string> out;
+  std::vector<std::pair<int, int>> added;  // (vertex, bone)
+  for (const auto& [r, w] : weight) {
+    const int joint = static_cast<int>(std::max_element(w.begin(), w.end()) - w.begin());
+    int bone = -1;
+    for (std::size_t b = 0; b < f.bones.size() && bone < 0; ++b)
+      if (f.bones[b].joint == joint) bone = static_cast<int>(b);
+    if (bone < 0) continue;
+    int count = 0;
+    for (int v = 0; v < n; ++v)
+      if (root(v) == r) added.emplace_back(v, bone), ++count;
+    out.push_back(fmt::format("{} vertices to {}", count, f.model.skeleton.joints[static_cast<std::size_t>(joint)].name));
+  }
+  if (added.empty()) return out;
+  for (std::size_t i = 0; i < f.binding.vertex.size(); ++i) added.emplace_back(f.binding.vertex[i], f.binding.bone[i]);
+  std::sort(added.begin(), added.end());
+  f.binding.vertex.clear();
+  f.binding.bone.clear();
+  for (const auto& [v, b] : added) {
+    f.binding.vertex.push_back(v);
+    f.binding.bone.push_back(b);
   }
   return out;
 }
@@ -221,6 +275,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
   }
   f.binding = bind_to_bones(f.bones, f.volume.vertices);
   if (split_lattice) f.binding = keep_bound_material(f.binding, f.bones, *split_lattice);
+  if (!f.binding.vertex.empty()) f.free_parts = bind_free_parts(f);
   f.bound_per_bone = f.binding.count_per_bone(static_cast<int>(f.bones.size()));
   for (std::size_t b = 0; b < f.bones.size(); ++b)
     if (radius_given[b] && f.bound_per_bone[b] == 0)

@@ -101,6 +101,9 @@ struct Flesh {
   Embedding embedding;                       ///< the model's vertices (its order) in the volume
   std::vector<Bone> bones;                   ///< with their capsule radii
   Binding binding;                           ///< volume vertices that follow bones
+  /// Parts of the volume that held no bone's capsule, bound whole to the joint their skin is weighted to
+  /// most (a prop or an eye that only its joint carries): "N vertices to JOINT" each.
+  std::vector<std::string> free_parts;
   std::vector<int> bound_per_bone;
   Binding released;                          ///< vertices in a capsule released at the joints (joint_cells)
   SoftBinding soft;                          ///< volume vertices pulled toward bones: the shell's, and the

@@ -39,6 +39,7 @@ void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& setting
   settings["model_triangles"] = m.triangles.cols();
   settings["joints"] = m.skeleton.size();
   settings["bound_vertices"] = flesh.binding.vertex.size();
+  settings["free_parts"] = flesh.free_parts;
   settings["volume_of_cells"] = flesh.volume_of_cells;
   settings["split_cells"] = spec.split_cells;
   settings["split_cubes"] = flesh.split_cubes;
@@ -114,6 +115,12 @@ void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream&
   for (std::size_t b = 0; b < flesh.bones.size(); ++b)
     counts += fmt::format("{}{} {}", b ? ", " : "", flesh.bones[b].name, flesh.bound_per_bone[b]);
   o << fmt::format("bones: {} binding {} volume vertices ({})\n", flesh.bones.size(), flesh.binding.vertex.size(), counts);
+  if (!flesh.free_parts.empty()) {
+    std::string parts;
+    for (std::size_t i = 0; i < flesh.free_parts.size(); ++i) parts += (i ? ", " : "") + flesh.free_parts[i];
+    o << fmt::format("bones: {} parts of the volume hold no bone's capsule and follow the joint their skin is weighted to, whole ({})\n",
+                     flesh.free_parts.size(), parts);
+  }
   if (!flesh.released.vertex.empty())
     o << fmt::format("joints: {} vertices of capsules in cells spanning two joints {} (joint cells {})\n", flesh.released.vertex.size(),
                      spec.joint_cells == JointCells::soft ? "bound softly instead" : "released", to_string(spec.joint_cells));
