@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <exception>
 #include <limits>
+#include <map>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -462,11 +463,84 @@ void number_cells(Lattice& L, const std::vector<unsigned char>& keep, const std:
 struct FaceLinks {
   std::vector<std::array<std::vector<std::pair<int, int>>, 3>> links;
   std::vector<unsigned char> near_split;
+  std::vector<int> part;  ///< per cell: the part (cells joined through the faces' links) it belongs to
   [[nodiscard]] bool joined(const Lattice& L, int low_cube, int axis, int piece_low, int piece_high) const {
     const auto& face = links[static_cast<std::size_t>(L.cell_at[static_cast<std::size_t>(low_cube)])][static_cast<std::size_t>(axis)];
     return std::find(face.begin(), face.end(), std::pair{piece_low, piece_high}) != face.end();
   }
 };
+
+/// A sliver (a touched cube whose samples are all outside) joins the pieces whose material reaches its faces;
+/// between two parts that the other links keep apart (a prop just beyond a limb's end) it would bridge them.
+/// Each sliver keeps its links to the one part it touches most (then the first), and is marked near a split;
+/// `part` then numbers the parts the links make, through which cubes that meet only along an edge or at a
+/// corner may be joined.
+template <class Above>
+void keep_slivers_to_one_part(const Lattice& L, const std::vector<int>& pieces_of, const std::vector<int>& kept, const Above& above,
+                              FaceLinks& out) {
+  const auto cells = static_cast<int>(L.cube_of_cell.size());
+  Groups parts(cells);
+  const auto cell_of = [&](int cube, int piece) { return L.cell_at[static_cast<std::size_t>(cube)] + piece; };
+  const auto sliver = [&](int cube) { return pieces_of[static_cast<std::size_t>(cube)] == 0; };
+  // Parts through the links between cubes that are not slivers.
+  for (const int c : kept)
+    for (int a = 0; a < 3; ++a)
+      if (const int d = above(c, a); d >= 0 && !sliver(c) && !sliver(d))
+        for (const auto& [pc, pd] : out.links[static_cast<std::size_t>(L.cell_at[static_cast<std::size_t>(c)])][static_cast<std::size_t>(a)])
+          parts.join(cell_of(c, pc), cell_of(d, pd));
+  const Eigen::Vector3i& dims = L.dims;
+  for (const int c : kept) {
+    if (!sliver(c)) continue;
+    // The sliver's links on its six faces: (the neighbour's cell, the face's list, the entry).
+    struct Link {
+      int cell;
+      std::vector<std::pair<int, int>>* face;
+      std::size_t entry;
+    };
+    std::vector<Link> found;
+    const Eigen::Vector3i ijk(c % dims.x(), (c / dims.x()) % dims.y(), c / (dims.x() * dims.y()));
+    for (int a = 0; a < 3; ++a) {
+      const int step = a == 0 ? 1 : a == 1 ? dims.x() : dims.x() * dims.y();
+      if (const int d = above(c, a); d >= 0 && !sliver(d)) {
+        auto& face = out.links[static_cast<std::size_t>(L.cell_at[static_cast<std::size_t>(c)])][static_cast<std::size_t>(a)];
+        for (std::size_t e = 0; e < face.size(); ++e) found.push_back({cell_of(d, face[e].second), &face, e});
+      }
+      if (ijk[a] > 0) {
+        const int b = c - step;
+        if (!L.cell_at.empty() && L.cell_at[static_cast<std::size_t>(b)] >= 0 && !sliver(b)) {
+          auto& face = out.links[static_cast<std::size_t>(L.cell_at[static_cast<std::size_t>(b)])][static_cast<std::size_t>(a)];
+          for (std::size_t e = 0; e < face.size(); ++e) found.push_back({cell_of(b, face[e].first), &face, e});
+        }
+      }
+    }
+    if (found.empty()) continue;
+    std::map<int, int> count;  // part → links
+    for (const Link& l : found) ++count[parts.root(l.cell)];
+    if (count.size() < 2) {
+      parts.join(cell_of(c, 0), found.front().cell);
+      continue;
+    }
+    int best = count.begin()->first;
+    for (const auto& [root, n] : count)
+      if (n > count[best]) best = root;
+    std::vector<std::pair<std::vector<std::pair<int, int>>*, std::size_t>> drop;
+    for (const Link& l : found)
+      if (parts.root(l.cell) != best) drop.emplace_back(l.face, l.entry);
+    std::sort(drop.begin(), drop.end(), [](const auto& x, const auto& y) { return x.first != y.first ? x.first < y.first : x.second > y.second; });
+    for (const auto& [face, entry] : drop) face->erase(face->begin() + static_cast<std::ptrdiff_t>(entry));
+    out.near_split[static_cast<std::size_t>(c)] = 1;
+    for (const Link& l : found) out.near_split[static_cast<std::size_t>(L.cube_of_cell[static_cast<std::size_t>(l.cell)])] = 1;
+    parts.join(cell_of(c, 0), best);
+  }
+  // Slivers next to slivers: joined through their links too.
+  for (const int c : kept)
+    for (int a = 0; a < 3; ++a)
+      if (const int d = above(c, a); d >= 0 && (sliver(c) || sliver(d)))
+        for (const auto& [pc, pd] : out.links[static_cast<std::size_t>(L.cell_at[static_cast<std::size_t>(c)])][static_cast<std::size_t>(a)])
+          parts.join(cell_of(c, pc), cell_of(d, pd));
+  out.part.resize(static_cast<std::size_t>(cells));
+  for (int i = 0; i < cells; ++i) out.part[static_cast<std::size_t>(i)] = parts.root(i);
+}
 
 FaceLinks link_faces(const Lattice& L, const PieceContext& P, const std::vector<int>& pieces_of) {
   const std::vector<unsigned char>& keep = P.keep;
@@ -509,6 +583,7 @@ FaceLinks link_faces(const Lattice& L, const PieceContext& P, const std::vector<
         out.near_split[static_cast<std::size_t>(c)] = out.near_split[static_cast<std::size_t>(d)] = 1;
     }
   }
+  keep_slivers_to_one_part(L, pieces_of, kept, above, out);
   return out;
 }
 
@@ -536,7 +611,9 @@ Groups group_at_node(const Lattice& L, const FaceLinks& F, const NodeCells& at) 
         const int pa = L.piece_of_cell[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(a)])];
         const int pb = L.piece_of_cell[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(b)])];
         if (F.joined(L, a_low ? ca : cb, differ == 1 ? 0 : differ == 2 ? 1 : 2, a_low ? pa : pb, a_low ? pb : pa)) groups.join(a, b);
-      } else if (!F.near_split[static_cast<std::size_t>(ca)] && !F.near_split[static_cast<std::size_t>(cb)]) {
+      } else if (!F.near_split[static_cast<std::size_t>(ca)] && !F.near_split[static_cast<std::size_t>(cb)] &&
+                 F.part[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(a)])] ==
+                     F.part[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(b)])]) {
         groups.join(a, b);
       }
     }
@@ -587,6 +664,8 @@ void build_cells(Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& 
           }
         }
         if (at.cell.empty()) continue;
+        for (std::size_t a = 1; a < at.cell.size() && at.clean && !links.part.empty(); ++a)
+          at.clean = links.part[static_cast<std::size_t>(at.cell[a])] == links.part[static_cast<std::size_t>(at.cell[0])];
         const Eigen::Vector3d x = L.origin + L.spacing * Eigen::Vector3d(i, j, k);
         const int n = static_cast<int>(at.cell.size());
         const std::size_t first_vertex = position.size();

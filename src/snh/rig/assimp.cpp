@@ -265,6 +265,40 @@ class SceneReader {
   }
 
   /// Each skinned mesh's vertices in the model's space, its triangles, and each vertex's four strongest joints.
+  /// Where a mesh without bones at `node` goes: its joint (the node's own, or the nearest above it) and the
+  /// matrix from the node's frame into the model at that joint's bind frame. False when no joint a skinned
+  /// mesh binds is at or above it.
+  bool rigid_place(const RiggedModel& out, const std::vector<int>& bound_by, int node, int& joint, Eigen::Matrix4d& place) const {
+    Eigen::Matrix4d chain = Eigen::Matrix4d::Identity();
+    joint = joint_of_node_[static_cast<std::size_t>(node)];
+    if (joint < 0) {
+      const auto [between, above] = rig_build::joint_above(
+          node, parent_, joint_of_node_, [&](int p) { return matrix(nodes_[static_cast<std::size_t>(p)]->mTransformation); });
+      chain = between * matrix(nodes_[static_cast<std::size_t>(node)]->mTransformation);
+      joint = above;
+    }
+    if (joint < 0 || bound_by[static_cast<std::size_t>(joint)] < 0) return false;
+    place = out.inverse_bind[static_cast<std::size_t>(joint)].inverse() * chain;
+    return true;
+  }
+
+  /// A mesh's triangles (its points and lines skipped), numbered from `offset`; none is an error.
+  void read_triangles(const aiMesh& mesh, int offset, const std::string& where, std::vector<Eigen::Vector3i>& tri) const {
+    const std::size_t first_triangle = tri.size();
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices != 3) continue;  // points and lines (a mesh of mixed primitives)
+      Eigen::Vector3i t;
+      for (int c = 0; c < 3; ++c) {
+        if (face.mIndices[c] >= mesh.mNumVertices)
+          fail(fmt::format("{}: face {} refers to vertex {}, but the mesh has {}", where, f, face.mIndices[c], mesh.mNumVertices));
+        t(c) = offset + static_cast<int>(face.mIndices[c]);
+      }
+      tri.push_back(t);
+    }
+    if (tri.size() == first_triangle) fail(fmt::format("{}: no triangles", where));
+  }
+
   void read_meshes(RiggedModel& out) {
     const std::size_t joints = joint_node_.size();
     out.inverse_bind.assign(joints, Eigen::Matrix4d::Identity());
@@ -288,18 +322,7 @@ class SceneReader {
       int rigid_joint = -1;
       Eigen::Matrix4d to_common;
       if (rigid) {
-        const int own = joint_of_node_[static_cast<std::size_t>(node)];
-        Eigen::Matrix4d chain = Eigen::Matrix4d::Identity();
-        int joint = own;
-        if (own < 0) {
-          const auto [between, above] = rig_build::joint_above(
-              node, parent_, joint_of_node_, [&](int p) { return matrix(nodes_[static_cast<std::size_t>(p)]->mTransformation); });
-          chain = between * matrix(nodes_[static_cast<std::size_t>(node)]->mTransformation);
-          joint = above;
-        }
-        if (joint < 0 || bound_by[static_cast<std::size_t>(joint)] < 0) continue;  // not part of the character
-        to_common = out.inverse_bind[static_cast<std::size_t>(joint)].inverse() * chain;
-        rigid_joint = joint;
+        if (!rigid_place(out, bound_by, node, rigid_joint, to_common)) continue;  // under no bound joint: not the character's
       } else {
         to_common = mesh_space(out, rest, bound_by, node, mesh);
       }
@@ -370,18 +393,7 @@ class SceneReader {
       }
       if (unweighted > 0)
         fail(fmt::format("{}: {} of its {} vertices have no bone weights and no joint above the mesh to follow", where, unweighted, nv));
-      const std::size_t first_triangle = tri.size();
-      for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-        const aiFace& face = mesh->mFaces[f];
-        if (face.mNumIndices != 3) continue;  // points and lines (a mesh of mixed primitives)
-        Eigen::Vector3i t;
-        for (int c = 0; c < 3; ++c) {
-          if (face.mIndices[c] >= nv) fail(fmt::format("{}: face {} refers to vertex {}, but the mesh has {}", where, f, face.mIndices[c], nv));
-          t(c) = offset + static_cast<int>(face.mIndices[c]);
-        }
-        tri.push_back(t);
-      }
-      if (tri.size() == first_triangle) fail(fmt::format("{}: no triangles", where));
+      read_triangles(*mesh, offset, where, tri);
       const std::string node_name = name_of(nodes_[static_cast<std::size_t>(node)]->mName);
       out.parts.push_back({.name = one_line(!mesh_name.empty() ? mesh_name : !node_name.empty() ? node_name : fmt::format("mesh{}", m)),
                            .first_vertex = offset,
