@@ -1,8 +1,9 @@
 # A character made in Blender (background mode), exported as an animator would export it, with Blender's own
-# skinning of it as the answer to compare with (tests/rig/test_blender_character.cpp).
+# skinning of it as the answer to compare with (tests/rig/test_model_formats.cpp).
 #   blender -b --factory-startup --python-exit-code 1 -P blender_character.py -- OUTDIR
 # Writes OUTDIR/character.glb (glTF exporter), character.fbx (FBX exporter, its default axes and units),
-# character.dae (COLLADA exporter) and truth.json: per frame of the clip (1, 12, 24 at 24 fps) the evaluated
+# character_zup.fbx (the same, Z up), character.dae (COLLADA exporter), character_prop.glb/.fbx (with a cube
+# parented to the hand bone; truth_prop.json holds its vertices per frame) and truth.json: per frame of the clip (1, 12, 24 at 24 fps) the evaluated
 # skin's vertices in Blender's world, and the bones' heads at frame 1.
 # The character: a bent arm of three bones (upper, lower, hand) inside a closed tube of 16 sides and 24 rings,
 # with smooth weights across the elbow and the wrist, smooth shading and a UV map; the elbow bends 70° and the
@@ -145,17 +146,23 @@ truth["heads"] = {name: list(rig.matrix_world @ rig.data.bones[name].head_local)
 with open(os.path.join(out, "truth.json"), "w") as f:
     json.dump(truth, f)
 
-bpy.ops.object.select_all(action="SELECT")
-bpy.ops.export_scene.gltf(filepath=os.path.join(out, "character.glb"), export_format="GLB", export_animations=True,
-                          export_skins=True)
-bpy.ops.export_scene.fbx(filepath=os.path.join(out, "character.fbx"), bake_anim=True, add_leaf_bones=False)
+
+def export(name):
+    """Everything, as NAME.glb (glTF exporter) and NAME.fbx (FBX exporter, its default axes and units)."""
+    bpy.ops.object.select_all(action="SELECT")
+    bpy.ops.export_scene.gltf(filepath=os.path.join(out, name + ".glb"), export_format="GLB", export_animations=True,
+                              export_skins=True)
+    bpy.ops.export_scene.fbx(filepath=os.path.join(out, name + ".fbx"), bake_anim=True, add_leaf_bones=False)
+
+
+export("character")
 # The same with Blender's own axes kept (Z up), as some pipelines ask for.
 bpy.ops.export_scene.fbx(filepath=os.path.join(out, "character_zup.fbx"), bake_anim=True, add_leaf_bones=False,
                          axis_up="Z", axis_forward="Y")
 bpy.ops.wm.collada_export(filepath=os.path.join(out, "character.dae"), include_animations=True)
 
-# A prop without a skin parented to the hand bone (a ring at the wrist, 0.03 beyond the skin), exported again
-# as character_prop.glb and character_prop.fbx; truth_prop.json holds its vertices in Blender's world per frame.
+# A prop without a skin: a small cube parented to the hand bone, exported again as character_prop.glb and
+# character_prop.fbx; truth_prop.json holds its vertices in Blender's world per frame.
 bpy.ops.object.select_all(action="DESELECT")
 bpy.ops.mesh.primitive_cube_add(size=0.06, location=(0.0, 0.3, 1.0))
 prop = bpy.context.active_object
@@ -171,8 +178,5 @@ for frame in (1, 12, 24):
 scene.frame_set(1)
 with open(os.path.join(out, "truth_prop.json"), "w") as f:
     json.dump(prop_truth, f)
-bpy.ops.object.select_all(action="SELECT")
-bpy.ops.export_scene.gltf(filepath=os.path.join(out, "character_prop.glb"), export_format="GLB", export_animations=True,
-                          export_skins=True)
-bpy.ops.export_scene.fbx(filepath=os.path.join(out, "character_prop.fbx"), bake_anim=True, add_leaf_bones=False)
+export("character_prop")
 print("blender_character: wrote", out)

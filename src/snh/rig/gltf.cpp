@@ -291,9 +291,9 @@ class Builder {
     }
   }
 
-  /// The nodes with a mesh and a skin, depth first through the default scene (scene 0 if none is named; every
-  /// root node if the file has no scene).
-  std::vector<int> skinned_nodes() const {
+  /// The nodes with a mesh, depth first through the default scene (scene 0 if none is named; every root node
+  /// if the file has no scene), each once.
+  std::vector<int> mesh_nodes() const {
     std::vector<int> roots;
     if (!m_.scenes.empty()) {
       const int s = m_.defaultScene >= 0 && m_.defaultScene < static_cast<int>(m_.scenes.size()) ? m_.defaultScene : 0;
@@ -311,34 +311,26 @@ class Builder {
       if (seen[static_cast<std::size_t>(i)]) continue;  // a scene listing a node twice
       seen[static_cast<std::size_t>(i)] = 1;
       const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(i)];
-      if (n.mesh >= 0 && n.skin >= 0) found.push_back(i);
+      if (n.mesh >= 0) found.push_back(i);
       stack.insert(stack.end(), n.children.rbegin(), n.children.rend());
     }
+    return found;
+  }
+
+  /// The nodes with a mesh and a skin, in the scene's order.
+  std::vector<int> skinned_nodes() const {
+    std::vector<int> found;
+    for (const int i : mesh_nodes())
+      if (m_.nodes[static_cast<std::size_t>(i)].skin >= 0) found.push_back(i);
     if (found.empty()) fail("no skinned mesh (a mesh node with a skin)");
     return found;
   }
 
-  /// The nodes with a mesh and no skin in the default scene (as skinned_nodes walks it), in its order.
+  /// The nodes with a mesh and no skin, in the scene's order.
   std::vector<int> rigid_nodes() const {
-    std::vector<int> roots;
-    if (!m_.scenes.empty()) {
-      const int s = m_.defaultScene >= 0 && m_.defaultScene < static_cast<int>(m_.scenes.size()) ? m_.defaultScene : 0;
-      roots = m_.scenes[static_cast<std::size_t>(s)].nodes;
-    } else {
-      for (int i = 0; i < static_cast<int>(m_.nodes.size()); ++i)
-        if (parent_[static_cast<std::size_t>(i)] < 0) roots.push_back(i);
-    }
-    std::vector<int> stack(roots.rbegin(), roots.rend()), found;
-    std::vector<char> seen(m_.nodes.size(), 0);
-    while (!stack.empty()) {
-      const int i = stack.back();
-      stack.pop_back();
-      if (i < 0 || i >= static_cast<int>(m_.nodes.size()) || seen[static_cast<std::size_t>(i)]) continue;
-      seen[static_cast<std::size_t>(i)] = 1;
-      const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(i)];
-      if (n.mesh >= 0 && n.skin < 0) found.push_back(i);
-      stack.insert(stack.end(), n.children.rbegin(), n.children.rend());
-    }
+    std::vector<int> found;
+    for (const int i : mesh_nodes())
+      if (m_.nodes[static_cast<std::size_t>(i)].skin < 0) found.push_back(i);
     return found;
   }
 

@@ -88,18 +88,24 @@ std::vector<std::string> bind_free_parts(Flesh& f) {
     for (int k = 0; k < 4; ++k) w[static_cast<std::size_t>(f.model.joint_index(k, p))] += f.model.joint_weight(k, p);
   }
   std::vector<std::string> out;
-  std::vector<std::pair<int, int>> added;  // (vertex, bone)
+  std::map<int, std::pair<int, int>> bone_of;  // per free part's root: its bone and its vertex count
   for (const auto& [r, w] : weight) {
     const int joint = static_cast<int>(std::max_element(w.begin(), w.end()) - w.begin());
-    int bone = -1;
-    for (std::size_t b = 0; b < f.bones.size() && bone < 0; ++b)
-      if (f.bones[b].joint == joint) bone = static_cast<int>(b);
-    if (bone < 0) continue;
-    int count = 0;
-    for (int v = 0; v < n; ++v)
-      if (root(v) == r) added.emplace_back(v, bone), ++count;
-    out.push_back(fmt::format("{} vertices to {}", count, f.model.skeleton.joints[static_cast<std::size_t>(joint)].name));
+    for (std::size_t b = 0; b < f.bones.size(); ++b)
+      if (f.bones[b].joint == joint) {
+        bone_of[r] = {static_cast<int>(b), 0};
+        break;
+      }
   }
+  std::vector<std::pair<int, int>> added;  // (vertex, bone)
+  for (int v = 0; v < n; ++v)
+    if (const auto it = bone_of.find(root(v)); it != bone_of.end()) {
+      added.emplace_back(v, it->second.first);
+      ++it->second.second;
+    }
+  for (const auto& [r, bone_count] : bone_of)
+    out.push_back(fmt::format("{} vertices to {}", bone_count.second,
+                              f.model.skeleton.joints[static_cast<std::size_t>(f.bones[static_cast<std::size_t>(bone_count.first)].joint)].name));
   if (added.empty()) return out;
   for (std::size_t i = 0; i < f.binding.vertex.size(); ++i) added.emplace_back(f.binding.vertex[i], f.binding.bone[i]);
   std::sort(added.begin(), added.end());
@@ -254,7 +260,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     f.split_cubes = lattice.split_cubes;
     f.copied_vertices = 0;
     for (const int c : lattice.copies) f.copied_vertices += c > 1 ? 1 : 0;
-    split_lattice = lattice.split_cubes > 0 ? std::make_unique<Lattice>(lattice) : nullptr;
+    split_lattice = f.copied_vertices > 0 ? std::make_unique<Lattice>(lattice) : nullptr;
   } else {
     f.cell_size = longest / f.resolution;
     // No tet larger than a sixth of a cube of the lattice's size (the five or six tets a cube splits into).
