@@ -14,6 +14,7 @@
 #include "parameter_options.hpp"
 #include "run_command.hpp"
 #include "snh/mesh/surface.hpp"
+#include "snh/rig/model.hpp"
 #include "snh/setup/scene_build.hpp"
 
 namespace snh::cli {
@@ -106,7 +107,8 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                 "Self-contact of the render surface (IPC barrier on the welded skin, embedded in the volume: no two of its "
                 "triangles pass through each other)");
   cmd->add_option("--ground", o->ground,
-                  "A ground plane y = Y (normal +y, glTF's up axis; other formats keep their own) that the render surface stays above; it must start above it");
+                  "A ground plane at height Y (model units) along the model's up axis (+y, or the axis an FBX states) that the render "
+                  "surface stays above; it must start above it");
   cmd->add_option("--dhat", o->dhat,
                   "Distance below which contact repels, model units (default: a quarter of the render surface's mean edge "
                   "length, at most half its smallest distance at rest)")
@@ -120,7 +122,10 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params, "--youngs 1e5 --poisson 0.488, the paper's flesh");
   auto* qs = cmd->add_flag("--quasi-static", o->quasi_static, "Quasi-static frames (the default, as the paper)");
-  cmd->add_flag("--dynamic", o->dynamic, "Backward Euler with gravity -9.81 y instead (density 1000)")->excludes(qs);
+  cmd->add_flag("--dynamic", o->dynamic,
+                "Backward Euler with gravity 9.81 m/s^2 down the model's up axis instead (density 1000 kg/m^3; gravity, density and "
+                "the material's Pa taken to the model's units where it states them, as an FBX in centimetres does)")
+      ->excludes(qs);
   cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(CLI::PositiveNumber);
   cmd->add_option("--out", o->out, "Output directory (default output/<model name>)")->check(non_empty_path());
   cmd->add_option("--solver", o->solver, "Linear solver (default auto: by size; see snh stretch --help)");
@@ -139,6 +144,16 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     }
     // The options become a scene, checked by the same parser as a scene file.
     nlohmann::json j;
+    // A dynamic run or a ground needs the model's unit and up axis (an FBX in centimetres, Z up): the options'
+    // pressures (Pa), density (kg/m³) and gravity (9.81 m/s² down) are taken to the model's units and axes.
+    const bool ground = cmd->count("--ground") > 0;
+    double unit = 1.0;                                 // metres per model unit
+    Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+    if (o->dynamic || ground) {
+      const RiggedModel m = read_model(o->model);
+      unit = m.meters_per_unit;
+      up = m.up_sign * Eigen::Vector3d::Unit(m.up_axis);
+    }
     j["flesh"] = {{"model", o->model}, {"volume", o->volume}};
     if (cmd->count("--resolution")) j["flesh"]["resolution"] = o->resolution;
     if (cmd->count("--cell-size")) j["flesh"]["cell_size"] = o->cell_size;
@@ -150,14 +165,14 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     nlohmann::json material = {{"name", o->material}};
     if (cmd->count("--youngs") || cmd->count("--poisson")) {
       (void)o->params.lame();  // checks that they go together
-      material["youngs"] = o->params.youngs;
+      material["youngs"] = o->params.youngs * unit;
       material["poisson"] = o->params.poisson;
     } else if (cmd->count("--mu") || cmd->count("--lambda")) {
       if (!cmd->count("--mu") || !cmd->count("--lambda")) throw ParameterError("--mu and --lambda go together for snh flesh");
-      material["mu"] = o->params.mu;
-      material["lambda"] = o->params.lambda;
+      material["mu"] = o->params.mu * unit;
+      material["lambda"] = o->params.lambda * unit;
     } else {
-      const Lame p = lame_from_youngs(FleshSpec::youngs, FleshSpec::poisson);
+      const Lame p = lame_from_youngs(FleshSpec::youngs * unit, FleshSpec::poisson);
       material["mu"] = p.mu;
       material["lambda"] = p.lambda;
     }
@@ -165,18 +180,22 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     j["material"] = material;
     if (o->dynamic) {
       j["integrator"] = "backward_euler";
-      j["gravity"] = {0.0, -9.81, 0.0};
+      const Eigen::Vector3d g = up.unaryExpr([unit](double u) { return u == 0.0 ? 0.0 : -9.81 / unit * u; });  // no −0
+      j["gravity"] = {g.x(), g.y(), g.z()};
+      j["density"] = FleshSpec::density * unit * unit * unit;
       j["dt"] = 1.0 / o->fps;
     } else {
       j["integrator"] = "quasi_static";
     }
     j["solver"] = {{"linear", o->solver}};
-    const bool ground = cmd->count("--ground") > 0;
     if (o->self_contact || ground) {
       j["contact"] = {{"self", o->self_contact}};
       if (cmd->count("--dhat")) j["contact"]["dhat"] = o->dhat;
       if (cmd->count("--contact-stiffness")) j["contact"]["stiffness"] = o->contact_stiffness;
-      if (ground) j["colliders"] = {{{"type", "plane"}, {"point", {0.0, o->ground, 0.0}}, {"normal", {0.0, 1.0, 0.0}}}};
+      if (ground) {
+        const Eigen::Vector3d point = o->ground * up;
+        j["colliders"] = {{{"type", "plane"}, {"point", {point.x(), point.y(), point.z()}}, {"normal", {up.x(), up.y(), up.z()}}}};
+      }
       if (cmd->count("--friction")) j["contact"]["friction"] = o->friction;
     } else if (cmd->count("--friction")) {
       throw SceneError("snh flesh: --friction needs --self-contact or --ground");

@@ -95,6 +95,23 @@ print(f"hand_fist: smallest volume flesh {flesh:.4f}, skinning {lbs:.4f}")
 sys.exit(0 if ok else 1)
 PY
 
+# A centimetre FBX (huesitos states UnitScaleFactor 1) run dynamically with a ground: gravity 981 cm/s² down y,
+# density 1000 kg/m³ as 0.001 kg/cm³, E = 100 kPa as 1000 kg/(cm s²); the ground's plane along y.
+huesitos=/usr/share/assimp/models/FBX/huesitos.fbx
+if [ -f "$huesitos" ]; then
+  if "$SNH" flesh "$huesitos" --dynamic --fps 6 --ground -100 --no-report --out "$work/cm" > "$work/cm.log" 2>&1; then ok; else bad "cm: $(tail -3 "$work/cm.log")"; fi
+  python3 - "$work/cm/stats.json" <<'PY' && ok || bad "cm: gravity, density and E in the model's units"
+import json, sys
+s = json.load(open(sys.argv[1]))
+g, rho, mu, lam = s["gravity"], s["density"], s["mu"], s["lambda"]
+E = mu * (3 * lam + 2 * mu) / (lam + mu)
+ok = abs(g[1] + 981) < 1e-9 and g[0] == 0 and g[2] == 0 and abs(rho - 1e-3) < 1e-12 and abs(E - 1000) < 1e-6
+print(f"cm: gravity {g}, density {rho}, E {E}")
+sys.exit(0 if ok else 1)
+PY
+  grep -q '^model: units: the file says 1 unit = 1 cm' "$work/cm.log" && ok || bad "cm: the header says the unit"
+fi
+
 # Bad input: one line, exit code 2, no output directory.
 flesh_error() {  # NAME PATTERN ARGS...
   local name="$1" pattern="$2"
