@@ -614,5 +614,40 @@ TEST(LatticePieces, SegmentMeetsTriangle) {
   EXPECT_FALSE(segment_meets_triangle({-1, 0.2, 0}, {2, 0.2, 0}, a, b, c));      // in its plane
 }
 
+TEST(LatticePieces, SoupsOfRandomTrianglesBuildAndEmbed) {
+  // Overlapping, open, inside-out, degenerate: whatever the triangles, the lattice is built, its cells are whole
+  // cubes, every triangle's vertices embed in it (in a cell of their cube), and samples out of range are refused.
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    SCOPED_TRACE("soup " + std::to_string(trial));
+    Surface s;
+    const int triangles = 10 + trial * 4;
+    s.V.resize(3, 3 * triangles);
+    s.F.resize(3, triangles);
+    for (int t = 0; t < triangles; ++t) {
+      const Eigen::Vector3d centre(u(rng), u(rng), u(rng));
+      for (int k = 0; k < 3; ++k) {
+        // Every fifth triangle degenerate (two corners equal).
+        s.V.col(3 * t + k) = (t % 5 == 0 && k == 2) ? Eigen::Vector3d(s.V.col(3 * t + 1)) : Eigen::Vector3d(centre + 0.4 * Eigen::Vector3d(u(rng), u(rng), u(rng)));
+        s.F(k, t) = 3 * t + k;
+      }
+    }
+    const Lattice L = lattice_for_surface(s.V, s.F, 6 + trial % 5);
+    for (Eigen::Index c = 0; c < L.mesh.cell_count(); ++c) {
+      Eigen::Matrix3d J;
+      for (int a = 0; a < 3; ++a) J.col(a) = L.mesh.vertices.col(L.mesh.cells(1 << a, c)) - L.mesh.vertices.col(L.mesh.cells(0, c));
+      ASSERT_NEAR(J.determinant(), std::pow(L.spacing, 3), 1e-9 * std::pow(L.spacing, 3)) << "cell " << c;
+    }
+    std::vector<int> vertex(static_cast<std::size_t>(s.V.cols()));
+    for (std::size_t v = 0; v < vertex.size(); ++v) vertex[v] = static_cast<int>(v);
+    const Embedding e = embed_surface_in_lattice(L, s.V, s.F, s.V, vertex);
+    EXPECT_LT((e.apply(L.mesh.vertices) - s.V).cwiseAbs().maxCoeff(), 1e-9);
+  }
+  const Surface box = test::axis_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
+  EXPECT_THROW((void)lattice_for_surface(box.V, box.F, 4, -1), std::invalid_argument);
+  EXPECT_THROW((void)lattice_for_surface(box.V, box.F, 4, 17), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace snh
