@@ -144,6 +144,26 @@ class BlenderCharacter : public ::testing::Test {
     }
   }
 
+  /// A flesh run of one of the files (resolution 10) into `out`; whether every frame converged, and its log.
+  static bool run_flesh(const std::string& file, int frames, const fs::path& out, std::string& log) {
+    const json scene = {{"flesh", {{"model", (dir_ / file).string()}, {"resolution", 10}}},
+                        {"frames", frames},
+                        {"output", {{"dir", out.string()}}}};
+    std::ostringstream text;
+    const SceneResult r = run_scene(parse_scene(scene, dir_ / "scene.json"), text);
+    log = text.str();
+    return r.all_converged;
+  }
+
+  /// What check_usda.py says of the run's flesh.usda (two meshes, `samples` time samples each), and its exit code.
+  static std::string check_stage(const fs::path& out, int samples, int& code) {
+    const std::string check = fmt::format("python3 '{}/apps/check_usda.py' '{}' 2 {} > '{}' 2>&1", SNH_TESTS_DIR,
+                                          (out / "flesh.usda").string(), samples, (out / "usda.log").string());
+    code = std::system(check.c_str());
+    std::ifstream usda_log(out / "usda.log");
+    return std::string(std::istreambuf_iterator<char>(usda_log), {});
+  }
+
   static inline fs::path dir_;
   static inline bool made_ = false;
   static inline std::string log_;
@@ -237,12 +257,8 @@ TEST(ModelNormals, TheHandsNormalsFromItsTrianglesAgreeWithItsOwn) {
 // A flesh run of the arm writes each frame's texture coordinates and normals into its OBJ frames and USD stage.
 TEST_F(BlenderCharacter, FleshFramesAndStageCarryTextureCoordinatesAndNormals) {
   const fs::path out = fs::temp_directory_path() / ("snh-test-blender-flesh-" + std::to_string(::getpid()));
-  const json scene = {{"flesh", {{"model", (dir_ / "character.glb").string()}, {"resolution", 10}}},
-                      {"frames", 3},
-                      {"output", {{"dir", out.string()}}}};
-  std::ostringstream log;
-  const SceneResult r = run_scene(parse_scene(scene, dir_ / "scene.json"), log);
-  ASSERT_TRUE(r.all_converged) << log.str();
+  std::string log;
+  ASSERT_TRUE(run_flesh("character.glb", 3, out, log)) << log;
   const RiggedModel m = read_model(dir_ / "character.glb");
   std::ifstream in(out / "surface" / "003.obj");
   std::map<std::string, int> lines;
@@ -258,11 +274,8 @@ TEST_F(BlenderCharacter, FleshFramesAndStageCarryTextureCoordinatesAndNormals) {
   EXPECT_EQ(lines["f"], m.triangles.cols());
   const int a = m.triangles(0, 0) + 1, b = m.triangles(1, 0) + 1, c = m.triangles(2, 0) + 1;
   EXPECT_EQ(face, fmt::format("f {}/{}/{} {}/{}/{} {}/{}/{}", a, a, a, b, b, b, c, c, c));
-  const std::string check = fmt::format("python3 '{}/apps/check_usda.py' '{}' 2 4 > '{}' 2>&1", SNH_TESTS_DIR, (out / "flesh.usda").string(),
-                                        (out / "usda.log").string());
-  const int code = std::system(check.c_str());
-  std::ifstream usda_log(out / "usda.log");
-  const std::string checked(std::istreambuf_iterator<char>(usda_log), {});
+  int code = 0;
+  const std::string checked = check_stage(out, 4, code);
   EXPECT_EQ(code, 0) << checked;
   EXPECT_NE(checked.find("flesh: " + std::to_string(m.triangles.cols()) + " faces"), std::string::npos) << checked;
   EXPECT_NE(checked.find("(extent, normals, primvars:st)"), std::string::npos) << checked;
@@ -273,18 +286,11 @@ TEST_F(BlenderCharacter, FleshFramesAndStageCarryTextureCoordinatesAndNormals) {
 // The stage of a character in centimetres, Z up (Blender's FBX with its own axes) says so.
 TEST_F(BlenderCharacter, TheStageSaysTheFilesUnitAndUpAxis) {
   const fs::path out = fs::temp_directory_path() / ("snh-test-blender-zup-" + std::to_string(::getpid()));
-  const json scene = {{"flesh", {{"model", (dir_ / "character_zup.fbx").string()}, {"resolution", 10}}},
-                      {"frames", 2},
-                      {"output", {{"dir", out.string()}}}};
-  std::ostringstream log;
-  const SceneResult r = run_scene(parse_scene(scene, dir_ / "scene.json"), log);
-  ASSERT_TRUE(r.all_converged) << log.str();
-  EXPECT_NE(log.str().find("model: units: the file says 1 unit = 1 cm"), std::string::npos) << log.str();
-  const std::string check = fmt::format("python3 '{}/apps/check_usda.py' '{}' 2 3 > '{}' 2>&1", SNH_TESTS_DIR, (out / "flesh.usda").string(),
-                                        (out / "usda.log").string());
-  const int code = std::system(check.c_str());
-  std::ifstream usda_log(out / "usda.log");
-  const std::string checked(std::istreambuf_iterator<char>(usda_log), {});
+  std::string log;
+  ASSERT_TRUE(run_flesh("character_zup.fbx", 2, out, log)) << log;
+  EXPECT_NE(log.find("model: units: the file says 1 unit = 1 cm"), std::string::npos) << log;
+  int code = 0;
+  const std::string checked = check_stage(out, 3, code);
   EXPECT_EQ(code, 0) << checked;
   EXPECT_NE(checked.find("stage: metersPerUnit 0.01, upAxis Z"), std::string::npos) << checked;
   std::ifstream stats_in(out / "stats.json");
