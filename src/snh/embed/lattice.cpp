@@ -736,13 +736,24 @@ bool segment_meets_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q, 
   return (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0);
 }
 
-Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution, int samples) {
+Lattice lattice_grid(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution) {
   if (resolution < 1) throw std::invalid_argument(fmt::format("lattice resolution must be >= 1, got {}", resolution));
+  if (F.cols() == 0) throw std::invalid_argument("lattice of a surface with no triangles");
+  check_triangles(V, F);
+  return empty_grid(V, F, resolution);
+}
+
+Lattice lattice_on_grid(const Lattice& grid, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int samples) {
   if (samples < 0 || samples > 16)
     throw std::invalid_argument(fmt::format("lattice samples per cube edge must be 0 .. 16, got {}", samples));
   if (F.cols() == 0) throw std::invalid_argument("lattice of a surface with no triangles");
+  if (!(grid.spacing > 0.0) || grid.dims.minCoeff() < 1)
+    throw std::invalid_argument("lattice on a grid with no cubes (use lattice_grid)");
   check_triangles(V, F);
-  Lattice L = empty_grid(V, F, resolution);
+  Lattice L;
+  L.origin = grid.origin;
+  L.spacing = grid.spacing;
+  L.dims = grid.dims;
   L.samples = samples;
   // Every cube a triangle meets (exact separating-axis tests), and every cube wholly inside.
   const std::vector<std::pair<int, int>> pairs = cube_triangle_pairs(L, V, F);
@@ -762,6 +773,12 @@ Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F
   for (std::size_t c = 0; c < keep.size(); ++c) keep[c] = keep[c] || std::abs(winding[c]) > 0.5f;
   build_cells(L, V, F, keep, winding);
   return L;
+}
+
+Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution, int samples) {
+  if (samples < 0 || samples > 16)
+    throw std::invalid_argument(fmt::format("lattice samples per cube edge must be 0 .. 16, got {}", samples));
+  return lattice_on_grid(lattice_grid(V, F, resolution), V, F, samples);
 }
 
 }  // namespace snh

@@ -68,6 +68,12 @@ struct Lattice {
 [[nodiscard]] Lattice lattice_for_surface(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution,
                                           int samples = 4);
 
+/// The grid lattice_for_surface would use (origin, spacing and dims only: no cells), so that several surfaces
+/// can be given lattices on one grid (a character's meshes kept apart, build_flesh). Throws as lattice_for_surface.
+[[nodiscard]] Lattice lattice_grid(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution);
+/// lattice_for_surface on a given grid (from lattice_grid): the triangles of F must lie within it.
+[[nodiscard]] Lattice lattice_on_grid(const Lattice& grid, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int samples = 4);
+
 /// Whether the segment [p, q] meets the triangle (a, b, c), touching included (a segment in the triangle's
 /// plane counts as not meeting it).
 [[nodiscard]] bool segment_meets_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& a,

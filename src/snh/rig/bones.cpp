@@ -63,12 +63,13 @@ std::vector<int> Binding::count_per_bone(int bones) const {
   return counts;
 }
 
-Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X) {
+Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X, const BoneAccess& may) {
   Binding out;
   for (Eigen::Index v = 0; v < X.cols(); ++v) {
     int best = -1;
     double depth = 0.0;  // radius − distance: > 0 inside; ties go to the first bone
     for (int b = 0; b < static_cast<int>(bones.size()); ++b) {
+      if (may && !may(v, b)) continue;
       const double d = bones[b].radius - segment_distance(bones[b].a, bones[b].b, X.col(v));
       if (d >= 0.0 && (best < 0 || d > depth)) best = b, depth = d;
     }
@@ -108,7 +109,7 @@ JointSplit split_at_joints(const Binding& binding, const std::vector<Bone>& bone
 }
 
 SoftBinding soft_bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X, double shell,
-                               const Binding& hard) {
+                               const Binding& hard, const BoneAccess& may) {
   SoftBinding out;
   if (!(shell > 0.0)) return out;
   std::vector<bool> held(static_cast<std::size_t>(X.cols()), false);
@@ -118,6 +119,7 @@ SoftBinding soft_bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matr
     int best = -1;
     double gap = 0.0;  // distance − radius: > 0 outside the capsule; ties go to the first bone
     for (int b = 0; b < static_cast<int>(bones.size()); ++b) {
+      if (may && !may(v, b)) continue;
       const double d = segment_distance(bones[b].a, bones[b].b, X.col(v)) - bones[b].radius;
       if (best < 0 || d < gap) best = b, gap = d;
     }

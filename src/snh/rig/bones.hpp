@@ -3,6 +3,7 @@
 // joints (a leaf joint with no child is a point), moving rigidly with the joint; the volume vertices inside
 // a bone's capsule are bound to it and follow it exactly (hard constraints, as HOBAK binds them); those in a
 // shell around the capsule may be bound softly, by springs toward where the bone carries them.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -52,8 +53,11 @@ struct Binding {
   std::vector<int> bone;    ///< the bone of each
   [[nodiscard]] std::vector<int> count_per_bone(int bones) const;
 };
+/// Which bones may hold which volume vertex (a character's meshes kept apart: a solid only by the bones of the
+/// joints its skin is weighted to); empty: every bone may hold every vertex.
+using BoneAccess = std::function<bool(Eigen::Index vertex, int bone)>;
 ///   X  3 by #V volume rest positions
-[[nodiscard]] Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X);
+[[nodiscard]] Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X, const BoneAccess& may = {});
 
 /// A binding split at the joints: `released` holds the bound vertices that share a cell with a vertex bound to
 /// a bone of another joint (such a cell spans a joint, and two rigid motions at once crush or tear it as the
@@ -73,7 +77,7 @@ struct SoftBinding : Binding {
   std::vector<double> weight;  ///< per vertex, in (0, 1]
 };
 [[nodiscard]] SoftBinding soft_bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X, double shell,
-                                             const Binding& hard);
+                                             const Binding& hard, const BoneAccess& may = {});
 /// `soft` with `more` added at weight w, in vertex order (a vertex in both keeps its entry in `soft`).
 [[nodiscard]] SoftBinding merge_soft(const SoftBinding& soft, const Binding& more, double w);
 
