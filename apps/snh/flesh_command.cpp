@@ -62,7 +62,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness;
     std::string joint_cells = to_string(FleshSpec{}.joint_cells);
     int threads = 0;
-    bool self_contact = false, list = false, no_split_cells = false;
+    bool self_contact = false, list = false, no_split_cells = false, join_meshes = false;
     double ground = 0.0, dhat = 0.0, contact_stiffness = 0.0, friction = 0.0;
   };
   auto o = std::make_shared<Options>();
@@ -103,6 +103,10 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-split-cells", o->no_split_cells,
                 "One lattice cell per cube even where the skin separates its material (parts closer than a cube, such as "
                 "two fingers, are then glued together there); by default such a cube gets a cell per piece");
+  cmd->add_flag("--join-meshes", o->join_meshes,
+                "Make all the model's meshes one solid; by default meshes whose skins share no joint are separate solids, "
+                "each held only by its own joints' bones and glued only at skin vertices they share, so parts that "
+                "overlap at rest (a hand sunk into a thigh) are not fused");
   cmd->add_flag("--self-contact", o->self_contact,
                 "Self-contact of the render surface (IPC barrier on the welded skin, embedded in the volume: no two of its "
                 "triangles pass through each other)");
@@ -162,6 +166,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     if (cmd->count("--soft-stiffness")) j["flesh"]["soft_binding"]["stiffness"] = o->soft_stiffness;
     j["flesh"]["joint_cells"] = o->joint_cells;
     if (o->no_split_cells) j["flesh"]["split_cells"] = false;
+    if (o->join_meshes) j["flesh"]["join_meshes"] = true;
     nlohmann::json material = {{"name", o->material}};
     if (cmd->count("--youngs") || cmd->count("--poisson")) {
       (void)o->params.lame();  // checks that they go together

@@ -36,6 +36,11 @@ struct LimbOptions {
   /// > 0: a second, still limb beside the first (the same cylinder moved by 2 radius + gap along z), skinned to
   /// a chain of its own (a second root joint "still" → "still_tip"), so the gap between them is that wide.
   double beside_gap = 0.0;
+  /// > 0: the still limb sunk this far into the first (its axis 2 radius − overlap away), in a mesh of its own.
+  double beside_overlap = 0.0;
+  /// The limb in two meshes that meet at the ring nearest the elbow (each with its own copy of that ring's
+  /// vertices): the upper one skinned wholly to the shoulder, the lower one to the elbow.
+  bool split_at_elbow = false;
   /// > 0: a box of side 0.2 without a skin, a child of the tip's node this far beyond it (a prop held at the tip).
   double rigid_cap = 0.0;
 };
@@ -44,11 +49,15 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
   std::vector<float> pos, weights;
   std::vector<std::uint16_t> joints;
   std::vector<std::uint32_t> idx;
+  const bool beside = o.beside_gap > 0.0 || o.beside_overlap > 0.0;
+  const double seam_x = 2.0 * ((o.along - 1) / 2) / (o.along - 1);  // the ring nearest the elbow (split_at_elbow)
+  bool lower = false;   // the vertices made now are the lower mesh's copy of the seam (split_at_elbow)
   bool still = false;   // the vertices made now belong to the still limb
   double offset = 0.0;  // its z offset
   auto vertex = [&](double x, double y, double z) {
     pos.insert(pos.end(), {float(x), float(y), float(z + offset)});
-    const double s = std::clamp((x - (1.0 - o.blend)) / (2.0 * o.blend), 0.0, 1.0);  // elbow's share
+    double s = std::clamp((x - (1.0 - o.blend)) / (2.0 * o.blend), 0.0, 1.0);  // elbow's share
+    if (o.split_at_elbow) s = x > seam_x + 1e-9 || lower ? 1.0 : 0.0;
     joints.insert(joints.end(), {std::uint16_t(still ? 3 : 0), 1, 0, 0});
     weights.insert(weights.end(), {float(still ? 1.0 : 1.0 - s), float(still ? 0.0 : s), 0.0f, 0.0f});
     return static_cast<std::uint32_t>(pos.size() / 3 - 1);
@@ -73,16 +82,45 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
     }
   };
   cylinder();
-  if (o.beside_gap > 0.0) {
+  std::size_t first_half = idx.size();  // the first mesh's triangles (two_meshes, beside_overlap, split_at_elbow)
+  if (beside) {
+    first_half = idx.size();
     still = true;
-    offset = 2.0 * o.radius + o.beside_gap;
+    offset = 2.0 * o.radius + o.beside_gap - o.beside_overlap;
     cylinder();
+  }
+  if (o.split_at_elbow) {
+    // Triangles between rings below the seam ring, and the shoulder's cap, stay in the first mesh; the others
+    // go to the second, on a copy of the seam ring's vertices.
+    const int seam = (o.along - 1) / 2;
+    lower = true;
+    std::vector<std::uint32_t> copy(static_cast<std::size_t>(o.around));
+    for (int k = 0; k < o.around; ++k) {
+      const double a = 2.0 * std::numbers::pi * k / o.around;
+      copy[static_cast<std::size_t>(k)] = vertex(seam_x, o.radius * std::cos(a), o.radius * std::sin(a));
+    }
+    std::vector<std::uint32_t> upper, rest;
+    const auto ring_of = [&](std::uint32_t v) { return v < static_cast<std::uint32_t>(o.along * o.around) ? int(v) / o.around : -1; };
+    for (std::size_t t = 0; t < idx.size(); t += 3) {
+      int top = -1;  // the highest ring a corner is on (caps' centres: none)
+      for (int c = 0; c < 3; ++c) top = std::max(top, ring_of(idx[t + c]));
+      const bool tip_cap = idx[t] == static_cast<std::uint32_t>(o.along * o.around + 1);
+      std::vector<std::uint32_t>& to = top <= seam && !tip_cap ? upper : rest;
+      for (int c = 0; c < 3; ++c) {
+        std::uint32_t v = idx[t + c];
+        if (&to == &rest && ring_of(v) == seam) v = copy[v % static_cast<std::uint32_t>(o.around)];
+        to.push_back(v);
+      }
+    }
+    idx = upper;
+    first_half = idx.size();
+    idx.insert(idx.end(), rest.begin(), rest.end());
   }
   if (o.inside_out)
     for (std::size_t t = 0; t + 2 < idx.size(); t += 3) std::swap(idx[t + 1], idx[t + 2]);
   // Inverse bind matrices (column-major): translations by −x of each joint.
   std::vector<float> ibm;
-  const double z_still = 2.0 * o.radius + o.beside_gap;
+  const double z_still = 2.0 * o.radius + o.beside_gap - o.beside_overlap;
   for (const auto& [x, z] : std::initializer_list<std::pair<double, double>>{{0.0, 0.0}, {1.0, 0.0}, {2.0, 0.0}, {0.0, z_still}, {2.0, z_still}}) {
     const float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, float(-x), 0, float(0.0 - z), 1};
     ibm.insert(ibm.end(), m, m + 16);
@@ -104,13 +142,15 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
   };
   const int a_pos = add(pos.data(), pos.size() * 4, 5126, pos.size() / 3, "VEC3", 34962);
   accessors[a_pos]["min"] = {0.0, -o.radius, -o.radius};
-  accessors[a_pos]["max"] = {2.0, o.radius, o.radius + (o.beside_gap > 0.0 ? z_still : 0.0)};
+  accessors[a_pos]["max"] = {2.0, o.radius, o.radius + (beside ? z_still : 0.0)};
   const int a_joints = add(joints.data(), joints.size() * 2, 5123, joints.size() / 4, "VEC4", 34962);
   const int a_weights = add(weights.data(), weights.size() * 4, 5126, weights.size() / 4, "VEC4", 34962);
-  const std::size_t first_half = o.two_meshes ? idx.size() / 6 * 3 : idx.size();
+  const bool second_mesh = o.two_meshes || o.beside_overlap > 0.0 || o.split_at_elbow;
+  if (o.two_meshes) first_half = idx.size() / 6 * 3;
+  if (!second_mesh) first_half = idx.size();
   const int a_idx = add(idx.data(), first_half * 4, 5125, first_half, "SCALAR", 34963);
-  const int a_idx2 = o.two_meshes ? add(idx.data() + first_half, (idx.size() - first_half) * 4, 5125, idx.size() - first_half, "SCALAR", 34963) : -1;
-  const int joint_count = o.beside_gap > 0.0 ? 5 : 3;
+  const int a_idx2 = second_mesh ? add(idx.data() + first_half, (idx.size() - first_half) * 4, 5125, idx.size() - first_half, "SCALAR", 34963) : -1;
+  const int joint_count = beside ? 5 : 3;
   const int a_ibm = add(ibm.data(), static_cast<std::size_t>(joint_count) * 64, 5126, static_cast<std::size_t>(joint_count), "MAT4", 0);
   const int a_t = add(times.data(), times.size() * 4, 5126, 2, "SCALAR", 0);
   accessors[a_t]["min"] = {0.0};
@@ -122,7 +162,7 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
   g["scene"] = 0;
   const bool armature = o.armature_scale != 1.0 || o.armature_degrees != 0.0;
   g["scenes"] = nlohmann::json::array({nlohmann::json{{"nodes", {0, armature ? 4 : 1}}}});
-  if (o.two_meshes) g["scenes"][0]["nodes"].push_back(armature ? 5 : 4);
+  if (second_mesh) g["scenes"][0]["nodes"].push_back(armature ? 5 : 4);
   g["nodes"] = nlohmann::json::array({nlohmann::json{{"name", "limb"}, {"mesh", 0}, {"skin", 0}},
                                       nlohmann::json{{"name", "shoulder"}, {"children", {2}}},
                                       nlohmann::json{{"name", "elbow"}, {"translation", {1.0, 0.0, 0.0}}, {"children", {3}}},
@@ -139,7 +179,7 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
   nlohmann::json primitive = {{"attributes", {{"POSITION", a_pos}, {"JOINTS_0", a_joints}, {"WEIGHTS_0", a_weights}}},
                                {"indices", a_idx}};
   g["meshes"] = nlohmann::json::array({nlohmann::json{{"primitives", nlohmann::json::array({primitive})}}});
-  if (o.two_meshes) {
+  if (second_mesh) {
     primitive["indices"] = a_idx2;
     g["meshes"].push_back({{"primitives", nlohmann::json::array({primitive})}});
     g["nodes"].push_back({{"name", "limb_far"}, {"mesh", 1}, {"skin", 0}});
@@ -159,7 +199,7 @@ inline void write_limb_gltf(const std::filesystem::path& path, const LimbOptions
     g["nodes"].push_back({{"name", "cap"}, {"mesh", g["meshes"].size() - 1}, {"translation", {o.rigid_cap, 0.0, 0.0}}});
     g["nodes"][3]["children"] = {cap};
   }
-  if (o.beside_gap > 0.0) {
+  if (beside) {
     const int first = static_cast<int>(g["nodes"].size());
     g["nodes"].push_back({{"name", "still"}, {"translation", {0.0, 0.0, z_still}}, {"children", {first + 1}}});
     g["nodes"].push_back({{"name", "still_tip"}, {"translation", {2.0, 0.0, 0.0}}});

@@ -43,6 +43,8 @@ class Character : public ::testing::Test {
     test::write_limb_gltf(dir_ / "still.gltf", {.still_clip_first = true});
     test::write_limb_gltf(dir_ / "beside.gltf", {.beside_gap = 0.04});
     test::write_limb_gltf(dir_ / "cap.gltf", {.rigid_cap = 0.6});
+    test::write_limb_gltf(dir_ / "sunk.gltf", {.beside_overlap = 0.2});
+    test::write_limb_gltf(dir_ / "seam.gltf", {.degrees = 45.0, .split_at_elbow = true});
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 
@@ -261,6 +263,72 @@ TEST_F(Character, PartsCloserThanACellAreNotGluedTogether) {
   const double apart = moved("beside"), glued = moved("glued");
   EXPECT_GT(glued, 0.05) << "glued, the still limb follows the bending one";
   EXPECT_LT(apart, 1e-3) << "apart, it stays (glued: " << glued << ")";
+}
+
+// Meshes whose skins share no joint are separate solids: a still limb sunk 0.2 into a bending one (a hand
+// resting in a thigh) is not dragged along, each held only by its own joints' bones. --join-meshes (the scene's
+// "join_meshes") makes one solid of them, and the bending limb then drags the still one.
+TEST_F(Character, MeshesWhoseSkinsShareNoJointOverlapWithoutFusing) {
+  std::string log;
+  json j = scene("sunk.gltf", "sunk", 16);
+  (void)run(j, &log);
+  EXPECT_NE(log.find("volume: 2 solids, kept apart where they overlap"), std::string::npos) << log;
+  EXPECT_EQ(stats("sunk")["solids"].size(), 2u);
+  j["flesh"]["join_meshes"] = true;
+  j["output"]["dir"] = (dir_ / "fused").string();
+  std::string fused_log;
+  (void)run(j, &fused_log);
+  EXPECT_EQ(fused_log.find("solids"), std::string::npos) << fused_log;
+  EXPECT_EQ(stats("fused")["solids"].size(), 1u);
+  // The still limb: the vertices skinned to its joint ("still", joint 3).
+  const RiggedModel m = read_model(dir_ / "sunk.gltf");
+  const auto moved = [&](const std::string& out) {
+    const Eigen::Matrix3Xd rest = read_surface(dir_ / out / "surface" / "000.obj").vertices;
+    const Eigen::Matrix3Xd last = read_surface(dir_ / out / "surface" / "004.obj").vertices;
+    double most = 0.0;
+    int still = 0;
+    for (Eigen::Index v = 0; v < rest.cols(); ++v)
+      if (m.joint_index(0, v) == 3 && m.joint_weight(0, v) == 1.0) most = std::max(most, (last.col(v) - rest.col(v)).norm()), ++still;
+    EXPECT_GT(still, 300);
+    return most;
+  };
+  const double apart = moved("sunk"), fused = moved("fused");
+  EXPECT_GT(fused, 0.05) << "one solid: the still limb follows the bending one";
+  EXPECT_LT(apart, 1e-3) << "two solids: it stays (fused: " << fused << ")";
+}
+
+// Two meshes that share no joint but meet along a seam (the limb cut at the elbow, the upper half skinned to the
+// shoulder, the lower to the elbow, each with its own copy of the seam's ring) are glued at the seam: the skin
+// does not open there as the elbow bends, though skinning alone would tear it.
+TEST_F(Character, SolidsMeetingAtASeamAreGluedThere) {
+  std::string log;
+  (void)run(scene("seam.gltf", "seam", 16), &log);
+  const json st = stats("seam");
+  EXPECT_EQ(st["solids"].size(), 2u);
+  EXPECT_EQ(st["seam_vertices"].get<int>(), 16) << log;  // one ring of 16
+  const RiggedModel m = read_model(dir_ / "seam.gltf");
+  ASSERT_EQ(m.parts.size(), 2u);
+  const Eigen::Matrix3Xd last = read_surface(dir_ / "seam" / "surface" / "004.obj").vertices;
+  const Eigen::Matrix3Xd lbs = skin_vertices(m, m.skeleton.world(sample(m.clips[0], m.skeleton, 1.0)));
+  // The meshes share one vertex buffer: each lists all vertices; a seam vertex is one the first mesh's
+  // triangles use at the place of one the second mesh's triangles use.
+  std::vector<int> used_by(static_cast<std::size_t>(m.vertices.cols()), 0);
+  for (Eigen::Index t = 0; t < m.triangles.cols(); ++t)
+    for (int c = 0; c < 3; ++c)
+      used_by[static_cast<std::size_t>(m.triangles(c, t))] |= m.triangles(c, t) < m.parts[1].first_vertex ? 1 : 2;
+  double gap = 0.0, lbs_gap = 0.0;  // between the two copies of each seam vertex
+  int pairs = 0;
+  for (Eigen::Index a = 0; a < m.parts[1].first_vertex; ++a)
+    for (Eigen::Index b = m.parts[1].first_vertex; b < m.vertices.cols(); ++b)
+      if (used_by[static_cast<std::size_t>(a)] && used_by[static_cast<std::size_t>(b)] && m.joint_weight(0, a) != m.joint_weight(0, b) &&
+          (m.vertices.col(a) - m.vertices.col(b)).norm() < 1e-9) {
+        ++pairs;
+        gap = std::max(gap, (last.col(a) - last.col(b)).norm());
+        lbs_gap = std::max(lbs_gap, (lbs.col(a) - lbs.col(b)).norm());
+      }
+  EXPECT_EQ(pairs, 16);
+  EXPECT_GT(lbs_gap, 0.05) << "skinning tears the seam open";
+  EXPECT_LT(gap, 1e-9) << "the flesh keeps it closed";
 }
 
 // A mesh without a skin under a joint (a prop held 0.5 beyond the tip) is read as part of the character, bound

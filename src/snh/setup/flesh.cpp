@@ -1,7 +1,9 @@
 #include "snh/setup/flesh.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -31,31 +33,232 @@ int joint_named(const RiggedModel& model, const std::string& name, const std::st
   throw RigError(fmt::format("{}: the model {} has no joint \"{}\" (its joints: {})", where, model.source.string(), name, known));
 }
 
+/// A lattice per solid on one grid, their cells one after another in the volume.
+struct SolidLattices {
+  std::vector<Lattice> lattice;             ///< per solid
+  std::vector<std::vector<int>> vertex_of;  ///< per solid: the volume vertex of each of its lattice's vertices
+};
+
 /// The binding without the vertices at a split grid node (one of several vertices there) whose cells' material
 /// lies outside their bone's capsule: where two fingers share a cube, the copy of a node that belongs to the
 /// other finger's piece is not carried by this finger's bone.
-Binding keep_bound_material(const Binding& binding, const std::vector<Bone>& bones, const Lattice& lattice) {
-  std::vector<std::vector<int>> cells_of(static_cast<std::size_t>(lattice.mesh.vertex_count()));
-  for (Eigen::Index c = 0; c < lattice.mesh.cell_count(); ++c)
-    for (int k = 0; k < 8; ++k)
-      if (const int v = lattice.mesh.cells(k, c); lattice.copies[static_cast<std::size_t>(v)] > 1)
-        cells_of[static_cast<std::size_t>(v)].push_back(static_cast<int>(c));
+Binding keep_bound_material(const Binding& binding, const std::vector<Bone>& bones, const SolidLattices& lattices,
+                            Eigen::Index volume_vertices) {
+  std::vector<std::vector<std::pair<int, int>>> cells_of(static_cast<std::size_t>(volume_vertices));  // (solid, cell)
+  for (std::size_t s = 0; s < lattices.lattice.size(); ++s) {
+    const Lattice& L = lattices.lattice[s];
+    for (Eigen::Index c = 0; c < L.mesh.cell_count(); ++c)
+      for (int k = 0; k < 8; ++k)
+        if (const int v = L.mesh.cells(k, c); L.copies[static_cast<std::size_t>(v)] > 1)
+          cells_of[static_cast<std::size_t>(lattices.vertex_of[s][static_cast<std::size_t>(v)])].emplace_back(static_cast<int>(s),
+                                                                                                            static_cast<int>(c));
+  }
   Binding out;
   for (std::size_t i = 0; i < binding.vertex.size(); ++i) {
-    const int v = binding.vertex[i];
-    bool keep = lattice.copies[static_cast<std::size_t>(v)] <= 1;
+    const auto& cells = cells_of[static_cast<std::size_t>(binding.vertex[i])];
+    bool keep = cells.empty();
     const Bone& bone = bones[static_cast<std::size_t>(binding.bone[i])];
-    for (const int c : cells_of[static_cast<std::size_t>(v)]) {
-      const Eigen::Matrix3Xd samples = lattice.cell_samples(c);
+    for (const auto& [solid, c] : cells) {
+      const Eigen::Matrix3Xd samples = lattices.lattice[static_cast<std::size_t>(solid)].cell_samples(c);
       for (Eigen::Index k = 0; k < samples.cols() && !keep; ++k)
         keep = segment_distance(bone.a, bone.b, samples.col(k)) <= bone.radius;
       if (keep) break;
     }
     if (keep) {
-      out.vertex.push_back(v);
+      out.vertex.push_back(binding.vertex[i]);
       out.bone.push_back(binding.bone[i]);
     }
   }
+  return out;
+}
+
+/// Per model vertex whether a triangle uses it (meshes that share a vertex buffer list each other's vertices).
+std::vector<char> used_vertices(const RiggedModel& m) {
+  std::vector<char> used(static_cast<std::size_t>(m.vertices.cols()), 0);
+  for (Eigen::Index t = 0; t < m.triangles.cols(); ++t)
+    for (int c = 0; c < 3; ++c) used[static_cast<std::size_t>(m.triangles(c, t))] = 1;
+  return used;
+}
+
+/// The solid of each of the model's meshes (parts): meshes whose skins share a joint (a weight above zero) are
+/// one solid; the others are kept apart even where they overlap at rest, and glued only where they share skin
+/// vertices (build_solid_lattices).
+std::vector<int> solids_of_parts(const RiggedModel& m) {
+  const std::size_t parts = m.parts.size();
+  std::vector<int> parent(parts);
+  for (std::size_t i = 0; i < parts; ++i) parent[i] = static_cast<int>(i);
+  const auto root = [&](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
+    return i;
+  };
+  std::vector<int> part_of_joint(static_cast<std::size_t>(m.skeleton.size()), -1);
+  const std::vector<char> used = used_vertices(m);
+  for (std::size_t p = 0; p < parts; ++p)
+    for (Eigen::Index v = m.parts[p].first_vertex; v < m.parts[p].first_vertex + m.parts[p].vertices; ++v)
+      for (int k = 0; k < 4 && used[static_cast<std::size_t>(v)]; ++k)
+        if (m.joint_weight(k, v) > 0.0) {
+          int& first = part_of_joint[static_cast<std::size_t>(m.joint_index(k, v))];
+          if (first < 0) first = static_cast<int>(p);
+          const int a = root(first), b = root(static_cast<int>(p));
+          if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+        }
+  std::vector<int> solid(parts, -1), number(parts, -1);
+  int solids = 0;
+  for (std::size_t p = 0; p < parts; ++p) {
+    int& n = number[static_cast<std::size_t>(root(static_cast<int>(p)))];
+    if (n < 0) n = solids++;
+    solid[p] = n;
+  }
+  return solid;
+}
+
+/// Seams between solids: at a skin vertex (welded) of several solids, the corners of its model vertices' cells
+/// that sit at one grid node become one vertex. Returns each vertex's number after (vertices of the lattices one
+/// solid after another before), `kept` the count after, and `seams` the skin vertices glued.
+std::vector<int> glue_seams(const RiggedModel& m, const std::vector<Lattice>& lattices, const std::vector<int>& solid_of_vertex,
+                            const std::vector<std::vector<int>>& solids_of_weld, const Embedding& e, int& kept, int& seams) {
+  const auto vertices = static_cast<Eigen::Index>(solid_of_vertex.size());
+  std::vector<int> parent(static_cast<std::size_t>(vertices));
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+  const auto root = [&](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
+    return i;
+  };
+  std::vector<Eigen::Index> first_of_solid;
+  {
+    Eigen::Index n = 0;
+    for (const Lattice& L : lattices) first_of_solid.push_back(n), n += L.mesh.vertex_count();
+  }
+  const auto node_of = [&](int v) {  // the grid node of a volume vertex (before gluing)
+    const int s = solid_of_vertex[static_cast<std::size_t>(v)];
+    const Lattice& L = lattices[static_cast<std::size_t>(s)];
+    const Eigen::Vector3d g = L.grid_coordinates(L.mesh.vertices.col(v - first_of_solid[static_cast<std::size_t>(s)]));
+    return std::array<long, 3>{std::lround(g.x()), std::lround(g.y()), std::lround(g.z())};
+  };
+  std::vector<std::vector<Eigen::Index>> points_of_weld(static_cast<std::size_t>(m.surface_vertices.cols()));
+  for (Eigen::Index v = 0; v < m.vertices.cols(); ++v)
+    if (solids_of_weld[static_cast<std::size_t>(m.weld[static_cast<std::size_t>(v)])].size() > 1)
+      points_of_weld[static_cast<std::size_t>(m.weld[static_cast<std::size_t>(v)])].push_back(v);
+  seams = 0;
+  for (const std::vector<Eigen::Index>& at : points_of_weld) {
+    if (at.empty()) continue;
+    ++seams;
+    std::map<std::array<long, 3>, int> first_at_node;
+    for (const Eigen::Index p : at)
+      for (int k = 0; k < 8; ++k) {
+        const int v = e.vertex(k, p);
+        const auto [it, fresh] = first_at_node.emplace(node_of(v), v);
+        if (fresh) continue;
+        const int a = root(it->second), b = root(v);
+        if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+      }
+  }
+  std::vector<int> renumber(static_cast<std::size_t>(vertices), -1);
+  kept = 0;
+  for (Eigen::Index v = 0; v < vertices; ++v)
+    if (root(static_cast<int>(v)) == v) renumber[static_cast<std::size_t>(v)] = kept++;
+  for (Eigen::Index v = 0; v < vertices; ++v) renumber[static_cast<std::size_t>(v)] = renumber[static_cast<std::size_t>(root(static_cast<int>(v)))];
+  return renumber;
+}
+
+/// The flesh's volume, embedding and solids from a lattice per solid (solid_of_part: one per mesh) on one grid.
+/// Where two solids share a skin vertex (a seam welded by position), the grid nodes of the cells embedding it
+/// are one vertex for both, so the solids are glued along their seams and nowhere else.
+SolidLattices build_solid_lattices(Flesh& f, const std::vector<int>& solid_of_part, int samples) {
+  const RiggedModel& m = f.model;
+  const int solids = solid_of_part.empty() ? 0 : *std::max_element(solid_of_part.begin(), solid_of_part.end()) + 1;
+  std::vector<int> solid_of_point(static_cast<std::size_t>(m.vertices.cols()), -1);
+  std::vector<std::vector<int>> solids_of_weld(static_cast<std::size_t>(m.surface_vertices.cols()));
+  f.solids.assign(static_cast<std::size_t>(solids), std::string());
+  // A vertex its mesh's triangles use is its mesh's solid's; one they do not use (meshes sharing a vertex
+  // buffer list each other's vertices) goes with the solid of a used vertex at its place, if any.
+  const std::vector<char> used = used_vertices(m);
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t p = 0; p < m.parts.size(); ++p) {
+      const int s = solid_of_part[p];
+      if (pass == 0) {
+        std::string& name = f.solids[static_cast<std::size_t>(s)];
+        name += (name.empty() ? "" : " + ") + m.parts[p].name;
+      }
+      for (Eigen::Index v = m.parts[p].first_vertex; v < m.parts[p].first_vertex + m.parts[p].vertices; ++v) {
+        if ((pass == 0) != (used[static_cast<std::size_t>(v)] != 0)) continue;
+        std::vector<int>& at = solids_of_weld[static_cast<std::size_t>(m.weld[static_cast<std::size_t>(v)])];
+        solid_of_point[static_cast<std::size_t>(v)] = pass == 1 && !at.empty() ? at.front() : s;
+        if (at.empty() || (pass == 0 && std::find(at.begin(), at.end(), s) == at.end())) at.push_back(s);
+      }
+    }
+  f.solid_of_point = solid_of_point;
+  for (const int s : solid_of_point)
+    if (s < 0) throw std::logic_error("build_flesh: a model vertex in no mesh");
+  const Lattice grid = lattice_grid(m.surface_vertices, m.surface_triangles, f.resolution);
+  SolidLattices out;
+  // Each solid's lattice, its vertices numbered one solid after another (before the seams are glued).
+  Embedding e;
+  e.cell.assign(static_cast<std::size_t>(m.vertices.cols()), -1);
+  e.vertex.resize(8, m.vertices.cols());
+  e.weight.resize(8, m.vertices.cols());
+  f.split_cubes = 0;
+  f.copied_vertices = 0;
+  Eigen::Index vertices = 0, cells = 0;
+  std::vector<int> solid_of_vertex;
+  for (int s = 0; s < solids; ++s) {
+    std::vector<Eigen::Index> triangles, points;
+    for (Eigen::Index t = 0; t < m.surface_triangles.cols(); ++t) {
+      bool in = true;  // a triangle is the solid's when all its corners are (a seam's triangles: both solids')
+      for (int c = 0; c < 3 && in; ++c) {
+        const std::vector<int>& at = solids_of_weld[static_cast<std::size_t>(m.surface_triangles(c, t))];
+        in = std::find(at.begin(), at.end(), s) != at.end();
+      }
+      if (in) triangles.push_back(t);
+    }
+    for (Eigen::Index v = 0; v < m.vertices.cols(); ++v)
+      if (solid_of_point[static_cast<std::size_t>(v)] == s) points.push_back(v);
+    if (triangles.empty())
+      throw RigError(fmt::format("{}: the meshes {} keep no triangle once welded by position", m.source.string(),
+                                 f.solids[static_cast<std::size_t>(s)]));
+    const Eigen::Matrix3Xi F = m.surface_triangles(Eigen::all, triangles);
+    Lattice L = lattice_on_grid(grid, m.surface_vertices, F, samples);
+    std::vector<int> weld(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) weld[i] = m.weld[static_cast<std::size_t>(points[i])];
+    const Embedding here = embed_surface_in_lattice(L, m.surface_vertices, F, m.vertices(Eigen::all, points), weld);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      e.cell[static_cast<std::size_t>(points[i])] = here.cell[i] + static_cast<int>(cells);
+      e.vertex.col(points[i]) = here.vertex.col(static_cast<Eigen::Index>(i)).array() + static_cast<int>(vertices);
+      e.weight.col(points[i]) = here.weight.col(static_cast<Eigen::Index>(i));
+    }
+    f.split_cubes += L.split_cubes;
+    for (const int c : L.copies) f.copied_vertices += c > 1 ? 1 : 0;
+    solid_of_vertex.insert(solid_of_vertex.end(), static_cast<std::size_t>(L.mesh.vertex_count()), s);
+    vertices += L.mesh.vertex_count();
+    cells += L.mesh.cell_count();
+    out.lattice.push_back(std::move(L));
+  }
+  int kept = 0;
+  const std::vector<int> renumber = glue_seams(m, out.lattice, solid_of_vertex, solids_of_weld, e, kept, f.seam_vertices);
+  f.volume.type = CellType::hex8;
+  f.volume.vertices.resize(3, kept);
+  f.volume.cells.resize(8, cells);
+  f.solid_of_volume_vertex.assign(static_cast<std::size_t>(kept), -1);
+  Eigen::Index cell = 0, first = 0;
+  for (std::size_t s = 0; s < out.lattice.size(); ++s) {
+    const Lattice& L = out.lattice[s];
+    std::vector<int>& of = out.vertex_of.emplace_back(static_cast<std::size_t>(L.mesh.vertex_count()));
+    for (Eigen::Index v = 0; v < L.mesh.vertex_count(); ++v) {
+      const int g = renumber[static_cast<std::size_t>(first + v)];
+      of[static_cast<std::size_t>(v)] = g;
+      f.volume.vertices.col(g) = L.mesh.vertices.col(v);
+      if (f.solid_of_volume_vertex[static_cast<std::size_t>(g)] < 0) f.solid_of_volume_vertex[static_cast<std::size_t>(g)] = static_cast<int>(s);
+    }
+    for (Eigen::Index c = 0; c < L.mesh.cell_count(); ++c, ++cell)
+      for (int k = 0; k < 8; ++k) f.volume.cells(k, cell) = of[static_cast<std::size_t>(L.mesh.cells(k, c))];
+    first += L.mesh.vertex_count();
+  }
+  for (Eigen::Index p = 0; p < e.vertex.cols(); ++p)
+    for (int k = 0; k < 8; ++k) e.vertex(k, p) = renumber[static_cast<std::size_t>(e.vertex(k, p))];
+  f.embedding = std::move(e);
+  f.cell_size = grid.spacing;
+  f.volume_of_cells = static_cast<double>(f.volume.cell_count()) * std::pow(grid.spacing, 3);
+  if (solids <= 1) f.solid_of_volume_vertex.clear();
   return out;
 }
 
@@ -249,18 +452,11 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     f.resolution = flesh_resolution(f.bones, reach, m.surface_vertices, f.surface_volume, f.resolution_reason);
   }
 
-  std::unique_ptr<Lattice> split_lattice;  // the lattice, where a cube is split into pieces
+  SolidLattices lattices;  // the lattice of each solid, where a cube is split into pieces
   if (spec.volume == FleshVolume::lattice) {
-    const Lattice lattice = lattice_for_surface(m.surface_vertices, m.surface_triangles, f.resolution,
-                                                 spec.split_cells ? 4 : 0);
-    f.volume = lattice.mesh;
-    f.cell_size = lattice.spacing;
-    f.volume_of_cells = static_cast<double>(f.volume.cell_count()) * std::pow(lattice.spacing, 3);
-    f.embedding = embed_surface_in_lattice(lattice, m.surface_vertices, m.surface_triangles, m.vertices, m.weld);
-    f.split_cubes = lattice.split_cubes;
-    f.copied_vertices = 0;
-    for (const int c : lattice.copies) f.copied_vertices += c > 1 ? 1 : 0;
-    split_lattice = f.copied_vertices > 0 ? std::make_unique<Lattice>(lattice) : nullptr;
+    lattices = build_solid_lattices(f, spec.join_meshes ? std::vector<int>(m.parts.size(), 0) : solids_of_parts(m),
+                                    spec.split_cells ? 4 : 0);
+    if (f.copied_vertices == 0) lattices = {};
   } else {
     f.cell_size = longest / f.resolution;
     // No tet larger than a sixth of a cube of the lattice's size (the five or six tets a cube splits into).
@@ -279,8 +475,21 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     for (std::size_t b = 0; b < f.bones.size(); ++b)
       if (f.bones[b].joint == j) f.bones[b].radius = r.radius, radius_given[b] = true;
   }
-  f.binding = bind_to_bones(f.bones, f.volume.vertices);
-  if (split_lattice) f.binding = keep_bound_material(f.binding, f.bones, *split_lattice);
+  // Where meshes are kept apart, a solid is held only by the bones of the joints its skin is weighted to.
+  std::vector<std::vector<char>> solid_has_joint;
+  if (!f.solid_of_volume_vertex.empty()) {
+    solid_has_joint.assign(f.solids.size(), std::vector<char>(static_cast<std::size_t>(m.skeleton.size()), 0));
+    for (Eigen::Index v = 0; v < m.vertices.cols(); ++v)
+      for (int k = 0; k < 4; ++k)
+        if (m.joint_weight(k, v) > 0.0)
+          solid_has_joint[static_cast<std::size_t>(f.solid_of_point[static_cast<std::size_t>(v)])][static_cast<std::size_t>(m.joint_index(k, v))] = 1;
+  }
+  const BoneAccess may = solid_has_joint.empty() ? BoneAccess{} : [&](Eigen::Index v, int b) {
+    return solid_has_joint[static_cast<std::size_t>(f.solid_of_volume_vertex[static_cast<std::size_t>(v)])]
+                          [static_cast<std::size_t>(f.bones[static_cast<std::size_t>(b)].joint)] != 0;
+  };
+  f.binding = bind_to_bones(f.bones, f.volume.vertices, may);
+  if (!lattices.lattice.empty()) f.binding = keep_bound_material(f.binding, f.bones, lattices, f.volume.vertex_count());
   if (!f.binding.vertex.empty()) f.free_parts = bind_free_parts(f);
   f.bound_per_bone = f.binding.count_per_bone(static_cast<int>(f.bones.size()));
   for (std::size_t b = 0; b < f.bones.size(); ++b)
@@ -292,7 +501,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
     throw std::invalid_argument(fmt::format("{}: no volume vertex lies inside a bone's capsule (cells are {:.3g} wide): raise the "
                                             "resolution or set bone radii",
                                             where, f.cell_size));
-  if (spec.soft_shell > 0.0) f.soft = soft_bind_to_bones(f.bones, f.volume.vertices, spec.soft_shell, f.binding);
+  if (spec.soft_shell > 0.0) f.soft = soft_bind_to_bones(f.bones, f.volume.vertices, spec.soft_shell, f.binding, may);
   if (spec.joint_cells != JointCells::hard) {
     JointSplit split = split_at_joints(f.binding, f.bones, f.volume.cells, f.volume.vertex_count());
     f.binding = std::move(split.kept);
@@ -332,10 +541,20 @@ std::function<void(double, std::vector<Eigen::Matrix<double, 3, 4>>&)> flesh_car
   const Eigen::Index n = X.cols();
   auto joints = std::make_shared<Eigen::Matrix4Xi>(4, n);
   auto weights = std::make_shared<Eigen::Matrix4Xd>(4, n);
+  // Where meshes are kept apart, the nearest model vertex of the volume vertex's own solid.
+  const std::vector<int>& solid = flesh->solid_of_volume_vertex;
+  const std::vector<int>& solid_of_point = flesh->solid_of_point;
 #pragma omp parallel for schedule(static)
   for (Eigen::Index v = 0; v < n; ++v) {
     Eigen::Index nearest = 0;
-    (S.colwise() - X.col(v)).colwise().squaredNorm().minCoeff(&nearest);
+    if (solid.empty()) {
+      (S.colwise() - X.col(v)).colwise().squaredNorm().minCoeff(&nearest);
+    } else {
+      double best = std::numeric_limits<double>::infinity();
+      for (Eigen::Index p = 0; p < S.cols(); ++p)
+        if (solid_of_point[static_cast<std::size_t>(p)] == solid[static_cast<std::size_t>(v)])
+          if (const double d = (S.col(p) - X.col(v)).squaredNorm(); d < best) best = d, nearest = p;
+    }
     joints->col(v) = flesh->model.joint_index.col(nearest);
     weights->col(v) = flesh->model.joint_weight.col(nearest);
   }

@@ -71,6 +71,10 @@ struct FleshSpec {
   /// A lattice cube whose material the skin separates (fingers closer than a cube) becomes a cell per piece,
   /// joined only where the material is (the virtual node algorithm); false: one cell per cube, pieces glued.
   bool split_cells = true;
+  /// false: meshes whose skins share no joint and no vertex are separate solids, each held only by its own
+  /// joints' bones, so that parts overlapping at rest (a hand sunk into a thigh) are not fused; true: all the
+  /// meshes make one solid.
+  bool join_meshes = false;
   // Defaults of a flesh run (the paper's: nu = 0.488) where the scene or command gives none:
   static constexpr double youngs = 1e5, poisson = 0.488;  ///< Pa; with quasi-static bones only nu matters
   static constexpr double density = 1000.0;               ///< kg/m³ (dynamics)
@@ -92,6 +96,11 @@ struct Flesh {
   std::string resolution_reason;             ///< why this resolution (one clause for the header)
   int split_cubes = 0;                       ///< lattice cubes the surface splits into pieces (a cell per piece)
   int copied_vertices = 0;                   ///< vertices at a grid node with more than one (the split cubes' nodes)
+  /// The solids the meshes make (lattice): per solid its meshes' names, joined by " + " (one: all in one).
+  std::vector<std::string> solids;
+  std::vector<int> solid_of_point;           ///< per model vertex its solid (lattice)
+  std::vector<int> solid_of_volume_vertex;   ///< per volume vertex its solid (a seam's: the first); empty when one solid
+  int seam_vertices = 0;                     ///< skin vertices (welded) shared by two solids: glued there
   double volume_of_cells = 0.0;              ///< the volume mesh's rest volume
   double surface_volume = 0.0;               ///< enclosed by the render surface at rest (its magnitude; for an
                                              ///< open surface the volume its triangles and the origin span)

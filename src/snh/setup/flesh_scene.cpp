@@ -44,6 +44,9 @@ void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& setting
   settings["split_cells"] = spec.split_cells;
   settings["split_cubes"] = flesh.split_cubes;
   settings["copied_vertices"] = flesh.copied_vertices;
+  settings["join_meshes"] = spec.join_meshes;
+  settings["solids"] = flesh.solids;
+  settings["seam_vertices"] = flesh.seam_vertices;
   settings["surface_volume"] = flesh.surface_volume;
   settings["bones"] = bones;
   settings["joint_cells"] = to_string(spec.joint_cells);
@@ -110,6 +113,13 @@ void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream&
     o << fmt::format("volume: the skin separates material closer than a cube ({} cubes split into a cell per piece); {} vertices "
                      "at shared grid nodes keep the parts apart, so they are not glued together\n",
                      flesh.split_cubes, flesh.copied_vertices);
+  if (flesh.solids.size() > 1) {
+    std::string names;
+    for (std::size_t i = 0; i < flesh.solids.size(); ++i) names += (i ? "; " : "") + flesh.solids[i];
+    o << fmt::format("volume: {} solids, kept apart where they overlap and each held by its own joints' bones (their skins share "
+                     "no joint; --join-meshes makes one), glued at {} skin vertices they share: {}\n",
+                     flesh.solids.size(), flesh.seam_vertices, names);
+  }
   if (const std::string bind = describe(flesh.bind); !bind.empty()) o << bind << "\n";
   std::string counts;
   for (std::size_t b = 0; b < flesh.bones.size(); ++b)

@@ -96,6 +96,7 @@ std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& sou
   const std::string joints = k.choice("joint_cells", to_string(s.joint_cells), {"soft", "free", "hard"});
   s.joint_cells = joints == "soft" ? JointCells::soft : joints == "free" ? JointCells::free : JointCells::hard;
   s.split_cells = k.boolean("split_cells", s.split_cells);
+  s.join_meshes = k.boolean("join_meshes", s.join_meshes);
   s.fps = k.positive("fps", s.fps);
   if (s.fps > 1e6) k.fail(fmt::format("must be at most 1e6 frames per second, got {:g}", s.fps), "fps");
   if (const json* soft = k.get("soft_binding")) {
