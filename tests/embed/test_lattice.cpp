@@ -20,6 +20,7 @@
 #include "embed/surfaces.hpp"
 #include "snh/embed/embedding.hpp"
 #include "snh/embed/lattice.hpp"
+#include "snh/math/union_find.hpp"
 #include "snh/embed/winding_number.hpp"
 
 namespace snh {
@@ -476,18 +477,14 @@ Surface join(const Surface& a, const Surface& b) {
 /// The cells' components when cells sharing a vertex are connected: the component of each cell.
 std::vector<int> components(const Lattice& L, int& count) {
   const auto n = static_cast<int>(L.mesh.cell_count());
-  std::vector<int> parent(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) parent[static_cast<std::size_t>(i)] = i;
-  const auto root = [&](int i) {
-    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
-    return i;
-  };
+  UnionFind groups(static_cast<std::size_t>(n));
+  const auto root = [&](int i) { return groups.root(i); };
   std::vector<int> cell_of_vertex(static_cast<std::size_t>(L.mesh.vertex_count()), -1);
   for (int c = 0; c < n; ++c)
     for (int k = 0; k < 8; ++k) {
       int& first = cell_of_vertex[static_cast<std::size_t>(L.mesh.cells(k, c))];
       if (first < 0) first = c;
-      else parent[static_cast<std::size_t>(root(c))] = root(first);
+      else groups.join(c, first);
     }
   std::vector<int> id(static_cast<std::size_t>(n), -1), out(static_cast<std::size_t>(n));
   count = 0;

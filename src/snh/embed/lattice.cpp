@@ -15,6 +15,7 @@
 #include "snh/embed/winding_number.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/math/parallel.hpp"
+#include "snh/math/union_find.hpp"
 
 namespace snh {
 namespace {
@@ -172,25 +173,6 @@ std::vector<float> cube_windings(const Lattice& L, const Eigen::Matrix3Xd& V, co
   return out;
 }
 
-/// A small union-find over 0 .. n − 1.
-class Groups {
- public:
-  explicit Groups(int n) : parent_(static_cast<std::size_t>(n)) {
-    for (int i = 0; i < n; ++i) parent_[static_cast<std::size_t>(i)] = i;
-  }
-  int root(int i) {
-    while (parent_[static_cast<std::size_t>(i)] != i) i = parent_[static_cast<std::size_t>(i)] = parent_[static_cast<std::size_t>(parent_[static_cast<std::size_t>(i)])];
-    return i;
-  }
-  void join(int a, int b) {
-    a = root(a), b = root(b);
-    if (a != b) parent_[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-  }
-
- private:
-  std::vector<int> parent_;
-};
-
 /// What the pieces are made of: the surface in cube units, the kept and touched cubes, and the samples.
 struct PieceContext {
   const Lattice& L;
@@ -279,7 +261,7 @@ int find_pieces(const PieceContext& P, const Eigen::Matrix3Xd& V, int t, signed 
         if (abc[a] + 1 < s) visit(i, P.sample_index(abc + Eigen::Vector3i::Unit(a)));
     }
   };
-  Groups regions(n);
+  UnionFind regions(static_cast<std::size_t>(n));
   axis_pairs([&](int i, int k) {
     if (!P.blocked(t, position(i), position(k))) regions.join(i, k);
   });
@@ -312,7 +294,7 @@ int find_pieces(const PieceContext& P, const Eigen::Matrix3Xd& V, int t, signed 
   }
   // Pieces: inside samples joined through the solid, along the axes, then any two groups a segment joins
   // (material thinner than a sample's spacing, or running diagonally, leaves its samples apart along the axes).
-  Groups pieces(n);
+  UnionFind pieces(static_cast<std::size_t>(n));
   axis_pairs([&](int i, int k) {
     if (std::abs(winding[i]) <= 0.5f || std::abs(winding[k]) <= 0.5f) return;
     if (regions.root(i) == regions.root(k) || P.through_solid(t, -1, position(i), position(k), winding[i])) pieces.join(i, k);
@@ -479,7 +461,7 @@ template <class Above>
 void keep_slivers_to_one_part(const Lattice& L, const std::vector<int>& pieces_of, const std::vector<int>& kept, const Above& above,
                               FaceLinks& out) {
   const auto cells = static_cast<int>(L.cube_of_cell.size());
-  Groups parts(cells);
+  UnionFind parts(static_cast<std::size_t>(cells));
   const auto cell_of = [&](int cube, int piece) { return L.cell_at[static_cast<std::size_t>(cube)] + piece; };
   const auto sliver = [&](int cube) { return pieces_of[static_cast<std::size_t>(cube)] == 0; };
   // Parts through the links between cubes that are not slivers.
@@ -597,9 +579,9 @@ struct NodeCells {
 
 /// The groups of the cells at a node that are connected (through a face's links, or meeting along an edge or
 /// at a corner with nothing split nearby); each group's root.
-Groups group_at_node(const Lattice& L, const FaceLinks& F, const NodeCells& at) {
+UnionFind group_at_node(const Lattice& L, const FaceLinks& F, const NodeCells& at) {
   const int n = static_cast<int>(at.cell.size());
-  Groups groups(n);
+  UnionFind groups(static_cast<std::size_t>(n));
   for (int a = 0; a < n; ++a)
     for (int b = a + 1; b < n; ++b) {
       const int ba = at.bit[static_cast<std::size_t>(a)], bb = at.bit[static_cast<std::size_t>(b)];
@@ -674,7 +656,7 @@ void build_cells(Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& 
             L.mesh.cells(at.corner[static_cast<std::size_t>(a)], at.cell[static_cast<std::size_t>(a)]) = static_cast<int>(first_vertex);
           position.push_back(x);
         } else {
-          Groups groups = group_at_node(L, links, at);
+          UnionFind groups = group_at_node(L, links, at);
           vertex_of_root.assign(static_cast<std::size_t>(n), -1);
           for (int a = 0; a < n; ++a) {
             int& v = vertex_of_root[static_cast<std::size_t>(groups.root(a))];

@@ -17,6 +17,7 @@
 #include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
 #include "snh/io/surface_read.hpp"
+#include "snh/math/union_find.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/rig/skinning.hpp"
 
@@ -85,12 +86,7 @@ std::vector<char> used_vertices(const RiggedModel& m) {
 /// vertices (build_solid_lattices).
 std::vector<int> solids_of_parts(const RiggedModel& m) {
   const std::size_t parts = m.parts.size();
-  std::vector<int> parent(parts);
-  for (std::size_t i = 0; i < parts; ++i) parent[i] = static_cast<int>(i);
-  const auto root = [&](int i) {
-    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
-    return i;
-  };
+  UnionFind groups(parts);
   std::vector<int> part_of_joint(static_cast<std::size_t>(m.skeleton.size()), -1);
   const std::vector<char> used = used_vertices(m);
   for (std::size_t p = 0; p < parts; ++p)
@@ -99,13 +95,12 @@ std::vector<int> solids_of_parts(const RiggedModel& m) {
         if (m.joint_weight(k, v) > 0.0) {
           int& first = part_of_joint[static_cast<std::size_t>(m.joint_index(k, v))];
           if (first < 0) first = static_cast<int>(p);
-          const int a = root(first), b = root(static_cast<int>(p));
-          if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+          groups.join(first, static_cast<int>(p));
         }
   std::vector<int> solid(parts, -1), number(parts, -1);
   int solids = 0;
   for (std::size_t p = 0; p < parts; ++p) {
-    int& n = number[static_cast<std::size_t>(root(static_cast<int>(p)))];
+    int& n = number[static_cast<std::size_t>(groups.root(static_cast<int>(p)))];
     if (n < 0) n = solids++;
     solid[p] = n;
   }
@@ -118,12 +113,7 @@ std::vector<int> solids_of_parts(const RiggedModel& m) {
 std::vector<int> glue_seams(const RiggedModel& m, const std::vector<Lattice>& lattices, const std::vector<int>& solid_of_vertex,
                             const std::vector<std::vector<int>>& solids_of_weld, const Embedding& e, int& kept, int& seams) {
   const auto vertices = static_cast<Eigen::Index>(solid_of_vertex.size());
-  std::vector<int> parent(static_cast<std::size_t>(vertices));
-  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
-  const auto root = [&](int i) {
-    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
-    return i;
-  };
+  UnionFind groups(static_cast<std::size_t>(vertices));
   std::vector<Eigen::Index> first_of_solid;
   {
     Eigen::Index n = 0;
@@ -149,15 +139,14 @@ std::vector<int> glue_seams(const RiggedModel& m, const std::vector<Lattice>& la
         const int v = e.vertex(k, p);
         const auto [it, fresh] = first_at_node.emplace(node_of(v), v);
         if (fresh) continue;
-        const int a = root(it->second), b = root(v);
-        if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+        groups.join(it->second, v);
       }
   }
   std::vector<int> renumber(static_cast<std::size_t>(vertices), -1);
   kept = 0;
   for (Eigen::Index v = 0; v < vertices; ++v)
-    if (root(static_cast<int>(v)) == v) renumber[static_cast<std::size_t>(v)] = kept++;
-  for (Eigen::Index v = 0; v < vertices; ++v) renumber[static_cast<std::size_t>(v)] = renumber[static_cast<std::size_t>(root(static_cast<int>(v)))];
+    if (groups.root(static_cast<int>(v)) == v) renumber[static_cast<std::size_t>(v)] = kept++;
+  for (Eigen::Index v = 0; v < vertices; ++v) renumber[static_cast<std::size_t>(v)] = renumber[static_cast<std::size_t>(groups.root(static_cast<int>(v)))];
   return renumber;
 }
 
@@ -268,16 +257,11 @@ SolidLattices build_solid_lattices(Flesh& f, const std::vector<int>& solid_of_pa
 std::vector<std::string> bind_free_parts(Flesh& f) {
   const VolumeMesh& vol = f.volume;
   const auto n = static_cast<int>(vol.vertex_count());
-  std::vector<int> parent(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) parent[static_cast<std::size_t>(i)] = i;
-  const auto root = [&](int i) {
-    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
-    return i;
-  };
+  UnionFind groups(static_cast<std::size_t>(n));
+  const auto root = [&](int i) { return groups.root(i); };
   for (Eigen::Index c = 0; c < vol.cell_count(); ++c)
     for (Eigen::Index k = 1; k < vol.cells.rows(); ++k) {
-      const int a = root(vol.cells(0, c)), b = root(vol.cells(k, c));
-      if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+      groups.join(vol.cells(0, c), vol.cells(k, c));
     }
   std::vector<char> held(static_cast<std::size_t>(n), 0);
   for (const int v : f.binding.vertex) held[static_cast<std::size_t>(root(v))] = 1;
