@@ -15,6 +15,7 @@
 #include "run_command.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/rig/model.hpp"
+#include "snh/setup/flesh_scene.hpp"
 #include "snh/setup/scene_build.hpp"
 
 namespace snh::cli {
@@ -54,7 +55,7 @@ void list_model(const std::string& file, std::ostream& o) {
 void add_flesh_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::string model, animation, volume = "lattice", material = "stable_neo_hookean", out, solver = "auto";
-    int resolution = 0;
+    int resolution = 0, newton_iterations = kFleshNewtonIterations;
     double cell_size = 0.0;
     ParameterOptions params;
     bool quasi_static = false, dynamic = false, resume = false, keep_going = false, no_report = false, force = false;
@@ -133,6 +134,9 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(CLI::PositiveNumber);
   cmd->add_option("--out", o->out, "Output directory (default output/<model name>)")->check(non_empty_path());
   cmd->add_option("--solver", o->solver, "Linear solver (default auto: by size; see snh stretch --help)");
+  cmd->add_option("--newton-iterations", o->newton_iterations,
+                  "Newton iterations a frame may take before it counts as not converged (default 200)")
+      ->check(CLI::Range(1, 100000));
   cmd->add_flag("--resume", o->resume, "Continue a stopped run in the output directory from its last completed frame");
   cmd->add_flag("--keep-going", o->keep_going,
                 "Write a frame that does not converge (marked NOT CONVERGED in its line and in stats.json) and go on from it instead of stopping; the exit code is still 1");
@@ -193,6 +197,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
       j["integrator"] = "quasi_static";
     }
     j["solver"] = {{"linear", o->solver}};
+    if (cmd->count("--newton-iterations")) j["solver"]["max_iterations"] = o->newton_iterations;
     if (o->self_contact || ground) {
       j["contact"] = {{"self", o->self_contact}};
       if (cmd->count("--dhat")) j["contact"]["dhat"] = o->dhat;

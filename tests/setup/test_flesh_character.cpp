@@ -362,6 +362,23 @@ TEST_F(Character, AMeshWithoutASkinUnderAJointFollowsIt) {
   EXPECT_LT((last.middleCols(first, 8) - end.middleCols(first, 8)).cwiseAbs().maxCoeff(), 1e-3);
 }
 
+// A flesh frame may take 200 Newton iterations (a joint bent far needs over 100), the paper programs' scenes 50;
+// the scene's solver.max_iterations (snh flesh --newton-iterations) sets it, and the header and stats.json say it.
+TEST_F(Character, AFleshFrameMayTakeTwoHundredNewtonIterations) {
+  std::string log;
+  json j = scene("limb.gltf", "newton_default");
+  (void)run(j, &log);
+  EXPECT_EQ(stats("newton_default")["max_newton_iterations"].get<int>(), 200);
+  EXPECT_NE(log.find("or fails after 200 iterations"), std::string::npos) << log;
+  j["solver"] = {{"max_iterations", 1}};
+  j["output"]["dir"] = (dir_ / "newton_one").string();
+  std::ostringstream one;
+  const SceneResult r = run_scene(parse_scene(j, dir_ / "scene.json"), one);
+  EXPECT_EQ(stats("newton_one")["max_newton_iterations"].get<int>(), 1);
+  EXPECT_FALSE(r.all_converged) << one.str();
+  EXPECT_NE(one.str().find("no convergence in 1 Newton iterations"), std::string::npos) << one.str();
+}
+
 // The clip played by default is the first that lasts and moves: a one-key "bind" clip, as FBX conversions
 // write, is skipped.
 TEST_F(Character, AStillClipIsNotPlayedByDefault) {

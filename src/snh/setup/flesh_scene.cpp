@@ -230,6 +230,7 @@ void flesh_time(const Scene& s, const Flesh& flesh, double& end_time, int& frame
 NewtonOptions flesh_newton_options(const SolverSpec& solver, const Flesh& flesh, const Lame& lame) {
   const double h = flesh.cell_size;
   NewtonOptions o = solver.newton;
+  o.max_iterations = solver.max_iterations ? *solver.max_iterations : kFleshNewtonIterations;
   o.tolerance = solver.tolerance ? *solver.tolerance : 1e-6 * youngs_modulus(lame) * h * h;
   o.step_tolerance = solver.step_tolerance ? *solver.step_tolerance : o.tolerance / ((lame.lambda + 2.0 * lame.mu) * h);
   return o;

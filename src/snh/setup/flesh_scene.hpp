@@ -15,10 +15,15 @@ namespace snh {
 /// grid of 1 / fps from 0, up to the end time rounded up to a whole frame (which becomes the end time).
 /// Throws SceneError when that makes more than TimeSpec::max_frames.
 void flesh_time(const Scene& scene, const Flesh& flesh, double& end_time, int& frames);
+/// Newton iterations a flesh frame may take unless the scene's solver says: more than the paper programs' 50,
+/// for a joint bent far crushes cells that Newton then needs many iterations to settle (assimp's BCN_Epileptic
+/// needs up to 166 at its hip's deepest bend).
+inline constexpr int kFleshNewtonIterations = 200;
 /// Newton's stopping rule at the flesh's scale, unless the scene sets one: a force of 1e-6 of what a unit
 /// strain puts on a cell's face (E h², h the cell size), and the step rule derived from it through the
 /// stiffness the solve sees, (λ + 2μ) h: a Newton step under tolerance / ((λ + 2μ) h), the displacement that
-/// such a force moves a cell's vertex by (docs/solvers.md, "When a solve has converged").
+/// such a force moves a cell's vertex by (docs/solvers.md, "When a solve has converged"); at most
+/// kFleshNewtonIterations iterations.
 [[nodiscard]] NewtonOptions flesh_newton_options(const SolverSpec& solver, const Flesh& flesh, const Lame& lame);
 /// Contact's d̂ and κ, as given or the flesh's defaults (flesh_contact_dhat, flesh_contact_stiffness).
 [[nodiscard]] ContactParameters flesh_contact(const ContactSpec& contact, const Flesh& flesh, double youngs);

@@ -125,6 +125,9 @@ struct SolverSpec {
   /// `step_tolerance` (a length) the flesh's step rule. The build resolves both (scene_build.hpp).
   std::optional<double> tolerance;
   std::optional<double> step_tolerance;
+  /// Newton iterations per solve when given (also in newton.max_iterations); else the paper programs' 50, or
+  /// a flesh scene's 200 (a joint bent far can need over 100: flesh_newton_options).
+  std::optional<int> max_iterations;
   double force_fraction = 1e-6;
   /// Every other Newton option (the build sets tolerance and step_tolerance from the two above).
   NewtonOptions newton = [] {

@@ -23,7 +23,7 @@ std::string stopping_rule(const NewtonOptions& o) {
   if (o.step_tolerance > 0.0) rule += fmt::format("{}a step < {:.3g}", rule.empty() ? "" : " or ", o.step_tolerance);
   if (o.relative_step_tolerance > 0.0)
     rule += fmt::format("{}a step < {:.3g} of its motion", rule.empty() ? "" : " or ", o.relative_step_tolerance);
-  return "Newton stops at " + rule;
+  return fmt::format("Newton stops at {}, or fails after {} iterations", rule, o.max_iterations);
 }
 
 /// stats.json's description of the run: the scene's sections as built (every default resolved), what the
@@ -53,6 +53,7 @@ json scene_settings(const BuiltScene& b, const Simulation& sim) {
   j["tolerance"] = b.newton.tolerance;
   j["step_tolerance"] = b.newton.step_tolerance;
   j["relative_step_tolerance"] = b.newton.relative_step_tolerance;
+  j["max_newton_iterations"] = b.newton.max_iterations;
   j["vertices"] = mesh.vertex_count();
   j["cells"] = mesh.cell_count();
   if (s.contact.enabled) {

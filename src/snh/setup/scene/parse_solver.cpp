@@ -14,6 +14,7 @@ SolverSpec parse_solver(Keys& top) {
     if (const double step = k.non_negative("step_tolerance", 0.0); k.has("step_tolerance")) s.step_tolerance = step;
     s.newton.relative_step_tolerance = k.non_negative("relative_step_tolerance", s.newton.relative_step_tolerance);
     s.newton.max_iterations = static_cast<int>(k.integer("max_iterations", s.newton.max_iterations, 1, 100000));
+    if (k.has("max_iterations")) s.max_iterations = s.newton.max_iterations;
     s.newton.try_true_hessian = !k.boolean("projected_only", !s.newton.try_true_hessian);
     k.finish();
   }
