@@ -185,7 +185,7 @@ template <class Sees>
 int choose_piece(const Lattice& L, int cube, int first, const Eigen::Vector3d& p, Sees&& sees) {
   const int s = L.samples, n = s * s * s, slot = L.touched_slot(cube);
   if (slot < 0 || s == 0) return first;
-  const Eigen::Vector3i ijk(cube % L.dims.x(), (cube / L.dims.x()) % L.dims.y(), cube / (L.dims.x() * L.dims.y()));
+  const Eigen::Vector3i ijk = L.cube_ijk(cube);
   std::vector<std::pair<double, int>> order;  // (distance², sample)
   for (int i = 0; i < n; ++i)
     if (L.sample_piece[static_cast<std::size_t>(slot) * static_cast<std::size_t>(n) + static_cast<std::size_t>(i)] >= 0) {

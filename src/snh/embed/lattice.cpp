@@ -142,7 +142,8 @@ std::vector<float> cube_windings(const Lattice& L, const Eigen::Matrix3Xd& V, co
     while (!stack.empty()) {
       const int c = stack.back();
       stack.pop_back();
-      const int i = c % dims.x(), j = (c / dims.x()) % dims.y(), k = c / (dims.x() * dims.y());
+      const Eigen::Vector3i ijk = L.cube_ijk(c);
+      const int i = ijk.x(), j = ijk.y(), k = ijk.z();
       const std::array<std::array<int, 3>, 6> next = {
           {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}}};
       for (const auto& n : next) {
@@ -161,8 +162,7 @@ std::vector<float> cube_windings(const Lattice& L, const Eigen::Matrix3Xd& V, co
   for (int r = 0; r < regions; ++r) {
     errors.run(r, [&] {
       const int c = seed[static_cast<std::size_t>(r)];
-      const int i = c % dims.x(), j = (c / dims.x()) % dims.y(), k = c / (dims.x() * dims.y());
-      const Eigen::Vector3d centre = L.origin + L.spacing * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
+      const Eigen::Vector3d centre = L.origin + L.spacing * (L.cube_ijk(c).cast<double>() + Eigen::Vector3d::Constant(0.5));
       inside[static_cast<std::size_t>(r)] = static_cast<float>(winding_number(V, F, centre));
     });
   }
@@ -186,7 +186,7 @@ struct PieceContext {
     return cube.cast<double>() + (abc.cast<double>() + Eigen::Vector3d::Constant(0.5)) / s;
   }
   [[nodiscard]] Eigen::Vector3i cube_of(int c) const {
-    return {c % L.dims.x(), (c / L.dims.x()) % L.dims.y(), c / (L.dims.x() * L.dims.y())};
+    return L.cube_ijk(c);
   }
   [[nodiscard]] int sample_index(const Eigen::Vector3i& abc) const { return abc.x() + s * (abc.y() + s * abc.z()); }
   /// Whether the segment p → q (cube units) meets a triangle of touched slot t (t < 0: none).
@@ -480,7 +480,7 @@ void keep_slivers_to_one_part(const Lattice& L, const std::vector<int>& pieces_o
       std::size_t entry;
     };
     std::vector<Link> found;
-    const Eigen::Vector3i ijk(c % dims.x(), (c / dims.x()) % dims.y(), c / (dims.x() * dims.y()));
+    const Eigen::Vector3i ijk = L.cube_ijk(c);
     for (int a = 0; a < 3; ++a) {
       const int step = a == 0 ? 1 : a == 1 ? dims.x() : dims.x() * dims.y();
       if (const int d = above(c, a); d >= 0 && !sliver(d)) {
@@ -691,7 +691,7 @@ std::pair<int, int> Lattice::cells_of_cube(int cube) const {
 
 Eigen::Matrix3Xd Lattice::cell_samples(int cell) const {
   const int c = cube_of_cell[static_cast<std::size_t>(cell)], piece = piece_of_cell[static_cast<std::size_t>(cell)];
-  const Eigen::Vector3i cube(c % dims.x(), (c / dims.x()) % dims.y(), c / (dims.x() * dims.y()));
+  const Eigen::Vector3i cube = cube_ijk(c);
   const int s = std::max(samples, 1), n = s * s * s, slot = touched_slot(c);
   std::vector<Eigen::Vector3d> out;
   for (int i = 0; i < n; ++i) {

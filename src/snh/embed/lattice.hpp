@@ -38,6 +38,10 @@ struct Lattice {
   std::vector<int> triangle;
   int split_cubes = 0;                   ///< cubes with more than one cell
   [[nodiscard]] int cube_index(int i, int j, int k) const { return i + dims.x() * (j + dims.y() * k); }
+  /// The (i, j, k) of cube index c (cube_index's inverse).
+  [[nodiscard]] Eigen::Vector3i cube_ijk(int c) const {
+    return {c % dims.x(), (c / dims.x()) % dims.y(), c / (dims.x() * dims.y())};
+  }
   /// The slot of a cube in `touched`, or −1.
   [[nodiscard]] int touched_slot(int cube) const;
   /// The cells of cube `cube` (none: an empty range).
