@@ -217,6 +217,9 @@ SolidLattices build_solid_lattices(Flesh& f, const std::vector<int>& solid_of_pa
     }
     f.split_cubes += L.split_cubes;
     for (const int c : L.copies) f.copied_vertices += c > 1 ? 1 : 0;
+    // The skin embedded, the index over the whole grid is not needed (keep_bound_material asks only
+    // cell_samples): dropped, so that many solids do not hold a grid-sized array each.
+    std::vector<int>().swap(L.cell_at);
     solid_of_vertex.insert(solid_of_vertex.end(), static_cast<std::size_t>(L.mesh.vertex_count()), s);
     vertices += L.mesh.vertex_count();
     cells += L.mesh.cell_count();
