@@ -112,6 +112,13 @@ PY
   grep -q '^model: units: the file says 1 unit = 1 cm' "$work/cm.log" && ok || bad "cm: the header says the unit"
 fi
 
+# The options a character may need reach the run: --newton-iterations 1 stops the first frame that needs more
+# (exit 1, the limit in the header and stats.json), --join-meshes is written to the run's settings.
+"$SNH" flesh "$limb" --resolution 12 --newton-iterations 1 --join-meshes --no-report --out "$work/one" > "$work/one.log" 2>&1
+[ $? -eq 1 ] && grep -q 'or fails after 1 iterations' "$work/one.log" && grep -q 'no convergence in 1 Newton iterations' "$work/one.log" \
+  && grep -q '"max_newton_iterations": 1,' "$work/one/stats.json" && grep -q '"join_meshes": true' "$work/one/stats.json" \
+  && ok || bad "one: $(tail -3 "$work/one.log")"
+
 # Bad input: one line, exit code 2, no output directory.
 flesh_error() {  # NAME PATTERN ARGS...
   local name="$1" pattern="$2"
