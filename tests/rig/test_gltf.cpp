@@ -499,6 +499,18 @@ TEST_F(Gltf, MalformedFilesAreRefusedInOneLine) {
   const std::string hand = read_bytes(kHand);
   refuses(text("half.glb", hand.substr(0, hand.size() / 2)), "not a valid glTF binary");
   refuses(text("header.glb", hand.substr(0, 30)), "not a valid glTF binary");
+  // JSON nested 20 000 deep (40 KB) overflowed tinygltf's recursion: measured first and refused, as text and
+  // as a GLB's JSON chunk; 64 levels pass the check (and fail later, for what they lack).
+  const std::string deep = std::string(20000, '[') + std::string(20000, ']');
+  refuses(text("deep.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"extras\": " + deep + "}"), "nested deeper than 64 levels");
+  std::string chunk = "{\"asset\": {\"version\": \"2.0\"}, \"extras\": " + deep + "}";
+  while (chunk.size() % 4) chunk += ' ';
+  const auto u32 = [](std::uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+  refuses(text("deep.glb", "glTF" + u32(2) + u32(static_cast<std::uint32_t>(20 + chunk.size())) +
+                               u32(static_cast<std::uint32_t>(chunk.size())) + "JSON" + chunk),
+          "nested deeper than 64 levels");
+  refuses(text("shallow.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"extras\": " + std::string(62, '[') + std::string(62, ']') + "}"),
+          "no skinned mesh");
 
   const auto variant = [&](const std::string& stem, auto change) {
     Synth s;

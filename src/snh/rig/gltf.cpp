@@ -20,6 +20,7 @@
 #include <Eigen/SVD>
 #include <fmt/format.h>
 
+#include "snh/math/json_depth.hpp"
 #include "snh/rig/model_build.hpp"
 
 namespace snh {
@@ -50,6 +51,8 @@ bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, 
   return true;
 }
 
+constexpr std::size_t kMaxGltfDepth = 64;
+
 /// The file parsed by tinygltf: a GLB container if it starts with "glTF", else glTF JSON.
 tinygltf::Model load(const fs::path& path) {
   std::size_t size = 0;
@@ -64,6 +67,16 @@ tinygltf::Model load(const fs::path& path) {
     if (i == size || bytes[i] != '{') fail(path, "not glTF (neither a glTF binary nor a JSON object)");
   }
   if (size > std::numeric_limits<unsigned int>::max()) fail(path, "too large for tinygltf");
+  // tinygltf copies extras into nested values recursively: a file that nests thousands of arrays would
+  // overflow the stack. A glTF's own structure is a few levels deep; extras get room to spare.
+  std::string_view json_text(reinterpret_cast<const char*>(bytes.data()), size);
+  if (binary && size >= 20) {  // the first chunk of a GLB is its JSON: 12-byte header, then length and type
+    std::uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + 12, 4);
+    json_text = json_text.substr(20, std::min<std::size_t>(length, size - 20));
+  }
+  if (json_depth(json_text, kMaxGltfDepth) > kMaxGltfDepth)
+    fail(path, fmt::format("its JSON is nested deeper than {} levels (a glTF needs a handful)", kMaxGltfDepth));
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&ignore_image, nullptr);
   tinygltf::Model model;
