@@ -17,6 +17,24 @@ namespace snh::py {
 
 namespace pyb = pybind11;
 
+/// The caster of a bound class T that refuses an instance whose C++ object was never made: one that
+/// T.__new__(T) gave without __init__ (pybind11 would hand the methods uninitialized memory). Raises
+/// TypeError naming the class and how to make one. Each binding file specializes pybind11's caster for its
+/// classes with it (SNH_CHECKED_CASTER).
+template <class T>
+struct checked_caster : pyb::detail::type_caster_base<T> {
+  bool load(pyb::handle src, bool convert) {
+    if (src && pyb::detail::get_type_info(typeid(T)) && pyb::isinstance<T>(src)) {
+      auto* inst = reinterpret_cast<pyb::detail::instance*>(src.ptr());
+      if (!inst->get_value_and_holder().holder_constructed())
+        throw pyb::type_error("snh." + std::string(pyb::str(pyb::type::handle_of(src).attr("__qualname__"))) +
+                              ": this object was made by __new__ without __init__ (make one with snh.material(...) "
+                              "or snh.Simulation(...))");
+    }
+    return pyb::detail::type_caster_base<T>::load(src, convert);
+  }
+};
+
 /// A C-contiguous float64 array.
 using Doubles = pyb::array_t<double, pyb::array::c_style>;
 

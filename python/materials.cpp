@@ -37,6 +37,15 @@ struct PyMaterial {
   decltype(auto) visit(F&& f) const { return std::visit(std::forward<F>(f), m); }
 };
 
+}  // namespace
+}  // namespace snh::py
+namespace pybind11::detail {
+template <>
+struct type_caster<snh::py::PyMaterial> : snh::py::checked_caster<snh::py::PyMaterial> {};
+}  // namespace pybind11::detail
+namespace snh::py {
+namespace {
+
 /// Runs body(k) for every matrix, in parallel over a batch, without the GIL.
 template <class Body>
 void for_each(const Matrices& F, Body&& body) {

@@ -234,6 +234,15 @@ class PySimulation {
   std::vector<int> scatter_;
 };
 
+}  // namespace
+}  // namespace snh::py
+namespace pybind11::detail {
+template <>
+struct type_caster<snh::py::PySimulation> : snh::py::checked_caster<snh::py::PySimulation> {};
+}  // namespace pybind11::detail
+namespace snh::py {
+namespace {
+
 /// A scene from a path (its relative paths resolve against the file's directory) or from a dict (its JSON
 /// text; its relative paths resolve against base_dir, by default the working directory).
 Scene scene_of(const pyb::handle& obj, const std::optional<std::filesystem::path>& base_dir) {

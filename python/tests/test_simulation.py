@@ -352,3 +352,19 @@ def test_a_dicts_paths_resolve_against_base_dir(tmp_path, monkeypatch):
                          report=False)["final_surface"] is None
     with pytest.raises(ValueError, match="base_dir"):
         snh.run_scene(str(SOURCE / "scenes/hand_fist.json"), base_dir=tmp_path, out=tmp_path / "f", quiet=True)
+
+
+def test_objects_made_without_init_raise_type_error():
+    # Class.__new__(Class) gives an object whose C++ side was never made: every use raises TypeError (it used
+    # to hand uninitialized memory to the methods: a segmentation fault, SIGILL or garbage).
+    V, C, _ = snh.box("hex8", 2)
+    for use in (lambda: snh.Simulation.__new__(snh.Simulation).step(1.0),
+                lambda: snh.Simulation.__new__(snh.Simulation).positions,
+                lambda: snh.Simulation.__new__(snh.Simulation).time,
+                lambda: snh.Material.__new__(snh.Material).psi(np.eye(3)),
+                lambda: snh.Material.__new__(snh.Material).name,
+                lambda: snh.Simulation(V, C, snh.Material.__new__(snh.Material))):
+        with pytest.raises(TypeError, match="made by __new__ without __init__"):
+            use()
+    # Made as documented, the same calls work.
+    assert SNH.name == "stable_neo_hookean" and snh.Simulation(V, C, SNH).time == 0.0
