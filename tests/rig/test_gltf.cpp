@@ -5,6 +5,7 @@
 // files, each refused with one line naming the file.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -16,6 +17,7 @@
 #include <map>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "snh/io/base64.hpp"
@@ -533,6 +535,26 @@ TEST_F(Gltf, MalformedFilesAreRefusedInOneLine) {
   const fs::path external = write(dir_, "lost", Synth{}, Container::external);
   fs::remove(dir_ / "lost.bin");
   refuses(external, "not a valid glTF file");
+  // The files a glTF names are checked as the model is: a FIFO (which would block the open forever), a link to
+  // one, and a buffer over 1 GiB are refused at once, without being read.
+  ASSERT_EQ(::mkfifo((dir_ / "lost.bin").c_str(), 0600), 0);
+  refuses(external, "lost.bin: not a regular file");
+  fs::remove(dir_ / "lost.bin");
+  ASSERT_EQ(::mkfifo((dir_ / "fifo.bin").c_str(), 0600), 0);
+  fs::create_symlink(dir_ / "fifo.bin", dir_ / "lost.bin");
+  refuses(external, "lost.bin: not a regular file");
+  fs::remove(dir_ / "lost.bin");
+  std::ofstream(dir_ / "lost.bin").put('\0');
+  fs::resize_file(dir_ / "lost.bin", (std::uintmax_t{1} << 30) + 1);  // sparse
+  refuses(external, "lost.bin: too large");
+  // A GLB is measured by its header first: bytes after its end, or a file of zeros named .glb, are refused
+  // without reading the rest.
+  const fs::path padded = text("padded.glb", hand);
+  fs::resize_file(padded, hand.size() + (std::uintmax_t{1} << 28));
+  refuses(padded, fmt::format("its header says {} bytes, the file has {}", hand.size(), hand.size() + (std::uintmax_t{1} << 28)));
+  const fs::path zeros = text("zeros.glb", std::string(16, '\0'));
+  fs::resize_file(zeros, std::uintmax_t{1} << 28);
+  refuses(zeros, "not a glTF binary (it does not start with \"glTF\")");
 }
 
 }  // namespace

@@ -39,12 +39,59 @@ std::vector<unsigned char> read_file(const fs::path& path, std::size_t& size) {
   const std::uintmax_t n = check_file(path, "glTF");
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open the file");
+  // A GLB's header says its length: checked before the rest is read, so that a file of something else named
+  // .glb, or a GLB with hundreds of megabytes after its end, is refused without reading it whole.
+  unsigned char head[12] = {};
+  in.read(reinterpret_cast<char*>(head), 12);
+  const auto got = static_cast<std::uintmax_t>(in.gcount());
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (got >= 4 && std::memcmp(head, "glTF", 4) == 0) {
+    std::uint32_t length = 0;
+    if (got == 12) std::memcpy(&length, head + 8, 4);
+    if (got < 12 || length != n)
+      fail(path, fmt::format("not a valid glTF binary: its header says {} bytes, the file has {}", got < 12 ? 0 : length, n));
+  } else if (ext == ".glb") {
+    fail(path, "not a glTF binary (it does not start with \"glTF\")");
+  }
+  in.seekg(0);
   std::vector<unsigned char> bytes(static_cast<std::size_t>(n) + 16, 0);
   in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(n));
   if (static_cast<std::uintmax_t>(in.gcount()) != n)
     fail(path, fmt::format("cannot read the file (read {} of {} bytes)", in.gcount(), n));
   size = static_cast<std::size_t>(n);
   return bytes;
+}
+
+/// tinygltf's file access for the files a glTF names (external buffers and images), checked as the model file
+/// is: only a regular file (a FIFO would block the open forever, a device never end), of at most
+/// max_file_bytes, read no further than its size. Existence is asked without opening the file.
+bool resource_exists(const std::string& path, void*) {
+  std::error_code ec;
+  return fs::exists(fs::status(path, ec));
+}
+bool read_resource(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  std::string why;
+  std::uintmax_t n = 0;
+  if (!fs::exists(st)) why = "no such file";
+  else if (!fs::is_regular_file(st)) why = fs::is_directory(st) ? "a directory" : "not a regular file (a FIFO, device or socket)";
+  else if (n = fs::file_size(path, ec); ec) why = "cannot read its size";
+  else if (n > rig_build::max_file_bytes) why = fmt::format("too large ({} bytes; at most {})", n, rig_build::max_file_bytes);
+  if (why.empty()) {
+    std::ifstream in(path, std::ios::binary);
+    out->assign(static_cast<std::size_t>(n), 0);
+    if (n > 0) in.read(reinterpret_cast<char*>(out->data()), static_cast<std::streamsize>(n));
+    if (!in || static_cast<std::uintmax_t>(in.gcount()) != n) why = "cannot read it";
+  }
+  if (why.empty()) return true;
+  if (err) *err += path + ": " + why + "\n";
+  return false;
+}
+bool refuse_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (err) *err += "snh does not write glTF files\n";
+  return false;
 }
 
 bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
@@ -79,6 +126,7 @@ tinygltf::Model load(const fs::path& path) {
     fail(path, fmt::format("its JSON is nested deeper than {} levels (a glTF needs a handful)", kMaxGltfDepth));
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&ignore_image, nullptr);
+  loader.SetFsCallbacks(tinygltf::FsCallbacks{&resource_exists, &tinygltf::ExpandFilePath, &read_resource, &refuse_write, nullptr});
   tinygltf::Model model;
   std::string err, warn;
   bool ok = false;
