@@ -147,6 +147,10 @@ class PySimulation {
   pyb::dict step(std::optional<double> t_opt, bool check) {
     const double t = t_opt ? *t_opt : sim_->time() + (sim_->dynamic() ? sim_->setup().dt : 1.0);
     require(std::isfinite(t), fmt::format("t must be a finite number, got {}", t));
+    // Backward Euler steps forward by t − time: a time at or before the current one would advance the physics
+    // by dt while setting the clock back. (Quasi-statically t only sets the pins' targets: any t goes.)
+    require(!sim_->dynamic() || t > sim_->time(),
+            fmt::format("t must be after the current time {:g} for backward Euler, got {:g}", sim_->time(), t));
     // Ctrl-C: Python's handler only records the signal; Newton asks between iterations.
     NewtonOptions options = sim_->setup().newton;
     options.should_stop = [] { return PyErr_CheckSignals() != 0; };

@@ -368,3 +368,19 @@ def test_objects_made_without_init_raise_type_error():
             use()
     # Made as documented, the same calls work.
     assert SNH.name == "stable_neo_hookean" and snh.Simulation(V, C, SNH).time == 0.0
+
+
+def test_backward_euler_refuses_to_step_back_in_time():
+    # A dynamic step to a time at or before the current one used to report converged, advance the physics by dt
+    # and set the clock back: refused, the state untouched. Quasi-statically t only sets the pins: any t goes.
+    V, C, _ = snh.box("hex8", 2)
+    sim = snh.Simulation(V, C, SNH, integrator="backward_euler", dt=0.05, gravity=[0, -1, 0])
+    sim.step(0.05)
+    before = sim.positions.copy()
+    for t in (0.05, 0.0, -5.0):
+        with pytest.raises(ValueError, match="after the current time 0.05"):
+            sim.step(t)
+    assert sim.time == 0.05 and np.array_equal(sim.positions, before)
+    quasi = snh.Simulation(V, C, SNH, pinned=[0])
+    quasi.step(1.0)
+    assert quasi.step(0.5)["converged"] and quasi.time == 0.5
