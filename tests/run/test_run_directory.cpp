@@ -98,6 +98,30 @@ TEST(RunDirectory, ClearingRemovesOnlyWhatARunOfOursWrites) {
   fs::remove_all(d);
 }
 
+// Inside a flesh run's surface/ and lbs/ and the report's report/, only the files a run writes there go:
+// a user's notes, subdirectories and a directory named like a frame stay (they were all deleted before), and
+// a subdirectory left empty goes.
+TEST(RunDirectory, ClearingLeavesWhatIsNotOursInsideItsSubdirectories) {
+  const fs::path d = fresh_dir("clear_sub");
+  std::ofstream(d / "checkpoint.bin") << "x";
+  fs::create_directories(d / "surface" / "sub");
+  fs::create_directories(d / "lbs" / "003.obj");
+  fs::create_directories(d / "report" / "frames");
+  for (const char* f : {"surface/000.obj", "surface/001.obj.tmp.9", "surface/NOTES.txt", "surface/sub/000.obj", "lbs/000.obj",
+                        "lbs/003.obj/inside.txt", "report/data.js", "report/snh-report.js", "report/frames/000.js"})
+    std::ofstream(d / f) << "x";
+  const RunDirectoryLock lock(d);
+  EXPECT_EQ(clear_previous_run(d, lock), 7);  // checkpoint.bin, 2 in surface/, 1 in lbs/, 3 in report/
+  EXPECT_TRUE(fs::exists(d / "surface" / "NOTES.txt"));
+  EXPECT_TRUE(fs::exists(d / "surface" / "sub" / "000.obj"));
+  EXPECT_FALSE(fs::exists(d / "surface" / "000.obj"));
+  EXPECT_FALSE(fs::exists(d / "surface" / "001.obj.tmp.9"));
+  EXPECT_TRUE(fs::exists(d / "lbs" / "003.obj" / "inside.txt"));
+  EXPECT_FALSE(fs::exists(d / "lbs" / "000.obj"));
+  EXPECT_FALSE(fs::exists(d / "report")) << "report/ held only ours: removed, frames/ with it";
+  fs::remove_all(d);
+}
+
 TEST(RunDirectory, ForceWritesIntoADirectoryOfSomeoneElse) {
   const fs::path d = fresh_dir("force");
   std::ofstream(d / "notes.txt") << "keep";

@@ -92,16 +92,42 @@ void refuse_foreign_directory(const fs::path& dir, const std::string& hint) {
                                   dir.string(), first, hint));
 }
 
+namespace {
+
+/// The files of ours in `dir` whose names `ours` matches (regular files and links, not directories), and in the
+/// subdirectories `subdirs` names, theirs by the same rule, recursively; appended to `doomed`, each directory
+/// after its contents (removed only if nothing else is left in it).
+void files_of_ours(const fs::path& dir, const std::regex& ours,
+                   const std::vector<std::pair<std::string, const std::regex*>>& subdirs, std::vector<fs::path>& doomed,
+                   std::vector<fs::path>& dirs, std::error_code& ec) {
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    const bool directory = e.is_directory(ec) && !e.is_symlink(ec);
+    if (directory) {
+      for (const auto& [sub, rule] : subdirs)
+        if (name == sub) {
+          files_of_ours(e.path(), *rule, sub == "report" ? std::vector<std::pair<std::string, const std::regex*>>{{"frames", rule}}
+                                                         : std::vector<std::pair<std::string, const std::regex*>>{},
+                        doomed, dirs, ec);
+          dirs.push_back(e.path());
+        }
+    } else if (std::regex_match(name, ours)) {
+      doomed.push_back(e.path());
+    }
+  }
+}
+
+}  // namespace
+
 int clear_previous_run(const fs::path& dir, const RunDirectoryLock& lock) {
   static const std::regex ours(R"((?:\d{3,}\.(?:obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html|flesh\.usda|bones\.json))"
                                R"((?:\.tmp\.\d+)?|\.snh-write-test\.\d+)");
-  std::vector<fs::path> doomed;
+  // Inside surface/ and lbs/ only NNN.obj; inside report/ (and report/frames/) only its scripts.
+  static const std::regex frames(R"(\d{3,}\.obj(?:\.tmp\.\d+)?)");
+  static const std::regex report(R"((?:data|snh-report|\d{3,})\.js(?:\.tmp\.\d+)?)");
+  std::vector<fs::path> doomed, dirs;
   std::error_code ec;
-  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    if ((name == "report" || name == "surface" || name == "lbs") && e.is_directory(ec)) doomed.push_back(e.path());
-    else if (std::regex_match(name, ours) && !e.is_directory(ec)) doomed.push_back(e.path());
-  }
+  files_of_ours(dir, ours, {{"surface", &frames}, {"lbs", &frames}, {"report", &report}}, doomed, dirs, ec);
   if (ec) throw WriteError(fmt::format("cannot list {}: {}", dir.string(), ec.message()));
   // Files with our names in a directory that shows no run of ours are someone else's: refuse to replace them.
   if (!doomed.empty() && !lock.found_earlier() && !lock.forced() && !holds_a_run_of_ours(dir))
@@ -109,9 +135,11 @@ int clear_previous_run(const fs::path& dir, const RunDirectoryLock& lock) {
                                  "directory",
                                  dir.string(), doomed.front().filename().string()));
   for (const fs::path& p : doomed) {
-    fs::remove_all(p, ec);
+    fs::remove(p, ec);
     if (ec) throw WriteError(fmt::format("cannot remove {} (left by an earlier run): {}", p.string(), ec.message()));
   }
+  for (const fs::path& d : dirs)  // deepest first; a directory that holds anything of someone else's stays
+    if (fs::is_empty(d, ec)) fs::remove(d, ec);
   return static_cast<int>(doomed.size());
 }
 
