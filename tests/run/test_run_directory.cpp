@@ -99,8 +99,8 @@ TEST(RunDirectory, ClearingRemovesOnlyWhatARunOfOursWrites) {
 }
 
 // Inside a flesh run's surface/ and lbs/ and the report's report/, only the files a run writes there go:
-// a user's notes, subdirectories and a directory named like a frame stay (they were all deleted before), and
-// a subdirectory left empty goes.
+// a user's notes and subdirectories stay (they were all deleted before), a subdirectory left empty goes, and
+// a directory or FIFO under one of our names is refused before anything is removed.
 TEST(RunDirectory, ClearingLeavesWhatIsNotOursInsideItsSubdirectories) {
   const fs::path d = fresh_dir("clear_sub");
   std::ofstream(d / "checkpoint.bin") << "x";
@@ -111,14 +111,22 @@ TEST(RunDirectory, ClearingLeavesWhatIsNotOursInsideItsSubdirectories) {
                         "lbs/003.obj/inside.txt", "report/data.js", "report/snh-report.js", "report/frames/000.js"})
     std::ofstream(d / f) << "x";
   const RunDirectoryLock lock(d);
+  // A directory where a frame goes is not ours: refused before anything is removed.
+  EXPECT_NE(error_of([&] { (void)clear_previous_run(d, lock); }).find("lbs/003.obj: is a directory"), std::string::npos);
+  EXPECT_TRUE(fs::exists(d / "surface" / "000.obj"));
+  fs::rename(d / "lbs" / "003.obj", d / "lbs" / "kept");
   EXPECT_EQ(clear_previous_run(d, lock), 7);  // checkpoint.bin, 2 in surface/, 1 in lbs/, 3 in report/
   EXPECT_TRUE(fs::exists(d / "surface" / "NOTES.txt"));
   EXPECT_TRUE(fs::exists(d / "surface" / "sub" / "000.obj"));
   EXPECT_FALSE(fs::exists(d / "surface" / "000.obj"));
   EXPECT_FALSE(fs::exists(d / "surface" / "001.obj.tmp.9"));
-  EXPECT_TRUE(fs::exists(d / "lbs" / "003.obj" / "inside.txt"));
+  EXPECT_TRUE(fs::exists(d / "lbs" / "kept" / "inside.txt"));
   EXPECT_FALSE(fs::exists(d / "lbs" / "000.obj"));
   EXPECT_FALSE(fs::exists(d / "report")) << "report/ held only ours: removed, frames/ with it";
+  ASSERT_EQ(::mkfifo((d / "flesh.usda").c_str(), 0600), 0);
+  std::ofstream(d / "stats.json") << "x";
+  EXPECT_NE(error_of([&] { (void)clear_previous_run(d, lock); }).find("flesh.usda: is a FIFO"), std::string::npos);
+  EXPECT_TRUE(fs::exists(d / "stats.json"));
   fs::remove_all(d);
 }
 

@@ -94,12 +94,13 @@ void refuse_foreign_directory(const fs::path& dir, const std::string& hint) {
 
 namespace {
 
-/// The files of ours in `dir` whose names `ours` matches (regular files and links, not directories), and in the
+/// The files of ours in `dir` whose names `ours` matches (regular files, or links to one), and in the
 /// subdirectories `subdirs` names, theirs by the same rule, recursively; appended to `doomed`, each directory
-/// after its contents (removed only if nothing else is left in it).
+/// after its contents to `dirs` (removed only if nothing else is left in it). Something else under one of
+/// our names (a FIFO, a device, a directory) is not ours: appended to `foreign`.
 void files_of_ours(const fs::path& dir, const std::regex& ours,
                    const std::vector<std::pair<std::string, const std::regex*>>& subdirs, std::vector<fs::path>& doomed,
-                   std::vector<fs::path>& dirs, std::error_code& ec) {
+                   std::vector<fs::path>& dirs, std::vector<fs::path>& foreign, std::error_code& ec) {
   for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
     const std::string name = e.path().filename().string();
     const bool directory = e.is_directory(ec) && !e.is_symlink(ec);
@@ -108,12 +109,11 @@ void files_of_ours(const fs::path& dir, const std::regex& ours,
         if (name == sub) {
           files_of_ours(e.path(), *rule, sub == "report" ? std::vector<std::pair<std::string, const std::regex*>>{{"frames", rule}}
                                                          : std::vector<std::pair<std::string, const std::regex*>>{},
-                        doomed, dirs, ec);
+                        doomed, dirs, foreign, ec);
           dirs.push_back(e.path());
         }
-    } else if (std::regex_match(name, ours)) {
-      doomed.push_back(e.path());
     }
+    if (std::regex_match(name, ours)) (e.is_regular_file(ec) ? doomed : foreign).push_back(e.path());
   }
 }
 
@@ -125,15 +125,18 @@ int clear_previous_run(const fs::path& dir, const RunDirectoryLock& lock) {
   // Inside surface/ and lbs/ only NNN.obj; inside report/ (and report/frames/) only its scripts.
   static const std::regex frames(R"(\d{3,}\.obj(?:\.tmp\.\d+)?)");
   static const std::regex report(R"((?:data|snh-report|\d{3,})\.js(?:\.tmp\.\d+)?)");
-  std::vector<fs::path> doomed, dirs;
+  std::vector<fs::path> doomed, dirs, foreign;
   std::error_code ec;
-  files_of_ours(dir, ours, {{"surface", &frames}, {"lbs", &frames}, {"report", &report}}, doomed, dirs, ec);
+  files_of_ours(dir, ours, {{"surface", &frames}, {"lbs", &frames}, {"report", &report}}, doomed, dirs, foreign, ec);
   if (ec) throw WriteError(fmt::format("cannot list {}: {}", dir.string(), ec.message()));
   // Files with our names in a directory that shows no run of ours are someone else's: refuse to replace them.
   if (!doomed.empty() && !lock.found_earlier() && !lock.forced() && !holds_a_run_of_ours(dir))
     throw OutputRefused(fmt::format("{} holds {} but no snh run: an snh run would replace it; choose an empty or new output "
                                  "directory",
                                  dir.string(), doomed.front().filename().string()));
+  // Something not a regular file where the run will write (a FIFO named flesh.usda, a directory named
+  // lbs/003.obj) is refused now, before anything is removed or computed, as the run's writers would refuse it.
+  for (const fs::path& p : foreign) check_replaceable(p);
   for (const fs::path& p : doomed) {
     fs::remove(p, ec);
     if (ec) throw WriteError(fmt::format("cannot remove {} (left by an earlier run): {}", p.string(), ec.message()));
