@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -254,13 +255,21 @@ struct Synth {
   std::size_t pos0_count = 5;  ///< the POSITION accessor's count
   bool hip_has_two_parents = false;
   double armature_scale_z = 2;  ///< not 2: the hip (turned about z) would need a non-uniform scale folded into its keys
+  /// The ankle's inverse bind matrix: its 3x3 part scaled by this, and its last row (0 0 0 1) replaced by
+  /// (0 0 ibm_projective 1) where that is not 0.
+  double ibm_scale = 1, ibm_projective = 0;
+  std::function<void(json&)> patch;  ///< applied to the finished document
 
   json document(Blob& b) const {
     // Inverse bind matrices: the joints' world transforms at rest, inverted.
     const Eigen::Matrix4d hip = kArmature * kHip, knee = hip * kKnee, ankle = knee * kAnkle;
     std::vector<float> ib;
-    for (const Eigen::Matrix4d& w : {ankle, hip, knee}) {
-      const Eigen::Matrix4d inv = w.inverse();
+    for (const Eigen::Matrix4d* w : {&ankle, &hip, &knee}) {
+      Eigen::Matrix4d inv = w->inverse();
+      if (w == &ankle) {
+        inv.topLeftCorner<3, 3>() *= ibm_scale;
+        inv(3, 2) = ibm_projective;
+      }
       for (int i = 0; i < 16; ++i) ib.push_back(static_cast<float>(inv(i % 4, i / 4)));
     }
     json prim0 = {{"attributes", {{"POSITION", b.add(pos0, kFloat, "VEC3", pos0_count)},
@@ -321,7 +330,7 @@ struct Synth {
     for (int i = 0; i < 16; ++i) ankle_matrix.push_back(kAnkle(i % 4, i / 4));
     nodes.push_back({{"name", "ankle"}, {"matrix", ankle_matrix}});
 
-    return {{"asset", {{"version", "2.0"}}},
+    json doc = {{"asset", {{"version", "2.0"}}},
             {"scene", 0},
             {"scenes", json::array({{{"nodes", json::array({0})}}})},
             {"nodes", nodes},
@@ -330,6 +339,8 @@ struct Synth {
             {"animations", json::array({{{"name", "walk"}, {"samplers", walk_samplers}, {"channels", walk_channels}}, run})},
             {"accessors", b.accessors},
             {"bufferViews", b.views}};
+    if (patch) patch(doc);
+    return doc;
   }
 };
 
@@ -525,6 +536,27 @@ TEST_F(Gltf, MalformedFilesAreRefusedInOneLine) {
   refuses(variant("nan", [](Synth& s) { s.pos0[7] = std::numeric_limits<float>::quiet_NaN(); }),
           "vertex 2 has a position that is not finite");
   refuses(variant("times", [](Synth& s) { s.rot_times = floats({0, 1, 1}); }), "not strictly increasing");
+  // Values that used to be taken and gave wrong frames (issue 32): refused, each naming what is wrong.
+  refuses(variant("ibm_zero", [](Synth& s) { s.ibm_scale = 0; }), "\"ankle\" (skin 0) is singular");
+  refuses(variant("ibm_tiny", [](Synth& s) { s.ibm_scale = 1e-30; }), "is singular or scales by");
+  refuses(variant("ibm_projective", [](Synth& s) { s.ibm_projective = 0.5; }), "is projective");
+  refuses(variant("far", [](Synth& s) { s.patch = [](json& d) { d["nodes"][2]["translation"][0] = 1e300; }; }),
+          "\"hip\" has a translation of 1e+300, beyond 1e+12");
+  refuses(variant("early", [](Synth& s) { s.rot_times = floats({-1, 1, 2}); }), "key time 0 is negative");
+  refuses(variant("draco", [](Synth& s) { s.patch = [](json& d) { d["extensionsRequired"] = {"KHR_draco_mesh_compression"}; }; }),
+          "requires the extension KHR_draco_mesh_compression, which snh does not read");
+  refuses(variant("scene", [](Synth& s) { s.patch = [](json& d) { d["scene"] = 3; }; }), "its scene is 3, but it has 1 scenes");
+  refuses(variant("version", [](Synth& s) { s.patch = [](json& d) { d["asset"]["version"] = "3.0"; }; }),
+          "asset version \"3.0\": snh reads glTF 2.0");
+  {  // A GLB whose header says version 1.
+    std::string glb = read_bytes(write(dir_, "v1", Synth{}, Container::binary));
+    glb[4] = 1;
+    refuses(text("v1.glb", glb), "a glTF binary of version 1: snh reads version 2");
+  }
+  // Extensions that change no vertex (materials) do not stop a model.
+  EXPECT_NO_THROW((void)read_gltf(variant("materials", [](Synth& s) {
+    s.patch = [](json& d) { d["extensionsRequired"] = {"KHR_materials_unlit"}; d["extensionsUsed"] = {"KHR_materials_unlit"}; };
+  })));
   refuses(variant("weights", [](Synth& s) { std::fill(s.weights0.begin() + 8, s.weights0.begin() + 12, 0.0f); }),
           "vertex 2 has joint weights that are all zero");
   refuses(variant("index", [](Synth& s) { s.indices0[5] = 5; }), "index 5 refers to vertex 5");

@@ -51,6 +51,9 @@ std::vector<unsigned char> read_file(const fs::path& path, std::size_t& size) {
     if (got == 12) std::memcpy(&length, head + 8, 4);
     if (got < 12 || length != n)
       fail(path, fmt::format("not a valid glTF binary: its header says {} bytes, the file has {}", got < 12 ? 0 : length, n));
+    std::uint32_t version = 0;
+    std::memcpy(&version, head + 4, 4);
+    if (version != 2) fail(path, fmt::format("a glTF binary of version {}: snh reads version 2", version));
   } else if (ext == ".glb") {
     fail(path, "not a glTF binary (it does not start with \"glTF\")");
   }
@@ -99,6 +102,7 @@ bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, 
 }
 
 constexpr std::size_t kMaxGltfDepth = 64;
+constexpr double kLargestCoordinate = 1e12;  ///< a node's translation or scale, an inverse bind matrix's translation
 
 /// The file parsed by tinygltf: a GLB container if it starts with "glTF", else glTF JSON.
 tinygltf::Model load(const fs::path& path) {
@@ -259,6 +263,7 @@ class Builder {
     RiggedModel out;
     out.source = path_;
     out.format = "glTF 2.0";
+    check_asset();
     link_nodes();
     const std::vector<int> nodes = skinned_nodes();
     const int skin = m_.nodes[static_cast<std::size_t>(nodes.front())].skin;
@@ -407,8 +412,11 @@ class Builder {
     }
     const auto vec = [&](const std::vector<double>& v, std::size_t size, const char* what) {
       if (v.size() != size) fail(fmt::format("node {} has a {} of {} numbers, not {}", node_name(i), what, v.size(), size));
-      for (const double x : v)
+      for (const double x : v) {
         if (!std::isfinite(x)) fail(fmt::format("node {} has a {} that is not finite", node_name(i), what));
+        if (std::abs(x) > kLargestCoordinate)
+          fail(fmt::format("node {} has a {} of {:g}, beyond {:g}", node_name(i), what, x, kLargestCoordinate));
+      }
     };
     if (!n.translation.empty()) {
       vec(n.translation, 3, "translation");
@@ -425,6 +433,20 @@ class Builder {
       t.scale = Eigen::Vector3d(n.scale[0], n.scale[1], n.scale[2]);
     }
     return t;
+  }
+
+  /// What the whole file declares: glTF 2.x, extensions it cannot be read without that snh knows to ignore
+  /// (materials, textures and lights change no vertex), and a default scene that exists.
+  void check_asset() const {
+    if (m_.asset.version.rfind("2.", 0) != 0)
+      fail(fmt::format("asset version \"{}\": snh reads glTF 2.0", one_line(m_.asset.version)));
+    for (const std::string& e : m_.extensionsRequired) {
+      const bool harmless = e.rfind("KHR_materials_", 0) == 0 || e.rfind("KHR_texture_", 0) == 0 ||
+                            e.rfind("EXT_texture_", 0) == 0 || e == "KHR_lights_punctual";
+      if (!harmless) fail(fmt::format("the file requires the extension {}, which snh does not read", one_line(e)));
+    }
+    if (m_.defaultScene >= static_cast<int>(std::max<std::size_t>(m_.scenes.size(), 1)) || (m_.defaultScene >= 0 && m_.scenes.empty()))
+      fail(fmt::format("its scene is {}, but it has {} scenes", m_.defaultScene, m_.scenes.size()));
   }
 
   Transform decomposed(const Eigen::Matrix4d& m, const std::string& what) const {
@@ -469,8 +491,20 @@ class Builder {
       if (ib.cols() < joints)
         fail(fmt::format("skin {} has {} joints but {} inverse bind matrices", skin_index, joints, ib.cols()));
       if (!ib.allFinite()) fail(fmt::format("an inverse bind matrix of skin {} is not finite", skin_index));
-      for (int j = 0; j < joints; ++j)
-        out.inverse_bind[static_cast<std::size_t>(j)] = Eigen::Map<const Eigen::Matrix4d>(ib.col(j).data());
+      for (int j = 0; j < joints; ++j) {
+        const Eigen::Matrix4d m = Eigen::Map<const Eigen::Matrix4d>(ib.col(j).data());
+        // An affine map that can be undone and moves no point beyond the coordinates snh takes: a zero,
+        // singular, vanishing (1e-30) or projective matrix would put the skin nowhere.
+        const Eigen::Vector3d s = Eigen::JacobiSVD<Eigen::Matrix3d>(m.topLeftCorner<3, 3>()).singularValues();
+        std::string why;
+        if (!m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-6)) why = "is projective (its last row is not 0 0 0 1)";
+        else if (!(s[0] >= 1e-9 && s[0] <= 1e9) || !(s[2] > 1e-9 * s[0])) why = fmt::format("is singular or scales by {:g} to {:g}", s[2], s[0]);
+        else if (m.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > kLargestCoordinate) why = "translates beyond 1e12";
+        if (!why.empty())
+          fail(fmt::format("the inverse bind matrix of joint {} (skin {}) {}", node_name(skin.joints[static_cast<std::size_t>(j)]),
+                           skin_index, why));
+        out.inverse_bind[static_cast<std::size_t>(j)] = m;
+      }
     }
   }
 
@@ -659,6 +693,7 @@ class Builder {
         c.times.assign(in.data(), in.data() + in.size());
         for (std::size_t k = 0; k < c.times.size(); ++k) {
           if (!std::isfinite(c.times[k])) fail(fmt::format("{}: key time {} is not finite", sw, k));
+          if (c.times[k] < 0.0) fail(fmt::format("{}: key time {} is negative ({:g}; glTF times start at 0)", sw, k, c.times[k]));
           if (k > 0 && !(c.times[k] > c.times[k - 1]))
             fail(fmt::format("{}: key times are not strictly increasing ({} then {})", sw, c.times[k - 1], c.times[k]));
         }
