@@ -302,6 +302,11 @@ TEST(StatsTables, OneDescriptionDrivesJsonCsvAndResume) {
                                        "factorizations,residual,newton_step,elastic_energy,kinetic_energy,gravity_energy,total_energy,"
                                        "volume_ratio,min_J,inverted,wall_seconds,assembly_seconds,solve_seconds");
   EXPECT_EQ(csv_row(stretch_table(), r), "3,0,7,0,0,0,1.500000e-04,2.25,0.000000,0.000000,0.000000,-0.5,2,1");
+  // A value that does not exist (the NaN energy here; min_contact_distance with no pair in range) is an empty
+  // CSV field, as JSON writes null: no nan reaches the file.
+  const std::string row = csv_row(scene_table(), r);
+  EXPECT_EQ(row.find("nan"), std::string::npos) << row;
+  EXPECT_NE(row.find(",,"), std::string::npos) << row;
 }
 
 json stats_of(const fs::path& dir) {

@@ -196,8 +196,13 @@ std::string csv_row(const RecordTable& table, const StepRecord& r) {
         [&](auto m) {
           using T = std::decay_t<decltype(r.*m)>;
           if constexpr (std::is_same_v<T, bool>) out += r.*m ? "1" : "0";
-          else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, double>)
+          else if constexpr (std::is_same_v<T, double>) {
+            // A value that does not exist (no contact pair in range: NaN) is an empty field, as JSON writes null;
+            // no nan or inf reaches the file.
+            if (std::isfinite(r.*m)) out += fmt::format(fmt::runtime(f.csv), r.*m);
+          } else if constexpr (std::is_same_v<T, int>) {
             out += fmt::format(fmt::runtime(f.csv), r.*m);
+          }
         },
         f.member);
   }
