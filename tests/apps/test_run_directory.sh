@@ -122,5 +122,14 @@ mkdir "$work/mg_given"
 "$SNH" stretch --res 3 --solver mg --out "$work/mg_given" > /dev/null 2>&1
 [ -d "$work/mg_given" ] && ok || bad "an output directory that was there before a refused run is gone"
 
+# 7. --out naming a file or a FIFO is a refused path (bad input: exit 2, one line), left as it was; tetcli and
+# snh stretch alike.
+printf 'mine\n' > "$work/a_file"
+mkfifo "$work/a_fifo"
+expect_error "out is a file" "a_file exists and is not a directory" -- "$SNH" stretch --res 2 --out "$work/a_file"
+expect_error "out is a FIFO" "a_fifo exists and is not a directory" -- "$SNH" stretch --res 2 --out "$work/a_fifo"
+expect_error "tetcli out is a file" "a_file exists and is not a directory" -- "$TETCLI" 2 stable_neo_hookean 1.0 10.0 "$work/a_file"
+[ "$(cat "$work/a_file")" = mine ] && [ -p "$work/a_fifo" ] && ok || bad "a refused --out was changed"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -64,7 +64,7 @@ void write_atomically(const std::filesystem::path& path, const std::function<voi
 void ensure_writable_directory(const std::filesystem::path& dir) {
   std::error_code ec;
   if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
-    throw WriteError(fmt::format("output directory {} exists and is not a directory", dir.string()));
+    throw OutputRefused(fmt::format("output directory {} exists and is not a directory", dir.string()));
   std::filesystem::create_directories(dir, ec);
   if (ec) throw WriteError(fmt::format("cannot create output directory {}: {}", dir.string(), ec.message()));
   const std::filesystem::path probe = dir / fmt::format(".snh-write-test.{}", ::getpid());

@@ -64,7 +64,7 @@ void validate(const StretchConfig& c) {
   // the run is refused before writing anything; here only what would stop the lock at once.
   std::error_code ec;
   if (std::filesystem::exists(c.out, ec) && !std::filesystem::is_directory(c.out, ec))
-    throw WriteError(fmt::format("output directory {} exists and is not a directory", c.out.string()));
+    throw OutputRefused(fmt::format("output directory {} exists and is not a directory", c.out.string()));
 }
 
 namespace {
