@@ -24,6 +24,7 @@
 #include "snh/io/base64.hpp"
 #include "rig_error.hpp"
 #include "snh/rig/gltf.hpp"
+#include "snh/rig/model.hpp"
 #include "snh/rig/skinning.hpp"
 
 namespace snh {
@@ -553,6 +554,16 @@ TEST_F(Gltf, MalformedFilesAreRefusedInOneLine) {
     glb[4] = 1;
     refuses(text("v1.glb", glb), "a glTF binary of version 1: snh reads version 2");
   }
+  // Names with control characters (ESC, BEL, a newline) are read with them written as \xNN, so that they
+  // print as they are instead of acting on the terminal.
+  const RiggedModel named = read_model(variant("names", [](Synth& s) {
+    s.patch = [](json& d) {
+      d["nodes"][2]["name"] = "hip\x1b[31m\n";
+      d["animations"][0]["name"] = std::string("walk\x07\0", 6);
+    };
+  }));
+  EXPECT_EQ(named.skeleton.joints[static_cast<std::size_t>(named.skeleton.find("hip\\x1b[31m\\x0a"))].name, "hip\\x1b[31m\\x0a");
+  EXPECT_EQ(named.clips[0].name, "walk\\x07\\x00");
   // Extensions that change no vertex (materials) do not stop a model.
   EXPECT_NO_THROW((void)read_gltf(variant("materials", [](Synth& s) {
     s.patch = [](json& d) { d["extensionsRequired"] = {"KHR_materials_unlit"}; d["extensionsUsed"] = {"KHR_materials_unlit"}; };

@@ -22,7 +22,27 @@ bool is_gltf(const std::filesystem::path& path) {
 }
 }  // namespace
 
-RiggedModel read_model(const std::filesystem::path& path) { return is_gltf(path) ? read_gltf(path) : read_assimp(path); }
+std::string printable_name(std::string_view name) {
+  std::string out;
+  for (const char ch : name) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7f) out += fmt::format("\\x{:02x}", c);
+    else out += ch;
+  }
+  return out;
+}
+
+RiggedModel read_model(const std::filesystem::path& path) {
+  RiggedModel m = is_gltf(path) ? read_gltf(path) : read_assimp(path);
+  // Names reach the terminal, the header, the files and the report: control characters (ESC, BEL, NUL, a
+  // newline) would act there instead of being read. They are written out as \xNN.
+  for (Joint& j : m.skeleton.joints) j.name = printable_name(j.name);
+  for (ModelPart& p : m.parts) p.name = printable_name(p.name);
+  for (Clip& c : m.clips) c.name = printable_name(c.name);
+  for (std::string& s : m.skipped) s = printable_name(s);
+  for (std::string& s : m.notes) s = printable_name(s);
+  return m;
+}
 
 int default_clip(const RiggedModel& model) {
   for (std::size_t c = 0; c < model.clips.size(); ++c)

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -62,7 +63,11 @@ struct RiggedModel {
   std::string hierarchy = "file";
 };
 
+/// `name` with its control characters (bytes below 0x20, and 0x7f) written as \xNN.
+[[nodiscard]] std::string printable_name(std::string_view name);
+
 /// Reads a rigged character: .gltf and .glb by read_gltf, every other file by read_assimp. Throws RigError.
+/// The joints', meshes' and clips' names are made printable (printable_name).
 [[nodiscard]] RiggedModel read_model(const std::filesystem::path& path);
 
 /// The clip played when none is named: the first that lasts and moves (a zero-length or still "bind" clip
