@@ -251,11 +251,22 @@ namespace {
 /// text; its relative paths resolve against base_dir, by default the working directory).
 Scene scene_of(const pyb::handle& obj, const std::optional<std::filesystem::path>& base_dir) {
   if (pyb::isinstance<pyb::dict>(obj)) {
-    const std::string text = pyb::module_::import("json").attr("dumps")(obj).cast<std::string>();
+    // NumPy scalars and arrays (np.int64(2), np.array([0, 1, 0])) are written as the numbers and lists they
+    // hold; anything else JSON cannot hold is a ValueError naming its type.
+    const pyb::cpp_function plain([](const pyb::handle& value) -> pyb::object {
+      if (pyb::hasattr(value, "tolist") && pyb::hasattr(value, "dtype")) return value.attr("tolist")();
+      throw pyb::value_error(fmt::format("scene: a value of type {} cannot be written as JSON (give numbers, strings, lists "
+                                         "and dicts)",
+                                         std::string(pyb::str(pyb::type::handle_of(value).attr("__name__")))));
+    });
+    const std::string text = pyb::module_::import("json").attr("dumps")(obj, pyb::arg("default") = plain).cast<std::string>();
     const std::filesystem::path source = base_dir ? *base_dir / "scene" : std::filesystem::path("scene");
     return parse_scene(read_scene_json(text, source.string()), source);
   }
   require(!base_dir, "base_dir is for a scene given as a dict: a scene file's paths resolve against its own directory");
+  if (!pyb::isinstance<pyb::str>(obj) && !pyb::hasattr(obj, "__fspath__"))
+    throw pyb::type_error(fmt::format("scene must be a path (str or os.PathLike) or a dict, got {}",
+                                      std::string(pyb::str(pyb::type::handle_of(obj).attr("__name__")))));
   return load_scene(obj.cast<std::filesystem::path>());
 }
 

@@ -384,3 +384,15 @@ def test_backward_euler_refuses_to_step_back_in_time():
     quasi = snh.Simulation(V, C, SNH, pinned=[0])
     quasi.step(1.0)
     assert quasi.step(0.5)["converged"] and quasi.time == 0.5
+
+
+def test_run_scene_takes_numpy_values_and_names_what_it_cannot_take(tmp_path):
+    # NumPy scalars and arrays in a scene dict are the numbers and lists they hold (a json TypeError before);
+    # None is a TypeError naming what a scene may be (pybind's internal cast error before).
+    r = snh.run_scene({"mesh": {"box": {"element": "hex", "res": np.int64(2)}}, "frames": np.int32(1),
+                       "gravity": np.array([0.0, -1.0, 0.0])}, out=tmp_path / "np", quiet=True, report=False)
+    assert r["all_converged"] and r["frames"] == 2
+    with pytest.raises(TypeError, match="scene must be a path"):
+        snh.run_scene(None, quiet=True)
+    with pytest.raises(ValueError, match="a value of type set cannot be written as JSON"):
+        snh.run_scene({"mesh": {"box": {"element": "hex", "res": 2}}, "frames": {1}}, out=tmp_path / "set", quiet=True)
