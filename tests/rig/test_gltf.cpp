@@ -534,6 +534,7 @@ TEST_F(Gltf, MalformedFilesAreRefusedInOneLine) {
   refuses(variant("no_skin", [](Synth& s) { s.skinned = false; }), "no skinned mesh (a mesh node with a skin)");
   refuses(variant("lines", [](Synth& s) { s.mode = 1; }), "mesh 0 primitive 0: mode 1 is not triangles");
   refuses(variant("joint", [](Synth& s) { s.joints0[4 * 3 + 1] = 3; }), "vertex 3 is bound to joint 3, but the skin has 3 joints");
+  refuses(variant("huge", [](Synth& s) { s.pos0[7] = 3e38f; }), "vertex 2 has a coordinate of 3e+38, beyond 1e+12");
   refuses(variant("nan", [](Synth& s) { s.pos0[7] = std::numeric_limits<float>::quiet_NaN(); }),
           "vertex 2 has a position that is not finite");
   refuses(variant("times", [](Synth& s) { s.rot_times = floats({0, 1, 1}); }), "not strictly increasing");

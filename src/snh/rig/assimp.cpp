@@ -371,6 +371,9 @@ class SceneReader {
         const aiVector3D& p = mesh->mVertices[v];
         const Eigen::Vector3d x = (to_common * Eigen::Vector4d(p.x, p.y, p.z, 1.0)).head<3>();
         if (!x.allFinite()) fail(fmt::format("{}: vertex {} has a position that is not finite", where, v));
+        if (x.cwiseAbs().maxCoeff() > rig_build::max_coordinate)
+          fail(fmt::format("{}: vertex {} has a coordinate of {:g}, beyond {:g}", where, v, x.cwiseAbs().maxCoeff(),
+                           rig_build::max_coordinate));
         auto [j, w, sum] = strongest_four(influences[v]);
         if (!(sum > 0.0)) {
           if (fallback < 0) {

@@ -102,7 +102,7 @@ bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, 
 }
 
 constexpr std::size_t kMaxGltfDepth = 64;
-constexpr double kLargestCoordinate = 1e12;  ///< a node's translation or scale, an inverse bind matrix's translation
+constexpr double kLargestCoordinate = rig_build::max_coordinate;  ///< vertices, node translations and scales, inverse binds
 
 /// The file parsed by tinygltf: a GLB container if it starts with "glTF", else glTF JSON.
 tinygltf::Model load(const fs::path& path) {
@@ -618,6 +618,9 @@ class Builder {
       const int offset = static_cast<int>(xyz.size());
       for (Eigen::Index v = 0; v < n; ++v) {
         if (!pos.col(v).allFinite()) fail(fmt::format("{}: vertex {} has a position that is not finite", where, v));
+        if (pos.col(v).cwiseAbs().maxCoeff() > kLargestCoordinate)
+          fail(fmt::format("{}: vertex {} has a coordinate of {:g}, beyond {:g}", where, v, pos.col(v).cwiseAbs().maxCoeff(),
+                           kLargestCoordinate));
         Eigen::Vector4d w = wgt.col(v);
         if (!w.allFinite() || w.minCoeff() < 0.0)
           fail(fmt::format("{}: vertex {} has joint weights {} {} {} {} (each must be finite and at least 0)", where, v, w(0), w(1),

@@ -17,6 +17,9 @@ namespace snh::rig_build {
 
 /// Model files larger than this are refused before they are read.
 inline constexpr std::uintmax_t max_file_bytes = std::uintmax_t{1} << 30;
+/// The largest coordinate a model may have (a vertex, a node's translation): beyond it volumes and capsule
+/// radii overflow (a vertex at 3e38 made the skin "enclose no volume").
+inline constexpr double max_coordinate = 1e12;
 
 /// Text from a file or a library on one line: its lines joined by "; ", other control characters as spaces.
 [[nodiscard]] std::string one_line(std::string_view text);
