@@ -217,7 +217,11 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     j["flesh"]["fps"] = o->fps;
     if (o->threads > 0) omp_set_num_threads(o->threads);
     BuiltScene built = build_scene(parse_scene(j, "snh flesh"));
-    if (const Clip& clip = built.body->flesh->clip; !(clip.duration() > 0.0))
+    if (const Clip& clip = built.body->flesh->clip; clip.channels.empty())
+      throw SceneError(fmt::format("{}: animation \"{}\" moves none of the skin's joints (its channels animate morph target "
+                                   "weights or nodes outside the skin): nothing to play",
+                                   o->model, clip.name));
+    else if (!(clip.duration() > 0.0))
       throw SceneError(fmt::format("{}: animation \"{}\" has no length (a single key): nothing to play", o->model, clip.name));
     built.scene.source = o->model;
     built.scene.run.program = "snh flesh";

@@ -130,6 +130,10 @@ mkdir -p "$work/dir.glb"
 head -c 30000 "$MODELS/hand/left.glb" > "$work/cut.glb"
 printf 'solid nothing\n' > "$work/text.gltf"
 flesh_error directory "dir.glb" "$work/dir.glb"
+# A clip whose only channel animates morph target weights moves no joint: said so, not "a single key".
+python3 -c "import json, sys; g = json.load(open(sys.argv[1])); g['animations'][0]['channels'][0]['target']['path'] = 'weights'; json.dump(g, open(sys.argv[2], 'w'))" \
+  "$limb" "$work/morph.gltf"
+flesh_error morph "animation \"bend\" moves none of the skin's joints" "$work/morph.gltf"
 flesh_error truncated "cut.glb" "$work/cut.glb"
 flesh_error not_gltf "text.gltf" "$work/text.gltf"
 flesh_error missing "missing.glb" "$work/missing.glb"

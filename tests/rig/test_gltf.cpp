@@ -588,6 +588,9 @@ TEST_F(Gltf, MalformedFilesAreRefusedInOneLine) {
   fs::create_symlink(dir_ / "fifo.bin", dir_ / "lost.bin");
   refuses(external, "lost.bin: not a regular file");
   fs::remove(dir_ / "lost.bin");
+  fs::create_directories(dir_ / "lost.bin");  // said "std::bad_alloc" before
+  refuses(external, "lost.bin: a directory");
+  fs::remove(dir_ / "lost.bin");
   std::ofstream(dir_ / "lost.bin").put('\0');
   fs::resize_file(dir_ / "lost.bin", (std::uintmax_t{1} << 30) + 1);  // sparse
   refuses(external, "lost.bin: too large");
