@@ -111,6 +111,17 @@ TEST_F(Surface, ErrorsAreOneLine) {
   const std::string missing = error("g.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
   ::setenv("PATH", saved.c_str(), 1);
   EXPECT_NE(missing.find("Debian package tetgen"), std::string::npos) << missing;
+  // A tetgen that crashes (as TetGen does on some surfaces, throwing an int): the crash is named, not the C++
+  // runtime's line. A stand-in program on PATH does what it does.
+  const fs::path bin = dir_ / "bin";
+  fs::create_directories(bin);
+  std::ofstream(bin / "tetgen") << "#!/bin/sh\necho \"terminate called after throwing an instance of 'int'\"\nkill -ABRT $$\n";
+  fs::permissions(bin / "tetgen", fs::perms::owner_all);
+  ::setenv("PATH", (bin.string() + ":" + saved).c_str(), 1);
+  const std::string crashed = error("h.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
+  ::setenv("PATH", saved.c_str(), 1);
+  EXPECT_NE(crashed.find("tetgen crashed (Aborted)"), std::string::npos) << crashed;
+  EXPECT_EQ(crashed.find("terminate called"), std::string::npos) << crashed;
 }
 
 // A surface followed by 900 MB of NUL bytes (a sparse file) fails after reading about as much as the

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <map>
 #include <random>
 #include <vector>
@@ -312,8 +313,12 @@ MeshFile tetrahedralize(const SurfaceMesh& surface, const fs::path& source, doub
     std::string last, line;
     while (std::getline(in, line))
       if (!line.empty()) last = line;
+    // TetGen's own last line says why; a crash (a C++ runtime's "terminate called after throwing an instance
+    // of 'int'", then SIGABRT) says nothing to a user: the signal is named instead.
+    std::string why = last.rfind("terminate called", 0) == 0 ? std::string() : last;
+    if (WIFSIGNALED(status)) why = fmt::format("tetgen crashed ({})", ::strsignal(WTERMSIG(status)));
     throw MeshError(fmt::format("{}: tetgen could not tetrahedralize the surface (is it closed and not self-intersecting?){}",
-                                source.string(), last.empty() ? "" : ": " + last));
+                                source.string(), why.empty() ? "" : ": " + why));
   }
   MeshFile m = read_mesh_file(node);
   // The cells' lines are lines of tetgen's temporary .ele file, not of `source`: the messages name cells only.
