@@ -190,15 +190,20 @@ TEST(SceneFile, ContactKeysAreChecked) {
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"self": true, "stiffness": 1}})")),
             "s.json: contact.dhat: required: the distance below which surfaces repel (> 0)");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": -1, "stiffness": 1}})")), "s.json: contact.dhat: must be > 0, got -1");
-  EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1}})")),
-            "s.json: contact.stiffness: required: the barrier's stiffness kappa (> 0, or \"auto\")");
+  // kappa left out (or "auto") is chosen by the build: IPC's rule with backward Euler, E l / dhat^2
+  // quasi-statically (l the cells' size), and the header says which.
+  const Scene quasi = parse_scene(json::parse(R"({"integrator": "quasi_static", "contact": {"dhat": 0.1}})"), "s.json");
+  EXPECT_FALSE(quasi.contact.stiffness);
+  const BuiltScene qb = build_scene(quasi);
+  const double cell = std::cbrt(std::abs(mesh_volume(qb.body->mesh)) / static_cast<double>(qb.body->mesh.cell_count()));
+  EXPECT_NEAR(qb.contact.stiffness, youngs_modulus(quasi.material.params) * cell / 0.01, 1e-9 * qb.contact.stiffness);
+  EXPECT_EQ(qb.contact_stiffness_rule, "chosen as E l / dhat^2, l the cells' size");
   const Scene automatic = parse_scene(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "auto"}})"), "s.json");
   EXPECT_FALSE(automatic.contact.stiffness) << "auto: resolved by the build";
   EXPECT_GT(build_scene(automatic).contact.stiffness, 0.0);
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": "soft"}})")),
             "s.json: contact.stiffness: expected a number > 0 or \"auto\", got \"soft\"");
-  EXPECT_EQ(error_of(json::parse(R"({"integrator": "quasi_static", "contact": {"dhat": 0.1, "stiffness": "auto"}})")),
-            "s.json: contact.stiffness: \"auto\" needs backward_euler (its masses and time step set the scale): give a number");
+  EXPECT_EQ(build_scene(automatic).contact_stiffness_rule, "chosen by IPC's rule on the mesh's size, mass and time step");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 0}})")), "s.json: contact.stiffness: must be > 0, got 0");
   EXPECT_EQ(error_of(json::parse(R"({"contact": {"dhat": 0.1, "stiffness": 1, "self": 1}})")),
             "s.json: contact.self: expected true or false, got 1");

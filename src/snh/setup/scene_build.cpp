@@ -96,18 +96,26 @@ void check_coordinates(const Scene& s, const VolumeMesh& mesh, const Eigen::Vect
                                  s.source.string(), scene::max_magnitude, x0.array().abs().maxCoeff()));
 }
 
-/// Contact's parameters for a volume scene: d̂ as given, κ as given or IPC's automatic choice on the mesh's
-/// size, its average vertex mass and the substep.
-ContactParameters volume_contact(const Scene& s, const VolumeMesh& mesh, double substep) {
+/// Contact's parameters for a volume scene: d̂ as given, κ as given, else chosen: with backward Euler IPC's
+/// automatic choice on the mesh's size, its average vertex mass and the substep; quasi-statically (no masses,
+/// no time step) the elastic rule the flesh uses, κ = E ℓ / d̂² (ℓ the cube root of the mean cell volume: a
+/// barrier about as stiff as a cell of the material where surfaces come within d̂). `how` says which.
+ContactParameters volume_contact(const Scene& s, const VolumeMesh& mesh, double substep, std::string& how) {
   ContactParameters p;
   p.dhat = s.contact.dhat.value_or(0.0);  // required by the parser
   if (s.contact.stiffness) {
     p.stiffness = *s.contact.stiffness;
-  } else {
+    how = "given";
+  } else if (s.time.integrator == Integrator::backward_euler) {
     const Eigen::Matrix3Xd& X = mesh.vertices;
     const double diagonal = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
     const double mass = s.material.density * std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.vertex_count());
     p.stiffness = scene::as_scene_error([&] { return ipc_barrier_stiffness(diagonal, p.dhat, mass, substep); });
+    how = "chosen by IPC's rule on the mesh's size, mass and time step";
+  } else {
+    const double cell = std::cbrt(std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.cell_count()));
+    p.stiffness = youngs_modulus(s.material.params) * cell / (p.dhat * p.dhat);
+    how = "chosen as E l / dhat^2, l the cells' size";
   }
   return p;
 }
@@ -171,7 +179,12 @@ BuiltScene build_scene(const Scene& s) {
   }
   b.substep = b.end_time / b.frames / b.substeps;
   if (s.contact.enabled) {
-    b.contact = b.body->flesh ? flesh_contact(s.contact, *b.body->flesh, youngs) : volume_contact(s, mesh, b.substep);
+    if (b.body->flesh) {
+      b.contact = flesh_contact(s.contact, *b.body->flesh, youngs);
+      b.contact_stiffness_rule = s.contact.stiffness ? "given" : "chosen as E h / dhat^2, h the cell size";
+    } else {
+      b.contact = volume_contact(s, mesh, b.substep, b.contact_stiffness_rule);
+    }
     b.contact.friction = s.contact.friction;
     b.contact.slip_velocity = s.contact.friction_velocity
                                   ? *s.contact.friction_velocity

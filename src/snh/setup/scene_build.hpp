@@ -40,6 +40,7 @@ struct BuiltScene {
   double substep = 0.0;                    ///< their length
   NewtonOptions newton;                    ///< the solver section's, its tolerances at the body's scale
   ContactParameters contact;               ///< d̂, κ, friction, ε_v (where contact is enabled)
+  std::string contact_stiffness_rule;      ///< how κ came about ("given", or the rule that chose it), for the header
   Eigen::VectorXd x0;                      ///< the rest positions with the initial operations applied
 };
 

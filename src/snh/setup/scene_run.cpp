@@ -90,6 +90,10 @@ void write_header(const BuiltScene& b, const Simulation& sim, std::ostream& o) {
                    s.forces.gravity[1], s.forces.gravity[2],
                    s.solver.linear == "auto" ? fmt::format("{} (auto)", sim.solver().name()) : s.solver.linear,
                    stopping_rule(sim.setup().newton), s.output.dir.string());
+  if (s.contact.enabled)
+    o << fmt::format("contact: dhat {:.4g}, stiffness {:.4g} ({}){}{}{}\n", b.contact.dhat, b.contact.stiffness, b.contact_stiffness_rule,
+                     s.contact.self ? ", self-contact" : "", s.contact.planes.size() + s.contact.colliders.size() == 0 ? "" : fmt::format(", {} colliders", s.contact.planes.size() + s.contact.colliders.size()),
+                     s.contact.friction > 0.0 ? fmt::format(", friction {:g}", s.contact.friction) : "");
 }
 
 /// The contact terms' statistics in every frame's record (contact_table): active pairs and the smallest

@@ -16,12 +16,11 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
     s.bones = k.boolean("bones", s.bones);
     if (!k.has("dhat") && !flesh) k.fail("required: the distance below which surfaces repel (> 0)", "dhat");
     if (k.has("dhat")) s.dhat = k.positive("dhat", 0.0);
-    if (!k.has("stiffness") && !flesh) k.fail("required: the barrier's stiffness kappa (> 0, or \"auto\")", "stiffness");
+    // kappa left out or "auto": unset, chosen by the build (volume_contact: IPC's rule with backward Euler,
+    // the elastic rule quasi-statically; a flesh's own rule).
+    (void)integrator;
     if (const json* st = k.get("stiffness"); st && st->is_string()) {
       if (st->get<std::string>() != "auto") k.fail("expected a number > 0 or \"auto\", got " + st->dump(), "stiffness");
-      if (integrator != Integrator::backward_euler && !flesh)
-        k.fail("\"auto\" needs backward_euler (its masses and time step set the scale): give a number", "stiffness");
-      // auto: unset, chosen on the mesh by the build (ipc_barrier_stiffness)
     } else if (st) {
       s.stiffness = k.positive("stiffness", 0.0);
     }
