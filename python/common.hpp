@@ -20,7 +20,7 @@ namespace pyb = pybind11;
 /// The caster of a bound class T that refuses an instance whose C++ object was never made: one that
 /// T.__new__(T) gave without __init__ (pybind11 would hand the methods uninitialized memory). Raises
 /// TypeError naming the class and how to make one. Each binding file specializes pybind11's caster for its
-/// classes with it (SNH_CHECKED_CASTER).
+/// class with it (type_caster<PyMaterial>, type_caster<PySimulation>), right after the class, before any use.
 template <class T>
 struct checked_caster : pyb::detail::type_caster_base<T> {
   bool load(pyb::handle src, bool convert) {

@@ -30,6 +30,7 @@ namespace fs = std::filesystem;
 using rig_build::check_file;
 using rig_build::decompose;
 using rig_build::fail;
+using rig_build::max_coordinate;
 using rig_build::one_line;
 static_assert(std::endian::native == std::endian::little, "glTF buffers are little-endian; this reader copies them as is");
 
@@ -102,17 +103,13 @@ bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, 
 }
 
 constexpr std::size_t kMaxGltfDepth = 64;
-constexpr double kLargestCoordinate = rig_build::max_coordinate;  ///< vertices, node translations and scales, inverse binds
 
 /// The file parsed by tinygltf: a GLB container if it starts with "glTF", else glTF JSON.
 tinygltf::Model load(const fs::path& path) {
   std::size_t size = 0;
   const std::vector<unsigned char> bytes = read_file(path, size);
   const bool binary = size >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
-  if (!binary) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (ext == ".glb") fail(path, "not a glTF binary (it does not start with \"glTF\")");
+  if (!binary) {  // (a .glb without the magic was refused by read_file)
     std::size_t i = size >= 3 && bytes[0] == 0xEF && bytes[1] == 0xBB && bytes[2] == 0xBF ? 3 : 0;  // UTF-8 BOM
     while (i < size && (bytes[i] == ' ' || bytes[i] == '\t' || bytes[i] == '\n' || bytes[i] == '\r')) ++i;
     if (i == size || bytes[i] != '{') fail(path, "not glTF (neither a glTF binary nor a JSON object)");
@@ -414,8 +411,8 @@ class Builder {
       if (v.size() != size) fail(fmt::format("node {} has a {} of {} numbers, not {}", node_name(i), what, v.size(), size));
       for (const double x : v) {
         if (!std::isfinite(x)) fail(fmt::format("node {} has a {} that is not finite", node_name(i), what));
-        if (std::abs(x) > kLargestCoordinate)
-          fail(fmt::format("node {} has a {} of {:g}, beyond {:g}", node_name(i), what, x, kLargestCoordinate));
+        if (std::abs(x) > max_coordinate)
+          fail(fmt::format("node {} has a {} of {:g}, beyond {:g}", node_name(i), what, x, max_coordinate));
       }
     };
     if (!n.translation.empty()) {
@@ -445,7 +442,7 @@ class Builder {
                             e.rfind("EXT_texture_", 0) == 0 || e == "KHR_lights_punctual";
       if (!harmless) fail(fmt::format("the file requires the extension {}, which snh does not read", one_line(e)));
     }
-    if (m_.defaultScene >= static_cast<int>(std::max<std::size_t>(m_.scenes.size(), 1)) || (m_.defaultScene >= 0 && m_.scenes.empty()))
+    if (m_.defaultScene >= static_cast<int>(m_.scenes.size()))
       fail(fmt::format("its scene is {}, but it has {} scenes", m_.defaultScene, m_.scenes.size()));
   }
 
@@ -499,7 +496,7 @@ class Builder {
         std::string why;
         if (!m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-6)) why = "is projective (its last row is not 0 0 0 1)";
         else if (!(s[0] >= 1e-9 && s[0] <= 1e9) || !(s[2] > 1e-9 * s[0])) why = fmt::format("is singular or scales by {:g} to {:g}", s[2], s[0]);
-        else if (m.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > kLargestCoordinate) why = "translates beyond 1e12";
+        else if (m.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > max_coordinate) why = "translates beyond 1e12";
         if (!why.empty())
           fail(fmt::format("the inverse bind matrix of joint {} (skin {}) {}", node_name(skin.joints[static_cast<std::size_t>(j)]),
                            skin_index, why));
@@ -618,9 +615,9 @@ class Builder {
       const int offset = static_cast<int>(xyz.size());
       for (Eigen::Index v = 0; v < n; ++v) {
         if (!pos.col(v).allFinite()) fail(fmt::format("{}: vertex {} has a position that is not finite", where, v));
-        if (pos.col(v).cwiseAbs().maxCoeff() > kLargestCoordinate)
+        if (pos.col(v).cwiseAbs().maxCoeff() > max_coordinate)
           fail(fmt::format("{}: vertex {} has a coordinate of {:g}, beyond {:g}", where, v, pos.col(v).cwiseAbs().maxCoeff(),
-                           kLargestCoordinate));
+                           max_coordinate));
         Eigen::Vector4d w = wgt.col(v);
         if (!w.allFinite() || w.minCoeff() < 0.0)
           fail(fmt::format("{}: vertex {} has joint weights {} {} {} {} (each must be finite and at least 0)", where, v, w(0), w(1),
