@@ -84,11 +84,11 @@ std::vector<char> used_vertices(const RiggedModel& m) {
 /// The solid of each of the model's meshes (parts): meshes whose skins share a joint (a weight above zero) are
 /// one solid; the others are kept apart even where they overlap at rest, and glued only where they share skin
 /// vertices (build_solid_lattices).
-std::vector<int> solids_of_parts(const RiggedModel& m) {
+///   used  used_vertices(m)
+std::vector<int> solids_of_parts(const RiggedModel& m, const std::vector<char>& used) {
   const std::size_t parts = m.parts.size();
   UnionFind groups(parts);
   std::vector<int> part_of_joint(static_cast<std::size_t>(m.skeleton.size()), -1);
-  const std::vector<char> used = used_vertices(m);
   for (std::size_t p = 0; p < parts; ++p)
     for (Eigen::Index v = m.parts[p].first_vertex; v < m.parts[p].first_vertex + m.parts[p].vertices; ++v)
       for (int k = 0; k < 4 && used[static_cast<std::size_t>(v)]; ++k)
@@ -153,7 +153,8 @@ std::vector<int> glue_seams(const RiggedModel& m, const std::vector<Lattice>& la
 /// The flesh's volume, embedding and solids from a lattice per solid (solid_of_part: one per mesh) on one grid.
 /// Where two solids share a skin vertex (a seam welded by position), the grid nodes of the cells embedding it
 /// are one vertex for both, so the solids are glued along their seams and nowhere else.
-SolidLattices build_solid_lattices(Flesh& f, const std::vector<int>& solid_of_part, int samples) {
+///   used  used_vertices(f.model)
+SolidLattices build_solid_lattices(Flesh& f, const std::vector<int>& solid_of_part, const std::vector<char>& used, int samples) {
   const RiggedModel& m = f.model;
   const int solids = solid_of_part.empty() ? 0 : *std::max_element(solid_of_part.begin(), solid_of_part.end()) + 1;
   std::vector<int> solid_of_point(static_cast<std::size_t>(m.vertices.cols()), -1);
@@ -161,7 +162,6 @@ SolidLattices build_solid_lattices(Flesh& f, const std::vector<int>& solid_of_pa
   f.solids.assign(static_cast<std::size_t>(solids), std::string());
   // A vertex its mesh's triangles use is its mesh's solid's; one they do not use (meshes sharing a vertex
   // buffer list each other's vertices) goes with the solid of a used vertex at its place, if any.
-  const std::vector<char> used = used_vertices(m);
   for (int pass = 0; pass < 2; ++pass)
     for (std::size_t p = 0; p < m.parts.size(); ++p) {
       const int s = solid_of_part[p];
@@ -441,7 +441,8 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
 
   SolidLattices lattices;  // the lattice of each solid, where a cube is split into pieces
   if (spec.volume == FleshVolume::lattice) {
-    lattices = build_solid_lattices(f, spec.join_meshes ? std::vector<int>(m.parts.size(), 0) : solids_of_parts(m),
+    const std::vector<char> used = used_vertices(m);
+    lattices = build_solid_lattices(f, spec.join_meshes ? std::vector<int>(m.parts.size(), 0) : solids_of_parts(m, used), used,
                                     spec.split_cells ? 4 : 0);
     if (f.copied_vertices == 0) lattices = {};
   } else {

@@ -30,7 +30,7 @@ Scene parse_scene(const nlohmann::json& j, const std::filesystem::path& source) 
   s.pins = scene::parse_pins(top, s.time.end_time.value_or(TimeSpec::default_end_time));
   s.initial = scene::parse_initial(top);
   s.solver = scene::parse_solver(top);
-  s.contact = scene::parse_contact(top, s.time.integrator, source, s.time.end_time.value_or(TimeSpec::default_end_time));
+  s.contact = scene::parse_contact(top, source, s.time.end_time.value_or(TimeSpec::default_end_time));
   s.output = scene::parse_output(top, source);
   top.finish();
   s.settings = j.dump();  // object keys sorted: the same text for the same scene

@@ -96,6 +96,11 @@ void check_coordinates(const Scene& s, const VolumeMesh& mesh, const Eigen::Vect
                                  s.source.string(), scene::max_magnitude, x0.array().abs().maxCoeff()));
 }
 
+/// The cells' size: the cube root of their mean rest volume.
+double mean_cell_size(const VolumeMesh& mesh) {
+  return std::cbrt(std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.cell_count()));
+}
+
 /// Contact's parameters for a volume scene: d̂ as given, κ as given, else chosen: with backward Euler IPC's
 /// automatic choice on the mesh's size, its average vertex mass and the substep; quasi-statically (no masses,
 /// no time step) the elastic rule the flesh uses, κ = E ℓ / d̂² (ℓ the cube root of the mean cell volume: a
@@ -113,8 +118,7 @@ ContactParameters volume_contact(const Scene& s, const VolumeMesh& mesh, double 
     p.stiffness = scene::as_scene_error([&] { return ipc_barrier_stiffness(diagonal, p.dhat, mass, substep); });
     how = "chosen by IPC's rule on the mesh's size, mass and time step";
   } else {
-    const double cell = std::cbrt(std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.cell_count()));
-    p.stiffness = youngs_modulus(s.material.params) * cell / (p.dhat * p.dhat);
+    p.stiffness = youngs_modulus(s.material.params) * mean_cell_size(mesh) / (p.dhat * p.dhat);
     how = "chosen as E l / dhat^2, l the cells' size";
   }
   return p;
@@ -127,7 +131,7 @@ NewtonOptions newton_options(const SolverSpec& solver, const VolumeMesh& rest, d
   o.tolerance = solver.tolerance.value_or(0.0);
   o.step_tolerance = solver.step_tolerance.value_or(0.0);
   if (o.tolerance == 0.0 && solver.force_fraction > 0.0 && rest.cell_count() > 0) {
-    const double cell = std::cbrt(std::abs(mesh_volume(rest)) / static_cast<double>(rest.cell_count()));
+    const double cell = mean_cell_size(rest);
     o.tolerance = solver.force_fraction * youngs * cell * cell;
   }
   return o;

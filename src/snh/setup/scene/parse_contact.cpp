@@ -3,7 +3,7 @@
 
 namespace snh::scene {
 
-ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesystem::path& source, double end_time) {
+ContactSpec parse_contact(Keys& top, const std::filesystem::path& source, double end_time) {
   ContactSpec s;
   if (const json* c = top.get("contact")) {
     Keys k(*c, "contact", top.file());
@@ -18,7 +18,6 @@ ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesyste
     if (k.has("dhat")) s.dhat = k.positive("dhat", 0.0);
     // kappa left out or "auto": unset, chosen by the build (volume_contact: IPC's rule with backward Euler,
     // the elastic rule quasi-statically; a flesh's own rule).
-    (void)integrator;
     if (const json* st = k.get("stiffness"); st && st->is_string()) {
       if (st->get<std::string>() != "auto") k.fail("expected a number > 0 or \"auto\", got " + st->dump(), "stiffness");
     } else if (st) {

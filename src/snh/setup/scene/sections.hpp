@@ -44,9 +44,9 @@ auto as_scene_error(F&& f) {
 [[nodiscard]] std::vector<InitialOp> parse_initial(Keys& top);
 /// "solver".
 [[nodiscard]] SolverSpec parse_solver(Keys& top);
-/// "contact" and "colliders" ("auto" stiffness only with backward Euler; mesh files relative to the scene
+/// "contact" and "colliders" (a stiffness left out or "auto" is chosen by the build; mesh files relative to the scene
 /// file's directory, named here and read by read_collider_mesh; motions default to ending at end_time).
-[[nodiscard]] ContactSpec parse_contact(Keys& top, Integrator integrator, const std::filesystem::path& source, double end_time);
+[[nodiscard]] ContactSpec parse_contact(Keys& top, const std::filesystem::path& source, double end_time);
 /// A mesh collider's surface file read into its vertices and triangles. Throws SceneError naming `file` (the
 /// scene) and the collider: the file cannot be read, has no triangles, a coordinate beyond max_magnitude or a
 /// degenerate triangle.
