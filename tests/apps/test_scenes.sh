@@ -18,6 +18,11 @@ for scene in "$SCENES"/*.json; do
   grep -q '"all_converged": true' "$work/$name/stats.json" && ok || bad "$name: stats.json all_converged"
 done
 
+# A run whose converged frames hold inverted elements (the crush of a cube to a point) says so on its closing
+# line (before the report's).
+grep -Eq '^finished, [0-9]+ frames with inverted elements \(warning: flesh turned inside out; at most [0-9]+, in frame [0-9]+\)' \
+  "$work/crush_point.log" && ok || bad "crush_point: closing line $(tail -2 "$work/crush_point.log")"
+
 # Bad scene files: one line naming the file and key, exit code 2.
 printf '{"gravty": [0, -9.8, 0]}' > "$work/typo.json"
 out="$("$SNH" run "$work/typo.json" --out "$work/t" 2>&1)"; code=$?

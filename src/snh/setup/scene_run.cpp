@@ -174,6 +174,14 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
   };
   plan.summary = [out = s.output.dir, frames](const RunResult& r) {
     std::string how = r.all_converged ? "finished" : "STOPPED: " + r.failure;
+    // Converged frames that hold inverted elements are warned of on their lines; the last line counts them,
+    // so that a run that "finished" is not read as clean.
+    int inverted_frames = 0, most = 0, worst = 0;
+    for (const StepRecord& rec : r.records)
+      if (rec.inverted > 0 && rec.converged && (++inverted_frames, rec.inverted > most)) most = rec.inverted, worst = rec.index;
+    if (r.all_converged && inverted_frames > 0)
+      how = fmt::format("finished, {} frame{} with inverted elements (warning: flesh turned inside out; at most {}, in frame {})",
+                        inverted_frames, inverted_frames == 1 ? "" : "s", most, worst);
     if (!r.unconverged.empty() && r.interrupted_by == 0 && !r.records.empty() && r.records.back().index == frames) {
       std::string list;
       for (std::size_t i = 0; i < r.unconverged.size() && i < 10; ++i) list += fmt::format("{}{}", i ? ", " : "", r.unconverged[i]);
