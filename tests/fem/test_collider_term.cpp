@@ -24,6 +24,7 @@
 #include "sim/face_pins.hpp"
 #include "fem/problem_fd.hpp"
 #include "fem/weighted_points.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
@@ -31,10 +32,10 @@ namespace {
 using testing::identity_through_weights;
 
 
-using Kind = ColliderShape::Kind;
+using Shape = ColliderShape::Kind;
 
-Eigen::VectorXd flatten(const Eigen::Matrix3Xd& X) { return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()); }
-Eigen::Matrix3Xd unflatten(const Eigen::VectorXd& x) { return Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3); }
+using test::flatten;
+using test::unflatten;
 
 /// A similarity: rotation about a tilted axis, uniform scale 1.3, translation.
 Eigen::Affine3d tilted_pose(double t) {
@@ -51,12 +52,12 @@ std::vector<int> iota_ids(Eigen::Index n) {
 }
 
 std::string fmt_kind(const ColliderShape& s) {
-  return s.kind == Kind::sphere ? "sphere" : s.kind == Kind::capsule ? "capsule" : s.kind == Kind::box ? "box" : "plane";
+  return s.kind == Shape::sphere ? "sphere" : s.kind == Shape::capsule ? "capsule" : s.kind == Shape::box ? "box" : "plane";
 }
 
-ColliderShape sphere() { return {Kind::sphere, Vec3(0.1, 0.2, -0.1), Vec3::Zero(), 0.7}; }
-ColliderShape capsule() { return {Kind::capsule, Vec3(-0.5, 0, 0), Vec3(0.5, 0.2, 0), 0.3}; }
-ColliderShape box() { return {Kind::box, Vec3(0, 0.1, 0), Vec3(0.4, 0.3, 0.6), 0.0}; }
+ColliderShape sphere() { return {Shape::sphere, Vec3(0.1, 0.2, -0.1), Vec3::Zero(), 0.7}; }
+ColliderShape capsule() { return {Shape::capsule, Vec3(-0.5, 0, 0), Vec3(0.5, 0.2, 0), 0.3}; }
+ColliderShape box() { return {Shape::box, Vec3(0, 0.1, 0), Vec3(0.4, 0.3, 0.6), 0.0}; }
 
 /// Points at distance `d` outside the shape in its base frame (world positions through the pose), next to
 /// the given base-frame points of the surface, in the given directions.
@@ -83,10 +84,10 @@ void expect_fd(ShapeColliderTerm& term, const Eigen::Matrix3Xd& X, const char* w
 /// and off the axis), near where they meet; the box's faces, edges and corners.
 std::vector<std::pair<Vec3, Vec3>> surface_probes(const ColliderShape& shape) {
   std::vector<std::pair<Vec3, Vec3>> at;
-  if (shape.kind == Kind::sphere) {
+  if (shape.kind == Shape::sphere) {
     for (const Vec3& n : {Vec3(1, 0, 0), Vec3(0.3, -1, 0.2), Vec3(-1, 1, 1), Vec3(0, 0, -1), Vec3(2, 1, -1), Vec3(-1, -1, 0.5)})
       at.push_back({shape.a + shape.radius * n.normalized(), n});
-  } else if (shape.kind == Kind::capsule) {
+  } else if (shape.kind == Shape::capsule) {
     const Vec3 axis = (shape.b - shape.a).normalized(), side = axis.cross(Vec3(0, 0, 1)).normalized();
     const Vec3 up(0, 0, 1);
     at = {{0.5 * (shape.a + shape.b) + 0.3 * side, side}, {shape.a - 0.3 * axis, -axis},
@@ -115,10 +116,10 @@ TEST(ShapeColliderTerm, MatchesFiniteDifferencesNearCapsEdgesAndCorners) {
     const Eigen::Matrix3Xd X = near(at, d, pose);
     for (Eigen::Index i = 0; i < X.cols(); ++i)
       EXPECT_NEAR(term.point_distance(flatten(X), static_cast<int>(i)), 1.3 * d, 1e-12) << "vertex " << i;
-    expect_fd(term, X, shape.kind == Kind::sphere ? "sphere" : shape.kind == Kind::capsule ? "capsule" : "box");
+    expect_fd(term, X, shape.kind == Shape::sphere ? "sphere" : shape.kind == Shape::capsule ? "capsule" : "box");
   }
   // A moving plane: the signed distance, its derivatives, and +∞ behind it.
-  ShapeColliderTerm plane(EmbeddedPoints::plain({0, 1}, "test"), {Kind::plane, Vec3(0, 0, 0), Vec3(0, 2, 0), 0.0}, tilted_pose, dhat, 10.0);
+  ShapeColliderTerm plane(EmbeddedPoints::plain({0, 1}, "test"), {Shape::plane, Vec3(0, 0, 0), Vec3(0, 2, 0), 0.0}, tilted_pose, dhat, 10.0);
   plane.at_time(0.7);
   const Eigen::Matrix3Xd P = near({{Vec3(0.2, 0, 0.1), Vec3(0, 1, 0)}, {Vec3(-0.3, 0, 0.4), Vec3(0, 1, 0)}}, d, pose);
   expect_fd(plane, P, "plane");
@@ -320,8 +321,8 @@ void drop_onto(const ColliderShape& shape, const char* what) {
 }
 
 TEST(ShapeColliderTerm, ACubeDroppedOnASphereAndOnABoxComesToRestAboveIt) {
-  drop_onto({Kind::sphere, Vec3(0, -5.2, 0), Vec3::Zero(), 4.0}, "sphere");
-  drop_onto({Kind::box, Vec3(0.3, -1.7, -0.2), Vec3(1.5, 0.5, 1.5), 0.0}, "box");
+  drop_onto({Shape::sphere, Vec3(0, -5.2, 0), Vec3::Zero(), 4.0}, "sphere");
+  drop_onto({Shape::box, Vec3(0.3, -1.7, -0.2), Vec3(1.5, 0.5, 1.5), 0.0}, "box");
 }
 
 TEST(MeshColliderTerm, ASlabPressingACubeNeverPassesIntoIt) {
@@ -376,7 +377,7 @@ TEST(ShapeColliderTerm, AMovingWallHitsACubeInSubStepsOfBackwardEuler) {
   const VolumeMesh m = box_tets(3);
   SimulationSetup setup = cube_setup(m, Integrator::backward_euler);
   const ColliderPose pose = [](double t) { return Eigen::Affine3d(Eigen::Translation3d(-10.0 * t, 0, 0)); };
-  auto wall = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Kind::box, Vec3(1.6, 0, 0), Vec3(0.5, 3, 3), 0.0}, pose, 0.02, 1e8);
+  auto wall = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Shape::box, Vec3(1.6, 0, 0), Vec3(0.5, 3, 3), 0.0}, pose, 0.02, 1e8);
   setup.terms.push_back(wall);
   setup.newton.step_tolerance = 1e-9;  // as scenes do: forces reach m v / h' ~ 1e8 on the shortest sub-steps h'
   Simulation sim(std::move(setup));
@@ -428,7 +429,7 @@ TEST(ShapeColliderTerm, AQuasiStaticCarrierTakesTheFreeFleshAlongInTheStepsCheck
         frames.assign(static_cast<std::size_t>(n), f);
       };
     const ColliderPose pose = [v](double t) { return Eigen::Affine3d(Eigen::Translation3d(t * v)); };
-    auto sphere = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Kind::sphere, Vec3(-1.5, 0, 0), Vec3::Zero(), 0.3}, pose, 0.05, 1e3);
+    auto sphere = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Shape::sphere, Vec3(-1.5, 0, 0), Vec3::Zero(), 0.3}, pose, 0.05, 1e3);
     setup.terms.push_back(sphere);
     Simulation sim(std::move(setup));
     int splits = 0;
@@ -452,7 +453,7 @@ TEST(ShapeColliderTerm, PinsDrivingTheSurfaceIntoAColliderStopTheRunWithOneLine)
   SimulationSetup setup = cube_setup(m, Integrator::quasi_static);
   KinematicSet bottom = bottom_pins(m, {Translate{Vec3(0, -0.5, 0), 0.0, 1.0}});
   setup.kinematic.push_back(bottom);
-  auto ground = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Kind::plane, Vec3(0, -1.1, 0), Vec3(0, 1, 0), 0.0}, ColliderPose{}, 0.02, 1e4);
+  auto ground = std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Shape::plane, Vec3(0, -1.1, 0), Vec3(0, 1, 0), 0.0}, ColliderPose{}, 0.02, 1e4);
   setup.terms.push_back(ground);
   Simulation sim(std::move(setup));
   bool failed = false;
@@ -481,7 +482,7 @@ TEST(MeshColliderTerm, CollidersOutOfRangeChangeNothingBitForBit) {
       setup.terms.push_back(std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), sphere(), [](double t) {
         return Eigen::Affine3d(Eigen::Translation3d(5, t, 0));
       }, 0.02, 1e8));
-      setup.terms.push_back(std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Kind::box, Vec3(-6, 0, 0), Vec3(1, 1, 1), 0}, pose, 0.02, 1e8));
+      setup.terms.push_back(std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface_of(m), "test"), ColliderShape{Shape::box, Vec3(-6, 0, 0), Vec3(1, 1, 1), 0}, pose, 0.02, 1e8));
       const Slab slab(Vec3(-2, 8, -2), Vec3(2, 9, 2));
       setup.terms.push_back(std::make_shared<MeshColliderTerm>(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, slab.V, slab.T, pose, 0.02, 1e8));
     }
@@ -501,9 +502,9 @@ TEST(MeshColliderTerm, CollidersOutOfRangeChangeNothingBitForBit) {
 }
 
 TEST(ShapeColliderTerm, BadArgumentsThrow) {
-  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), {Kind::sphere, Vec3::Zero(), Vec3::Zero(), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), {Kind::box, Vec3::Zero(), Vec3(1, 0, 1), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
-  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), {Kind::plane, Vec3::Zero(), Vec3::Zero(), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), {Shape::sphere, Vec3::Zero(), Vec3::Zero(), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), {Shape::box, Vec3::Zero(), Vec3(1, 0, 1), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
+  EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), {Shape::plane, Vec3::Zero(), Vec3::Zero(), 0.0}, {}, 0.1, 1.0), std::invalid_argument);
   EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({0}, "test"), sphere(), {}, 0.0, 1.0), std::invalid_argument);
   EXPECT_THROW(ShapeColliderTerm(EmbeddedPoints::plain({-1}, "test"), sphere(), {}, 0.1, 1.0), std::invalid_argument);
   const ColliderPose shear = [](double) {
@@ -594,12 +595,12 @@ Eigen::VectorXd pulled_back(const EmbeddedCells& e, const Eigen::VectorXd& gp) {
 TEST(ShapeColliderTerm, EmbeddedPointsMatchFiniteDifferencesThroughTheirWeights) {
   const double dhat = 0.1, d = 0.04;
   const Eigen::Affine3d pose = tilted_pose(0.7);
-  const ColliderShape plane{Kind::plane, Vec3(0, 0, 0), Vec3(0, 2, 0), 0.0};
+  const ColliderShape plane{Shape::plane, Vec3(0, 0, 0), Vec3(0, 2, 0), 0.0};
   for (const ColliderShape& shape : {sphere(), capsule(), box(), plane})
     for (const bool hexes : {true, false}) {
       SCOPED_TRACE(fmt_kind(shape) + (hexes ? " in hexes" : " in tets"));
       const std::vector<std::pair<Vec3, Vec3>> at =
-          shape.kind == Kind::plane ? std::vector<std::pair<Vec3, Vec3>>{{Vec3(0.2, 0, 0.1), Vec3(0, 1, 0)}, {Vec3(-0.3, 0, 0.4), Vec3(0, 1, 0)}}
+          shape.kind == Shape::plane ? std::vector<std::pair<Vec3, Vec3>>{{Vec3(0.2, 0, 0.1), Vec3(0, 1, 0)}, {Vec3(-0.3, 0, 0.4), Vec3(0, 1, 0)}}
                                     : surface_probes(shape);
       const EmbeddedCells e(near(at, d, pose), hexes, 21);
       ShapeColliderTerm term(EmbeddedPoints(e.vertex, e.weight, "test", -1), shape, tilted_pose, dhat, 10.0);

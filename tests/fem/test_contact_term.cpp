@@ -27,6 +27,7 @@
 #include "contact/surface_checks.hpp"
 #include "fem/problem_fd.hpp"
 #include "fem/weighted_points.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
@@ -35,11 +36,11 @@ using testing::identity_through_weights;
 
 using Kind = ContactPair::Kind;
 
-Eigen::VectorXd flatten(const Eigen::Matrix3Xd& X) { return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()); }
+using test::flatten;
 /// A plane through p with normal n (any length: the term normalises it) as a collider shape.
 ColliderShape plane(const Vec3& p, const Vec3& n) { return {ColliderShape::Kind::plane, p, n, 0.0}; }
 
-Eigen::Matrix3Xd unflatten(const Eigen::VectorXd& x) { return Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3); }
+using test::unflatten;
 
 /// Tet A = (0,0,0), (1,0,0), (0,1,0), (0,0,−1) (its top face on z = 0) and tet B = vertices 4..7.
 struct TwoTets {

@@ -14,6 +14,7 @@
 #include "snh/fem/problem.hpp"
 #include "snh/mesh/box.hpp"
 #include "fem/problem_fd.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
@@ -29,7 +30,7 @@ VolumeMesh distorted(CellType type, int res, double jitter, unsigned seed) {
   return m;
 }
 
-Eigen::VectorXd flatten(const Eigen::Matrix3Xd& V) { return Eigen::Map<const Eigen::VectorXd>(V.data(), V.size()); }
+using test::flatten;
 
 /// Boundary vertices of the (undistorted) lattice fixed, interior free.
 std::vector<std::uint8_t> boundary_fixed(int res) {

@@ -20,13 +20,14 @@
 #include "snh/sim/simulation.hpp"
 #include "fem/problem_fd.hpp"
 #include "sim/face_pins.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
 
-using Kind = ColliderShape::Kind;
+using Shape = ColliderShape::Kind;
 
-Eigen::VectorXd flatten(const Eigen::Matrix3Xd& X) { return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()); }
+using test::flatten;
 
 /// A similarity moving in time: turning about a tilted axis, scaled 1.3, translating.
 Eigen::Affine3d turning_pose(double t) {
@@ -36,7 +37,7 @@ Eigen::Affine3d turning_pose(double t) {
   return A;
 }
 
-const ColliderShape kSphere{Kind::sphere, Vec3(0.1, 0.2, -0.1), Vec3::Zero(), 0.7};
+const ColliderShape kSphere{Shape::sphere, Vec3(0.1, 0.2, -0.1), Vec3::Zero(), 0.7};
 
 /// Points (world) at distances 0.01 … 0.06 outside the sphere at its pose at t0 = 0.2.
 Eigen::Matrix3Xd near_sphere(int n, std::mt19937_64& rng) {
@@ -123,7 +124,7 @@ TEST(FrictionTerm, MatchesFiniteDifferencesWhileStickingAndSliding) {
 }
 
 TEST(FrictionTerm, NothingWithoutContactOrTimeAndBadArgumentsThrow) {
-  const ColliderShape plane{Kind::plane, Vec3::Zero(), Vec3::UnitY(), 0.0};
+  const ColliderShape plane{Shape::plane, Vec3::Zero(), Vec3::UnitY(), 0.0};
   Eigen::Matrix3Xd X(3, 2);
   X << 0, 1, 0.5, 0.05, 0, 0;  // 0.5 above (out of range), 0.05 above (in range of d̂ = 0.1)
   FrictionTerm term(EmbeddedPoints::plain({0, 1}, "test"), plane, {}, 0.1, 1.0, 0.5, 1.0);
@@ -177,9 +178,9 @@ Slide slide(double mu, bool with_term) {
   surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
   const double dhat = 0.02, kappa = 1e8;
   const Vec3 point(0, -1.01, 0), normal = Vec3::UnitY();
-  setup.terms.push_back(std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface, "test"), ColliderShape{Kind::plane, point, normal, 0.0}, ColliderPose{}, dhat, kappa));
+  setup.terms.push_back(std::make_shared<ShapeColliderTerm>(EmbeddedPoints::plain(surface, "test"), ColliderShape{Shape::plane, point, normal, 0.0}, ColliderPose{}, dhat, kappa));
   if (with_term)
-    setup.terms.push_back(std::make_shared<FrictionTerm>(EmbeddedPoints::plain(surface, "test"), ColliderShape{Kind::plane, point, normal, 0.0}, ColliderPose{}, dhat, kappa, mu, 1e-3));
+    setup.terms.push_back(std::make_shared<FrictionTerm>(EmbeddedPoints::plain(surface, "test"), ColliderShape{Shape::plane, point, normal, 0.0}, ColliderPose{}, dhat, kappa, mu, 1e-3));
   Simulation sim(std::move(setup));
   Slide out;
   const auto centroid_x = [&] { return sim.x()(Eigen::seqN(0, m.vertex_count(), 3)).mean(); };

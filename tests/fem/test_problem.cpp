@@ -10,11 +10,12 @@
 #include "snh/fem/problem.hpp"
 #include "snh/mesh/box.hpp"
 #include "fem/problem_fd.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
 
-Eigen::VectorXd flatten(const Eigen::Matrix3Xd& X) { return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()); }
+using test::flatten;
 
 /// Springs k/2 (|x_a − x_b| − L)² between vertex pairs; the pairs may be chosen by x (varying stencil):
 /// when `follow` is set, vertex 0 is also tied to whichever vertex is farthest from it.

@@ -27,7 +27,7 @@ namespace fs = std::filesystem;
 const double kCube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
 const int kQuads[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};  // outward
 
-class Surface : public ::testing::Test {
+class SurfaceFiles : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("snh_test_surface_" + std::to_string(::getpid()));
@@ -75,7 +75,7 @@ std::vector<std::pair<std::string, std::string>> cube_files() {
   return {{"c.obj", obj}, {"c.off", off}, {"c.ply", ply}, {"a.stl", stl}, {"b.stl", bin}};
 }
 
-TEST_F(Surface, EveryFormatGivesTheCube) {
+TEST_F(SurfaceFiles, EveryFormatGivesTheCube) {
   for (const auto& [name, text] : cube_files()) {
     const SurfaceMesh s = read_surface(write(name, text));
     EXPECT_EQ(s.vertices.cols(), 8) << name;
@@ -87,7 +87,7 @@ TEST_F(Surface, EveryFormatGivesTheCube) {
   }
 }
 
-TEST_F(Surface, ErrorsAreOneLine) {
+TEST_F(SurfaceFiles, ErrorsAreOneLine) {
   auto error = [&](const std::string& name, const std::string& text) {
     try {
       (void)read_mesh(write(name, text));
@@ -127,7 +127,7 @@ TEST_F(Surface, ErrorsAreOneLine) {
 // A surface followed by 900 MB of NUL bytes (a sparse file) fails after reading about as much as the
 // surface; a binary STL's triangle count is checked against its size, and an ASCII one's first word, before
 // the rest is read.
-TEST_F(Surface, APaddedFileIsReadOnlyUpToItsPadding) {
+TEST_F(SurfaceFiles, APaddedFileIsReadOnlyUpToItsPadding) {
   if (test::bytes_read() < 0) GTEST_SKIP() << "no /proc/self/io";
   for (const auto& [name, text] : cube_files()) {
     const fs::path p = write(name, text);

@@ -33,6 +33,7 @@
 #include "snh/setup/lab.hpp"
 #include "snh/setup/scene_run.hpp"
 #include "snh/setup/stretch.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
@@ -40,13 +41,9 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("snh_report_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  return dir;
-}
+fs::path report_dir(const std::string& name) { return test::fresh_dir("snh_report_", name); }
 
-/// Removes every directory made by fresh_dir when the test program ends, also after a failed ASSERT.
+/// Removes every directory made by report_dir when the test program ends, also after a failed ASSERT.
 struct CleanUp : ::testing::Environment {
   void TearDown() override {
     std::error_code ec;
@@ -105,7 +102,7 @@ std::vector<T> decode(const json& b64) {
 }
 
 TEST(VtuData, ReadsBackEveryArrayOfAFrame) {
-  const fs::path dir = fresh_dir("vtu");
+  const fs::path dir = report_dir("vtu");
   fs::create_directories(dir);
   const VolumeMesh m = box_hexes(2);
   const Eigen::Matrix3Xd X = m.vertices * 1.25;
@@ -141,7 +138,7 @@ StretchRun stretch_run(CellType element, const std::string& name) {
   c.resolution = 3;
   c.steps = 5;
   c.stretch = 2.0;
-  c.out = r.dir = fresh_dir(name);
+  c.out = r.dir = report_dir(name);
   c.command_line = "snh stretch --res 3 --steps 5 --stretch 2";
   std::ostringstream log;
   r.result = run_stretch(c, log);
@@ -278,7 +275,7 @@ TEST(RunReport, RewritingForFewerFramesRemovesStaleFrameFiles) {
   fs::remove_all(run.dir);
 }
 
-/// A 2x2x2 hex bar hanging from its top face under gravity, 4 frames to t = 0.2, into fresh_dir(name).
+/// A 2x2x2 hex bar hanging from its top face under gravity, 4 frames to t = 0.2, into report_dir(name).
 Scene hanging_scene(const std::string& name, const std::string& command_line) {
   Scene s;
   s.mesh.element = CellType::hex8;
@@ -289,7 +286,7 @@ Scene hanging_scene(const std::string& name, const std::string& command_line) {
   PinSpec pin;
   pin.select.region = Eigen::AlignedBox3d(Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d(1, 1, 1));  // the top face
   s.pins.push_back(pin);
-  s.output.dir = fresh_dir(name);
+  s.output.dir = report_dir(name);
   s.run.command_line = command_line;
   return s;
 }
@@ -530,7 +527,7 @@ TEST(RunReport, RunWithoutVtuFramesHasPlotsButNo3DView) {
   c.resolution = 2;
   c.steps = 2;
   c.write_vtu = false;
-  c.out = fresh_dir("novtu");
+  c.out = report_dir("novtu");
   std::ostringstream log;
   (void)run_stretch(c, log);
   const ReportSummary s = write_report(c.out);
@@ -542,7 +539,7 @@ TEST(RunReport, RunWithoutVtuFramesHasPlotsButNo3DView) {
 }
 
 TEST(RunReport, OneLineErrors) {
-  const fs::path dir = fresh_dir("errors");
+  const fs::path dir = report_dir("errors");
   fs::create_directories(dir);
   auto message = [&](const fs::path& d) {
     try {
@@ -577,7 +574,7 @@ TEST(RunReport, OneLineErrors) {
 // The report's own reads (stats.json, lab.json, bones.json, data.js) are checked as every input file is: a
 // directory or a FIFO there fails at once with one line (a FIFO blocked the report forever).
 TEST(RunReport, ItsJsonInputsAreCheckedBeforeReading) {
-  const fs::path dir = fresh_dir("json_inputs");
+  const fs::path dir = report_dir("json_inputs");
   fs::create_directories(dir / "stats.json");
   auto message = [&](const std::function<void()>& f) {
     try {
@@ -603,7 +600,7 @@ TEST(LabReport, TablesCurvesAndAReportPerSimulation) {
   LabOptions o;
   o.quick = true;
   o.energies = {"stable_neo_hookean"};
-  o.out = fresh_dir("lab");
+  o.out = report_dir("lab");
   o.command_line = "snh lab --quick";
   const LabReport lab = run_lab(o);
   // One simulation's output broken: only its own page is missing.
@@ -712,7 +709,7 @@ TEST(Render, AStopRequestedBeforeTheBrowserStartsEndsTheRender) {
 }
 
 TEST(Render, PngSizeReadsTheHeader) {
-  const fs::path dir = fresh_dir("png");
+  const fs::path dir = report_dir("png");
   fs::create_directories(dir);
   const unsigned char png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R',
                                0, 0, 0x04, 0xB0, 0, 0, 0x03, 0x84, 8, 6, 0, 0, 0};

@@ -26,6 +26,7 @@
 #include "snh/rig/gltf.hpp"
 #include "snh/rig/model.hpp"
 #include "snh/rig/skinning.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
@@ -195,7 +196,7 @@ TEST(Hand, HasNoClipToFind) {
 // and ankle below an "Armature" node that turns, moves and doubles them.
 
 const Eigen::Vector3d kX = Eigen::Vector3d::UnitX(), kY = Eigen::Vector3d::UnitY(), kZ = Eigen::Vector3d::UnitZ();
-Eigen::Quaterniond about(const Eigen::Vector3d& axis, double angle) { return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis)); }
+using test::about;
 
 const Eigen::Matrix4d kArmature = trs({0.1, 0.2, 0.3}, about(kY, 0.7), {2, 2, 2});
 const Eigen::Matrix4d kHip = trs({0, 0.5, 0}, about(kZ, 0.2), {1, 1, 1});

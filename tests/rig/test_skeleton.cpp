@@ -11,13 +11,12 @@
 #include "snh/rig/animation.hpp"
 #include "snh/rig/skeleton.hpp"
 #include "snh/rig/skinning.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
 
-Eigen::Quaterniond about(const Eigen::Vector3d& axis, double angle) {
-  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis.normalized()));
-}
+using test::about;
 
 Joint joint(const std::string& name, int parent, const Eigen::Vector3d& t, const Eigen::Quaterniond& r,
             const Eigen::Vector3d& s = Eigen::Vector3d::Ones()) {

@@ -16,15 +16,15 @@
 #include "snh/io/atomic_file.hpp"
 #include "snh/run/checkpoint.hpp"
 #include "snh/run/run_directory.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("snh_test_rundir_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
+fs::path scratch_dir(const std::string& name) {
+  fs::path d = test::fresh_dir("snh_test_rundir_", name);
   fs::create_directories(d);
   return d;
 }
@@ -39,7 +39,7 @@ std::string error_of(const std::function<void()>& f) {
 }
 
 TEST(RunDirectory, ALockedDirectoryRefusesASecondRunUntilReleased) {
-  const fs::path d = fresh_dir("lock");
+  const fs::path d = scratch_dir("lock");
   {
     const RunDirectoryLock first(d / "out");  // created by the lock
     EXPECT_TRUE(fs::is_directory(d / "out"));
@@ -55,7 +55,7 @@ TEST(RunDirectory, ALockedDirectoryRefusesASecondRunUntilReleased) {
 }
 
 TEST(RunDirectory, ADirectoryTheLockMadeAndNothingWroteIsRemovedWithIt) {
-  const fs::path d = fresh_dir("unused");
+  const fs::path d = scratch_dir("unused");
   { const RunDirectoryLock lock(d / "new"); }  // a run refused before its first file
   EXPECT_FALSE(fs::exists(d / "new"));
   {
@@ -70,7 +70,7 @@ TEST(RunDirectory, ADirectoryTheLockMadeAndNothingWroteIsRemovedWithIt) {
 }
 
 TEST(RunDirectory, ClearingRemovesOnlyWhatARunOfOursWrites) {
-  const fs::path d = fresh_dir("clear");
+  const fs::path d = scratch_dir("clear");
   for (const char* f : {"000.obj", "012.vtu", "1234.obj", "stats.json", "stats.csv", "index.html",
                         "stats.json.tmp.77", ".snh-write-test.5"})
     std::ofstream(d / f) << "x";
@@ -102,7 +102,7 @@ TEST(RunDirectory, ClearingRemovesOnlyWhatARunOfOursWrites) {
 // a user's notes and subdirectories stay (they were all deleted before), a subdirectory left empty goes, and
 // a directory or FIFO under one of our names is refused before anything is removed.
 TEST(RunDirectory, ClearingLeavesWhatIsNotOursInsideItsSubdirectories) {
-  const fs::path d = fresh_dir("clear_sub");
+  const fs::path d = scratch_dir("clear_sub");
   std::ofstream(d / "checkpoint.bin") << "x";
   fs::create_directories(d / "surface" / "sub");
   fs::create_directories(d / "lbs" / "003.obj");
@@ -131,7 +131,7 @@ TEST(RunDirectory, ClearingLeavesWhatIsNotOursInsideItsSubdirectories) {
 }
 
 TEST(RunDirectory, ForceWritesIntoADirectoryOfSomeoneElse) {
-  const fs::path d = fresh_dir("force");
+  const fs::path d = scratch_dir("force");
   std::ofstream(d / "notes.txt") << "keep";
   std::ofstream(d / "index.html") << "theirs";
   const RunDirectoryLock lock(d, true);
@@ -142,7 +142,7 @@ TEST(RunDirectory, ForceWritesIntoADirectoryOfSomeoneElse) {
 }
 
 TEST(RunDirectory, AStatsFileOfOursIsReadOnlyIfRegular) {
-  const fs::path d = fresh_dir("fifo");
+  const fs::path d = scratch_dir("fifo");
   ASSERT_EQ(::mkfifo((d / "stats.json").c_str(), 0644), 0);  // opening it to read would block
   EXPECT_FALSE(holds_a_run_of_ours(d));
   EXPECT_NE(error_of([&] { RunDirectoryLock lock(d); }).find("holds no snh run (it has stats.json)"), std::string::npos);
@@ -150,7 +150,7 @@ TEST(RunDirectory, AStatsFileOfOursIsReadOnlyIfRegular) {
 }
 
 TEST(RunDirectory, AStatsFileOfSnhShowsARunOfOurs) {
-  const fs::path d = fresh_dir("ours");
+  const fs::path d = scratch_dir("ours");
   std::ofstream(d / "stats.json") << "{\"snh_version\": \"0.1.0\", \"steps\": []}";  // a run from before the lock file
   std::ofstream(d / "001.obj") << "x";
   const RunDirectoryLock lock(d);
@@ -159,7 +159,7 @@ TEST(RunDirectory, AStatsFileOfSnhShowsARunOfOurs) {
 }
 
 TEST(RunDirectory, AResumeNeedsTheFramesItKeeps) {
-  const fs::path d = fresh_dir("frames");
+  const fs::path d = scratch_dir("frames");
   for (int i = 0; i <= 3; ++i)
     for (const char* ext : {"obj", "vtu"}) std::ofstream(d / fmt::format("{:03d}.{}", i, ext)) << "x";
   EXPECT_EQ(error_of([&] { check_kept_frames(d, 3, true); }), "");
@@ -173,7 +173,7 @@ TEST(RunDirectory, AResumeNeedsTheFramesItKeeps) {
 }
 
 TEST(Checkpoint, RoundTripsAndRefusesDamage) {
-  const fs::path d = fresh_dir("checkpoint");
+  const fs::path d = scratch_dir("checkpoint");
   const Checkpoint c{.fingerprint = "stretch: test", .step = 7, .time = 0.35, .x = Eigen::VectorXd::LinSpaced(30, -1, 2),
                      .aux = Eigen::VectorXd::Constant(30, 0.5)};
   write_checkpoint(d, c);

@@ -21,11 +21,12 @@
 #include "snh/mesh/surface.hpp"
 #include "snh/sim/kinematics.hpp"
 #include "snh/sim/simulation.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
 
-Eigen::Matrix3Xd unflatten(const Eigen::VectorXd& x) { return Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, x.size() / 3); }
+using test::unflatten;
 
 /// The tets of box_tets(res) whose centroids lie in [lo, hi], with only the vertices they use (renumbered
 /// in the box's order).

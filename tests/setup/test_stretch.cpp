@@ -23,17 +23,14 @@
 #include "snh/run/checkpoint.hpp"
 #include "snh/run/interrupt.hpp"
 #include "snh/setup/stretch.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("snh_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  return dir;
-}
+fs::path stretch_dir(const std::string& name) { return test::fresh_dir("snh_test_", name); }
 
 /// Vertex positions from an OBJ frame ("v x y z" lines), and the count of "f" lines.
 Eigen::Matrix3Xd read_obj_vertices(const fs::path& path, int* faces = nullptr) {
@@ -114,7 +111,7 @@ class Stretch : public ::testing::TestWithParam<CellType> {};
 // the extrapolated guesses carry them on for 25 steps: about 1e-8 measured). A mesh that lacks a
 // symmetry is off by about 0.5.
 TEST_P(Stretch, ConvergesEveryStepThinsInTheMiddleAndIsSymmetric) {
-  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_paper");
+  const fs::path out = stretch_dir(std::string(to_string(GetParam())) + "_paper");
   const StretchResult r = run(GetParam(), out, 1e-3);
   expect_every_step_converged(r);
   EXPECT_LT(r.middle_width, 1.5);  // from 2 at rest; ≈ 1.01 at res 4, ≈ 1.06 at res 10 (docs/paper-programs.md)
@@ -141,7 +138,7 @@ TEST_P(Stretch, ConvergesEveryStepThinsInTheMiddleAndIsSymmetric) {
 TEST(StretchMeshFile, NoMiddleCrossSectionIsReportedAsNotApplicable) {
   // Issue 13: a mesh whose layer nearest the middle is one vertex (a single tet) or the pinned end layer
   // (the res-1 box) reported "width 0 (rest 0)" or the pinned layer's width; now NaN, null and "n/a".
-  const fs::path dir = fresh_dir("no_middle");
+  const fs::path dir = stretch_dir("no_middle");
   fs::create_directories(dir);
   VolumeMesh tet;
   tet.type = CellType::tet4;
@@ -170,7 +167,7 @@ TEST(StretchMeshFile, NoMiddleCrossSectionIsReportedAsNotApplicable) {
 
 TEST(StretchMeshFile, AMeshFileOfTheBoxGivesTheBoxResultAndAnyAxisWorks) {
   // The res-4 box written as Gmsh 4.1 and stretched as a mesh file: the same run as the box.
-  const fs::path dir = fresh_dir("mesh_file");
+  const fs::path dir = stretch_dir("mesh_file");
   fs::create_directories(dir);
   for (CellType type : {CellType::tet4, CellType::hex8}) {
     write_msh(dir / "box.msh", type == CellType::tet4 ? box_tets(4) : box_hexes(4));
@@ -212,7 +209,7 @@ TEST(StretchMeshFile, AMeshFileOfTheBoxGivesTheBoxResultAndAnyAxisWorks) {
 }
 
 TEST(StretchInterrupt, AStopKeepsTheCompletedStepsAndTheirFrames) {
-  const fs::path full_dir = fresh_dir("int_full"), cut_dir = fresh_dir("int_cut");
+  const fs::path full_dir = stretch_dir("int_full"), cut_dir = stretch_dir("int_cut");
   StretchConfig c;
   c.element = CellType::hex8;
   c.resolution = 3;
@@ -247,7 +244,7 @@ TEST(StretchInterrupt, AStopKeepsTheCompletedStepsAndTheirFrames) {
 }
 
 TEST(StretchInterrupt, ResumeContinuesFromTheLastCompletedStep) {
-  const fs::path full_dir = fresh_dir("resume_full"), dir = fresh_dir("resume");
+  const fs::path full_dir = stretch_dir("resume_full"), dir = stretch_dir("resume");
   StretchConfig c;
   c.element = CellType::tet4;
   c.resolution = 4;
@@ -335,7 +332,7 @@ StretchConfig small_run(const fs::path& dir, double interval) {
 // Newton's first iteration of every step: what the run has left on disk by then.
 TEST(StretchProgress, WrittenAfterTheFirstStepThenByTimeAndAtTheEnd) {
   for (const double interval : {0.0, 1e9}) {
-    const fs::path dir = fresh_dir("progress");
+    const fs::path dir = stretch_dir("progress");
     StretchConfig c = small_run(dir, interval);
     std::vector<Progress> seen;  // at the start of steps 1 … 4
     c.newton.on_iteration = [&](int iteration, double) {
@@ -365,7 +362,7 @@ TEST(StretchProgress, WrittenAfterTheFirstStepThenByTimeAndAtTheEnd) {
 // a frame that cannot be written would be) first writes the progress it had not written: steps 1 and 2
 // are in the stats, the series and the checkpoint, and --resume continues from step 2.
 TEST(StretchProgress, AnExceptionWritesTheProgressNotYetWritten) {
-  const fs::path dir = fresh_dir("progress_throw");
+  const fs::path dir = stretch_dir("progress_throw");
   StretchConfig c = small_run(dir, 1e9);
   int step = 0;
   c.newton.on_iteration = [&](int iteration, double) {
@@ -389,7 +386,7 @@ TEST(StretchProgress, AnExceptionWritesTheProgressNotYetWritten) {
 
 TEST(StretchFailure, ANonConvergedStepIsReportedWithItsWorstElement) {
   // Corotated's linear volume term drives the lateral singular values negative at res 4 (docs/results.md).
-  const fs::path dir = fresh_dir("corotated");
+  const fs::path dir = stretch_dir("corotated");
   StretchConfig c;
   c.resolution = 4;
   c.material = "corotated";
@@ -407,7 +404,7 @@ TEST(StretchFailure, ANonConvergedStepIsReportedWithItsWorstElement) {
 }
 
 TEST(StretchMirroredTets, ConvergesEveryStepAndIsMirrorSymmetricInXAndZ) {
-  const fs::path out = fresh_dir("tet_mirrored");
+  const fs::path out = stretch_dir("tet_mirrored");
   const StretchResult r = run(CellType::tet4, out, 1e-3, 25, 3.5, TetSplit::mirrored);
   expect_every_step_converged(r);
   EXPECT_LT(r.middle_width, 1.5);
@@ -418,7 +415,7 @@ TEST(StretchMirroredTets, ConvergesEveryStepAndIsMirrorSymmetricInXAndZ) {
 }
 
 TEST_P(Stretch, NewtonConvergesQuadratically) {
-  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_quad");
+  const fs::path out = stretch_dir(std::string(to_string(GetParam())) + "_quad");
   const StretchResult r = run(GetParam(), out, 1e-11, 1, 2.5);  // one big step, solved tightly
   ASSERT_TRUE(r.all_converged);
   const std::vector<double>& h = r.steps[0].residuals;
@@ -440,7 +437,7 @@ TEST_P(Stretch, NewtonConvergesQuadratically) {
 }
 
 TEST_P(Stretch, ObjFramesHaveThePaperStructure) {
-  const fs::path out = fresh_dir(std::string(to_string(GetParam())) + "_obj");
+  const fs::path out = stretch_dir(std::string(to_string(GetParam())) + "_obj");
   const StretchResult r = run(GetParam(), out, 1e-3, 3, 1.3);
   ASSERT_TRUE(r.all_converged);
   const int res = 4;
@@ -486,7 +483,7 @@ INSTANTIATE_TEST_SUITE_P(Elements, Stretch, ::testing::Values(CellType::tet4, Ce
 
 TEST(StretchConfig, RejectsBadInputBeforeAnyWork) {
   StretchConfig c;
-  c.out = fresh_dir("reject");
+  c.out = stretch_dir("reject");
   c.material = "stable_neohookean";
   EXPECT_THROW(validate(c), std::invalid_argument);
   c.material = "stable_neo_hookean";

@@ -13,11 +13,12 @@
 #include "snh/sim/dynamics.hpp"
 #include "snh/setup/scene_run.hpp"
 #include "snh/solve/newton.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
 
-Eigen::VectorXd flatten(const Eigen::Matrix3Xd& X) { return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()); }
+using test::flatten;
 
 TEST(Dynamics, LumpedMassSumsToDensityTimesVolume) {
   for (CellType type : {CellType::tet4, CellType::hex8}) {

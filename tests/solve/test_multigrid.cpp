@@ -23,6 +23,7 @@
 #include "snh/setup/stretch.hpp"
 #include "snh/solve/multigrid.hpp"
 #include "snh/solve/newton.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
@@ -403,11 +404,7 @@ INSTANTIATE_TEST_SUITE_P(Multigrid, TruncatedNewton, testing::Values("mg", "amg"
 
 namespace fs = std::filesystem;
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("snh_test_mg_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  return dir;
-}
+fs::path multigrid_dir(const std::string& name) { return test::fresh_dir("snh_test_mg_", name); }
 
 std::string contents(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -437,7 +434,7 @@ class StretchRun : public testing::TestWithParam<const char*> {};
 TEST_P(StretchRun, MatchesTheDirectSolverAndIsTheSameForOneAndTwoThreads) {
   const std::string solver = GetParam();
   const CellType element = solver == "mg" ? CellType::hex8 : CellType::tet4;
-  const fs::path direct_dir = fresh_dir(solver + "_direct"), one = fresh_dir(solver + "_one"), two = fresh_dir(solver + "_two");
+  const fs::path direct_dir = multigrid_dir(solver + "_direct"), one = multigrid_dir(solver + "_one"), two = multigrid_dir(solver + "_two");
   const StretchResult direct = stretch("cholmod", direct_dir, element);
   omp_set_num_threads(1);
   const StretchResult mg1 = stretch(solver, one, element);
@@ -476,7 +473,7 @@ TEST(MultigridRuns, TetMeshesAreRefusedWithOneLine) {
   c.element = CellType::tet4;
   c.resolution = 3;
   c.solver = "mg";
-  c.out = fresh_dir("tets");
+  c.out = multigrid_dir("tets");
   std::ostringstream log;
   try {
     (void)run_stretch(c, log);
@@ -494,7 +491,7 @@ class FleshRun : public testing::TestWithParam<const char*> {};
 
 TEST_P(FleshRun, MatchesTheDirectSolver) {
   const std::string multigrid = GetParam();
-  const fs::path dir = fresh_dir("flesh_" + multigrid);
+  const fs::path dir = multigrid_dir("flesh_" + multigrid);
   fs::create_directories(dir);
   test::write_limb_gltf(dir / "limb.gltf");
   Eigen::VectorXd x[2];
