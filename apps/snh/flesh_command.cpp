@@ -88,7 +88,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                                "(capped at about 20 000 cells); the header says why")
                    ->check(CLI::Range(1, 1000));
   cmd->add_option("--cell-size", o->cell_size, "The cubes' edge in model units, instead of --resolution")
-      ->check(CLI::PositiveNumber)
+      ->check(finite_number(Sign::positive))
       ->excludes(res);
   cmd->add_option("--soft-shell", o->soft_shell,
                                 "Bind softly the flesh within this distance outside the bones' capsules (model units): springs "
@@ -117,13 +117,13 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--dhat", o->dhat,
                   "Distance below which contact repels, model units (default: a quarter of the render surface's mean edge "
                   "length, at most half its smallest distance at rest)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_number(Sign::positive));
   cmd->add_option("--contact-stiffness", o->contact_stiffness,
                   "Barrier stiffness kappa (default: Young's modulus x cell size / dhat^2, about one cell's stiffness)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_number(Sign::positive));
   cmd->add_option("--friction", o->friction,
                   "Coulomb friction coefficient mu of the skin on itself (--self-contact) and on the --ground (default 0: frictionless)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_number(Sign::non_negative));
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params, "--youngs 1e5 --poisson 0.488, the paper's flesh");
   auto* qs = cmd->add_flag("--quasi-static", o->quasi_static, "Quasi-static frames (the default, as the paper)");
@@ -131,7 +131,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                 "Backward Euler with gravity 9.81 m/s^2 down the model's up axis instead (density 1000 kg/m^3; gravity, density and "
                 "the material's Pa taken to the model's units where it states them, as an FBX in centimetres does)")
       ->excludes(qs);
-  cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(CLI::PositiveNumber);
+  cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(finite_number(Sign::positive));
   cmd->add_option("--out", o->out, "Output directory (default output/<model name>)")->check(non_empty_path());
   cmd->add_option("--solver", o->solver, "Linear solver (default auto: by size; see snh stretch --help)");
   cmd->add_option("--newton-iterations", o->newton_iterations,

@@ -7,6 +7,7 @@
 
 #include "../common/command_line.hpp"
 #include "../common/omp_env.hpp"
+#include "../common/out_option.hpp"
 #include "flesh_command.hpp"
 #include "lab_command.hpp"
 #include "material_command.hpp"
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
   snh::cli::add_lab_command(app, exit_code);
   snh::cli::add_mesh_commands(app, exit_code);
   snh::cli::add_report_commands(app, exit_code);
+  snh::cli::refuse_non_finite_numbers(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

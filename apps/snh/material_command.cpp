@@ -94,10 +94,7 @@ int run_inspect(const MaterialOptions& o) {
   Mat3 F;
   if (!o.F_text.empty()) {
     F = parse_F(o.F_text);
-  } else {
-    for (std::size_t i = 0; i < 3; ++i)
-      if (!std::isfinite(o.stretch[i]))
-        throw std::invalid_argument(fmt::format("--stretch value {} is not a finite number", i));
+  } else {  // nan and inf were refused with the options (refuse_non_finite_numbers)
     F = Vec3(o.stretch[0], o.stretch[1], o.stretch[2]).asDiagonal();
   }
   check_F_range(F, o.F_text.empty());

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "../common/out_option.hpp"
 #include "snh/io/atomic_file.hpp"
 #include "snh/report/render.hpp"
 #include "snh/report/report.hpp"
@@ -65,7 +66,7 @@ void add_report_commands(CLI::App& app, int& exit_code) {
       "Saves a picture of one frame of a run (the report's 3D view with its legend) as a PNG, through headless "
       "Chromium (Debian package chromium; or set SNH_CHROMIUM). Writes the report first if the directory has none.");
   render->add_option("dir", r->dir, "The run's output directory")->required();
-  render->add_option("--frame", r->frame, "The frame (default: the last)")->check(CLI::NonNegativeNumber);
+  render->add_option("--frame", r->frame, "The frame (default: the last)")->check(finite_number(Sign::non_negative));
   render->add_option("--field", r->field, "Colour by J (default), psi (energy density) or displacement");
   render->add_option("--out", r->out, "The PNG to write")->required();
   render->add_option("--width", r->width, "Picture width in pixels (default 1200)");

@@ -42,7 +42,9 @@ check "F nan" input "--F entry 4 is not a finite number: 'nan'" -- material stab
 check "F and stretch" input "excludes" -- material stable_neo_hookean --F "1 0 0 0 1 0 0 0 1" --stretch 1 1 1
 check "no F" input "give exactly one of --F" -- material stable_neo_hookean
 check "bad projection" input "--projection must be none, clamp or abs" -- material stable_neo_hookean --stretch 1 1 1 --projection foo
-check "stretch inf" input "--stretch value 2 is not a finite number" -- material stable_neo_hookean --stretch 1 1 inf
+check "stretch inf" input "^snh: error: --stretch: must be a finite number, got inf" -- material stable_neo_hookean --stretch 1 1 inf
+check "stretch run nan" input "^snh: error: --stretch: must be a finite number, got nan" -- stretch --stretch nan --out /tmp/snh-never-written
+check "render frame -1" input "^snh: error: --frame: must be >= 0, got -1" -- render /tmp/snh-never-written --frame -1
 check "no reparam psi_d" input "psi_d cannot be reparametrized" -- material psi_d --reparametrize --stretch 1 1 1
 # Issue 13: outside the supported ranges, refused before any work, naming the value (no nan printed).
 check "mu 1e300" 2 "^snh: error: mu = 1e\+300 is outside the supported range \[1e-12, 1e\+12\]$" -- material stable_neo_hookean --mu 1e300 --stretch 1 1 1

@@ -143,6 +143,14 @@ flesh_error lame "go together" "$limb" --mu 1
 flesh_error soft_stiffness "flesh.soft_binding.stiffness: must be > 0, got 0" "$limb" --soft-stiffness 0
 flesh_error joint_cells "joint-cells: loose not in" "$limb" --joint-cells loose
 flesh_error soft_shell "flesh.soft_binding.shell: must be > 0, got -1" "$limb" --soft-shell -1
+# Numbers: nan and inf name the option; a frame rate too low for one frame of the clip is refused.
+flesh_error fps_nan "^snh: error: --fps: must be a finite number, got nan" "$limb" --fps nan
+flesh_error ground_inf "^snh: error: --ground: must be a finite number, got inf" "$limb" --ground inf
+flesh_error fps_tiny "fps: 1e-300 frames per second makes less than one frame of the 1 s to run" "$limb" --fps 1e-300
+# A frame rate that is not a whole number stays what it is: 7.5 fps over the 1 s clip is 8 frames to 16/15 s.
+if "$SNH" flesh "$limb" --fps 7.5 --resolution 12 --no-report --out "$work/fps" > "$work/fps.log" 2>&1 \
+   && grep -q '^quasi-static, 8 frames to t = 1.06667' "$work/fps.log" && grep -q 'timeCodesPerSecond = 7.5$' "$work/fps/flesh.usda" \
+   && [ -f "$work/fps/surface/008.obj" ] && [ ! -f "$work/fps/surface/009.obj" ]; then ok; else bad "fps 7.5: $(tail -3 "$work/fps.log")"; fi
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

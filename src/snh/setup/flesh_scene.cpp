@@ -219,6 +219,10 @@ void flesh_time(const Scene& s, const Flesh& flesh, double& end_time, int& frame
   const double fps = s.flesh->fps;  // a flesh body comes from the scene's flesh section
   // Frames on the animation's grid, t = i / fps: the end time rounded up to a whole frame (a clip holds its
   // last key after its end), so a cache's samples fall on the frames of the user's tool.
+  if (end_time > 0.0 && end_time * fps < 1.0 - 1e-9)  // its one frame would lie after the end, at 1 / fps
+    throw SceneError(fmt::format("{}: fps: {:g} frames per second makes less than one frame of the {:g} s to run; "
+                                 "at least {:g} are needed",
+                                 s.source.string(), fps, end_time, 1.0 / end_time));
   const double n = std::max(1.0, std::ceil(end_time * fps * (1.0 - 1e-9)));
   if (!(n <= TimeSpec::max_frames))
     throw SceneError(fmt::format("{}: end_time: {:g} s at {:g} frames per second makes {:.3g} frames; at most {} can run",
