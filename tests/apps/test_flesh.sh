@@ -114,10 +114,29 @@ fi
 
 # The options a character may need reach the run: --newton-iterations 1 stops the first frame that needs more
 # (exit 1, the limit in the header and stats.json), --join-meshes is written to the run's settings.
-"$SNH" flesh "$limb" --resolution 12 --newton-iterations 1 --join-meshes --no-report --out "$work/one" > "$work/one.log" 2>&1
+"$SNH" flesh "$limb" --resolution 12 --newton-iterations 1 --join-meshes --out "$work/one" > "$work/one.log" 2>&1
 [ $? -eq 1 ] && grep -q 'or fails after 1 iterations' "$work/one.log" && grep -q 'no convergence in 1 Newton iterations' "$work/one.log" \
   && grep -q '"max_newton_iterations": 1,' "$work/one/stats.json" && grep -q '"join_meshes": true' "$work/one/stats.json" \
   && ok || bad "one: $(tail -3 "$work/one.log")"
+# The frame where that run stopped is no result: its last iterate is failed_001 (the volume, surface/ and lbs/),
+# named in the last line; frames.pvd, flesh.usda, the point caches and the report's frames end at frame 0.
+[ -f "$work/one/failed_001.obj" ] && [ -f "$work/one/failed_001.vtu" ] && [ -f "$work/one/surface/failed_001.obj" ] \
+  && [ -f "$work/one/lbs/failed_001.obj" ] && [ ! -e "$work/one/001.obj" ] && [ ! -e "$work/one/surface/001.obj" ] \
+  && grep -q "^STOPPED: frame 1, .*; its last iterate: failed_001.obj" "$work/one.log" && grep -q "\"failed_frame\": \"failed_001.obj\"" "$work/one/stats.json" && ok || bad "one: failed_001 files"
+[ "$(grep -c '<DataSet' "$work/one/frames.pvd")" -eq 1 ] && ! grep -q failed "$work/one/frames.pvd" \
+  && python3 "$HERE/check_usda.py" "$work/one/flesh.usda" 2 1 > /dev/null && [ "$(stat -c %s "$work/one/flesh.pc2")" -eq $((32 + 386 * 12)) ] \
+  && grep -q 'its last iterate, no result, is failed_001.obj' "$work/one/report/data.js" && ok || bad "one: the failed frame is in no series"
+# With --keep-going the frames stay in order, and each one that did not converge is marked: a comment before its
+# DataSet in frames.pvd, snh:converged false at its time code in flesh.usda, its label in the report.
+"$SNH" flesh "$limb" --resolution 12 --newton-iterations 1 --keep-going --out "$work/kept" > "$work/kept.log" 2>&1
+[ $? -eq 1 ] && [ -f "$work/kept/024.obj" ] && ! ls "$work/kept" | grep -q failed_ \
+  && [ "$(grep -c '^<!-- frame [0-9]* did not converge: .* -->$' "$work/kept/frames.pvd")" -eq 24 ] \
+  && grep -q '^            0: true,$' "$work/kept/flesh.usda" && grep -q '^            24: false,$' "$work/kept/flesh.usda" \
+  && python3 "$HERE/check_usda.py" "$work/kept/flesh.usda" 2 25 > /dev/null \
+  && grep -q '"label":"frame 24 (did not converge)"' "$work/kept/report/data.js" && ok || bad "kept: $(tail -3 "$work/kept.log")"
+# A new run into the stopped run's directory removes its failed_ files with the rest.
+"$SNH" flesh "$limb" --resolution 12 --no-report --out "$work/one" > "$work/one_again.log" 2>&1
+[ $? -eq 0 ] && ! find "$work/one" -name 'failed_*' | grep -q . && [ -f "$work/one/surface/024.obj" ] && ok || bad "one again: $(tail -2 "$work/one_again.log")"
 
 # Bad input: one line, exit code 2, no output directory.
 flesh_error() {  # NAME PATTERN ARGS...

@@ -14,7 +14,11 @@
 #include <fmt/format.h>
 
 #include "snh/io/atomic_file.hpp"
+#include "snh/fem/elastic_term.hpp"
+#include "snh/material/registry.hpp"
+#include "snh/mesh/box.hpp"
 #include "snh/run/checkpoint.hpp"
+#include "snh/run/output.hpp"
 #include "snh/run/run_directory.hpp"
 #include "test_support.hpp"
 
@@ -127,6 +131,37 @@ TEST(RunDirectory, ClearingLeavesWhatIsNotOursInsideItsSubdirectories) {
   std::ofstream(d / "stats.json") << "x";
   EXPECT_NE(error_of([&] { (void)clear_previous_run(d, lock); }).find("flesh.usda: is a FIFO"), std::string::npos);
   EXPECT_TRUE(fs::exists(d / "stats.json"));
+  fs::remove_all(d);
+}
+
+// The frame where a run stops without converging is written as failed_NNN, outside the series; a frame written
+// later under that index (a resumed run that gets past it) removes it. A frame that did not converge but stays
+// in the series (a run that went past it) is marked in frames.pvd by its note.
+TEST(FrameWriter, AFailedFrameIsKeptOutOfTheSeriesAndANoteMarksAFrameInIt) {
+  const fs::path d = scratch_dir("failed_frame");
+  const VolumeMesh mesh = box_hexes(1);
+  const ElasticTerm elastic(mesh, make_material("stable_neo_hookean", {1.0, 10.0}));
+  const Eigen::VectorXd x = test::flatten(mesh.vertices);
+  const ElasticTerm::Deformation def = elastic.deformation(x);
+  FrameWriter frames(d, mesh, true, std::vector<bool>(mesh.vertex_count(), false));
+  frames.write(0, 0.0, x, def);
+  frames.write(1, 0.5, x, def, kFailedPrefix);
+  frames.write_series();
+  EXPECT_TRUE(fs::exists(d / "failed_001.obj"));
+  EXPECT_TRUE(fs::exists(d / "failed_001.vtu"));
+  EXPECT_FALSE(fs::exists(d / "001.obj"));
+  std::ifstream pvd(d / "frames.pvd");
+  const std::string text((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.find("failed_"), std::string::npos) << text;
+  EXPECT_EQ(read_pvd(d / "frames.pvd").size(), 1u);
+  frames.write(1, 0.5, x, def, "", "frame 1 did not converge -- twice");
+  frames.write_series();
+  EXPECT_FALSE(fs::exists(d / "failed_001.obj"));
+  EXPECT_FALSE(fs::exists(d / "failed_001.vtu"));
+  std::ifstream pvd2(d / "frames.pvd");
+  const std::string text2((std::istreambuf_iterator<char>(pvd2)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text2.find("<!-- frame 1 did not converge - twice -->\n<DataSet timestep=\"0.5\""), std::string::npos) << text2;
+  EXPECT_EQ(read_pvd(d / "frames.pvd").size(), 2u);
   fs::remove_all(d);
 }
 

@@ -398,7 +398,10 @@ TEST(StretchFailure, ANonConvergedStepIsReportedWithItsWorstElement) {
   EXPECT_FALSE(last.converged);
   EXPECT_NE(last.failure.find("no convergence in 50 Newton iterations"), std::string::npos) << last.failure;
   EXPECT_NE(last.failure.find("; worst element "), std::string::npos) << last.failure;
-  EXPECT_TRUE(fs::exists(dir / fmt::format("{:03d}.obj", last.index))) << "the failed step's frame is kept";
+  EXPECT_TRUE(fs::exists(dir / fmt::format("failed_{:03d}.obj", last.index))) << "the failed step's state is kept, as no result";
+  EXPECT_FALSE(fs::exists(dir / fmt::format("{:03d}.obj", last.index)));
+  EXPECT_NE(log.str().find(fmt::format("STOPPED: a step did not converge (its last iterate: failed_{:03d}.obj)", last.index)),
+            std::string::npos) << log.str();
   EXPECT_TRUE(fs::exists(dir / "stats.json"));
   fs::remove_all(dir);
 }

@@ -1,5 +1,6 @@
 #include "snh/io/usda.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <stdexcept>
@@ -54,6 +55,8 @@ void write_usda(const std::filesystem::path& path, const std::string& root, cons
       if (!m.frames[f].allFinite())
         throw std::invalid_argument(fmt::format("USD mesh {}: frame {} has a non-finite point", m.name, f));
     }
+    if (!m.converged.empty() && m.converged.size() != m.frames.size())
+      throw std::invalid_argument(fmt::format("USD mesh {}: {} convergence flags for {} frames", m.name, m.converged.size(), m.frames.size()));
     if (!m.normals.empty() && m.normals.size() != m.frames.size())
       throw std::invalid_argument(fmt::format("USD mesh {}: {} frames of normals for {} frames", m.name, m.normals.size(), m.frames.size()));
     for (const Eigen::Matrix3Xd& n : m.normals)
@@ -101,6 +104,11 @@ void write_usda(const std::filesystem::path& path, const std::string& root, cons
       samples("normal3f[] normals", m.normals.size(), [&](std::size_t f) -> const Eigen::Matrix3Xd& { return m.normals[f]; });
     }
     put(o, "        uniform token orientation = \"rightHanded\"\n");
+    if (std::find(m.converged.begin(), m.converged.end(), false) != m.converged.end()) {
+      put(o, "        custom bool snh:converged.timeSamples = {{\n");
+      for (std::size_t f = 0; f < m.converged.size(); ++f) put(o, "            {}: {},\n", f, m.converged[f] ? "true" : "false");
+      put(o, "        }}\n");
+    }
     samples("point3f[] points", m.frames.size(), [&](std::size_t f) -> const Eigen::Matrix3Xd& { return m.frames[f]; });
     if (m.uv.cols() > 0) {
       put(o, "        texCoord2f[] primvars:st = [");

@@ -17,6 +17,9 @@ struct UsdMesh {
   std::vector<Eigen::Matrix3Xd> frames;  ///< the points (3 by #V) at time codes 0, 1, 2, …
   std::vector<Eigen::Matrix3Xd> normals; ///< per frame, unit vertex normals (3 by #V); empty: none written
   Eigen::Matrix2Xd uv;                   ///< texture coordinates per vertex (2 by #V, origin bottom left); empty: none
+  /// Per frame, whether it is a result: where one is false, the mesh gets `custom bool snh:converged` sampled
+  /// at every time code (a frame that did not converge, which a run went past, is marked false). Empty: none.
+  std::vector<bool> converged;
 };
 
 /// Writes the stage atomically: one Xform prim `root` (the default prim) holding each mesh, time codes 0 …

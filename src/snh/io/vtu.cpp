@@ -96,11 +96,18 @@ void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const 
   VtuWriter(mesh).write(path, positions, point_data, cell_data, point_scalars);
 }
 
-void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& frames) {
+void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& frames,
+               const std::vector<std::string>& notes) {
   write_atomically(path, [&](std::ostream& out) {
     out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n<Collection>\n";
-    for (const auto& [t, file] : frames)
-      out << fmt::format("<DataSet timestep=\"{:g}\" group=\"\" part=\"0\" file=\"{}\"/>\n", t, file);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      if (i < notes.size() && !notes[i].empty()) {
+        std::string note = notes[i];  // "--" may not appear inside an XML comment
+        for (auto at = note.find("--"); at != std::string::npos; at = note.find("--", at)) note.erase(at, 1);
+        out << "<!-- " << note << " -->\n";
+      }
+      out << fmt::format("<DataSet timestep=\"{:g}\" group=\"\" part=\"0\" file=\"{}\"/>\n", frames[i].first, frames[i].second);
+    }
     out << "</Collection>\n</VTKFile>\n";
   });
 }

@@ -51,8 +51,10 @@ void write_vtu(const std::filesystem::path& path, const VolumeMesh& mesh, const 
                const std::vector<std::pair<std::string, Eigen::VectorXd>>& cell_data,
                const std::vector<std::pair<std::string, Eigen::VectorXd>>& point_scalars = {});
 
-/// Writes a ParaView collection listing (time, file) pairs; files relative to the .pvd's directory.
-void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& frames);
+/// Writes a ParaView collection listing (time, file) pairs; files relative to the .pvd's directory. `notes`
+/// (empty, or one per frame): an XML comment before each DataSet whose note is not empty.
+void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& frames,
+               const std::vector<std::string>& notes = {});
 
 /// Reads a ParaView collection back: (time, file) of each DataSet in order (a missing timestep is the
 /// DataSet's index). Throws MeshError ("FILE: what is wrong") for an unreadable file, a DataSet without

@@ -317,7 +317,8 @@ json frame_values(const VtuData& data, const fs::path& file, const VolumeMesh& r
 /// The 3D part of a run's report: reads the .vtu frames listed in frames.pvd, writes report/frames/NNN.js
 /// (surface positions and fields of each frame, and a flesh run's render surface) and returns the "mesh"
 /// object of data.js; `render` is set to the "render" object of a flesh run (surface/000.obj there), else null.
-json write_frames(const fs::path& dir, const std::string& frame_word, json& render) {
+/// A frame in `unconverged` (a run that went past it) is labelled so.
+json write_frames(const fs::path& dir, const std::string& frame_word, const std::vector<int>& unconverged, json& render) {
   std::vector<std::pair<double, std::string>> pvd;
   try {
     pvd = read_pvd(dir / "frames.pvd");
@@ -354,7 +355,9 @@ json write_frames(const fs::path& dir, const std::string& frame_word, json& rend
     if (render_surface) frame_json["render"] = render_surface->frame(i, pvd[i].second);
     const std::string src = fmt::format("report/frames/{:03d}.js", i);
     write_atomically(dir / src, [&](std::ostream& o) { o << "snhReportFrame(" << i << ", " << frame_json.dump() << ");\n"; });
-    frames.push_back({{"index", i}, {"time", pvd[i].first}, {"label", fmt::format("{} {}", frame_word, i)}, {"src", src}});
+    const bool failed = std::find(unconverged.begin(), unconverged.end(), static_cast<int>(i)) != unconverged.end();
+    frames.push_back({{"index", i}, {"time", pvd[i].first}, {"label", fmt::format("{} {}{}", frame_word, i, failed ? " (did not converge)" : "")},
+                      {"src", src}});
   }
   // Frame files of an earlier, longer report of this directory would only confuse: remove them.
   for (std::size_t i = pvd.size();; ++i) {
@@ -440,7 +443,11 @@ json run_data(const fs::path& dir, const json& stats) {
                          "or is still running)",
                          scene ? "frame" : "step", rows.empty() ? 0 : rows.back().value(scene ? "frame" : "step", 0));
   else if (!ok && signal) status = fmt::format("interrupted by signal {} after {} {}", signal, scene ? "frame" : "step", rows.empty() ? 0 : rows.back().value(scene ? "frame" : "step", 0));
-  else if (!ok && scene) status = "stopped: " + stats.value("failure", std::string("a frame failed"));
+  else if (!ok && scene) {
+    status = "stopped: " + stats.value("failure", std::string("a frame failed"));
+    if (stats.contains("failed_frame") && stats.at("failed_frame").is_string())
+      status += "; its last iterate, no result, is " + stats.at("failed_frame").get<std::string>();
+  }
   else if (!ok) {
     status = "stopped: a step did not converge";
     if (!rows.empty()) status = fmt::format("stopped: step {} did not converge ({})", rows.back().value("step", 0), rows.back().value("failure", std::string()));
@@ -506,7 +513,13 @@ json run_data(const fs::path& dir, const json& stats) {
 
   d["mesh"] = nullptr;
   d["render"] = nullptr;
-  if (fs::exists(dir / "frames.pvd")) d["mesh"] = write_frames(dir, scene ? "frame" : "step", d["render"]);
+  if (fs::exists(dir / "frames.pvd")) {
+    std::vector<int> unconverged;
+    if (const auto it = stats.find("unconverged_frames"); it != stats.end() && it->is_array())
+      for (const json& f : *it)
+        if (f.is_number_integer()) unconverged.push_back(f.get<int>());
+    d["mesh"] = write_frames(dir, scene ? "frame" : "step", unconverged, d["render"]);
+  }
   else d["meta"].push_back({"3D view", "none: the run wrote no .vtu frames (frames.pvd is missing)"});
   return d;
 }

@@ -30,6 +30,7 @@ void write_stats(const RunPlan& plan, const RunResult& r, const std::string& sta
   j["all_converged"] = status == "finished" ? r.all_converged : false;
   j["failure"] = r.failure;
   j["unconverged_frames"] = r.unconverged;
+  if (!r.failed_frame.empty()) j["failed_frame"] = r.failed_frame;
   j["interrupted_by_signal"] = r.interrupted_by;
   j["total_seconds"] = r.total_seconds;
   j["peak_memory_mib"] = r.peak_memory_mib;
@@ -133,7 +134,12 @@ class RunLoop {
     if (resume_from_) {
       sim_.restore({.x = resume_from_->x, .aux = resume_from_->aux, .time = resume_from_->time,
                     .steps = resume_from_->step * plan_.substeps});
-      frames_->adopt_written(resume_from_->step, [&](int i) { return i * plan_.frame_duration; });
+      frames_->adopt_written(resume_from_->step, [&](int i) { return i * plan_.frame_duration; },
+                             [&](int i) {  // a frame that a --keep-going run went past stays marked
+                               for (const StepRecord& r : result_.records)
+                                 if (r.index == i && !r.converged) return unconverged_note(r);
+                               return std::string();
+                             });
       first_ = resume_from_->step + 1;
       log_ << fmt::format("resuming after {} {} (checkpoint in {})\n", word_, resume_from_->step, plan_.out.string());
       log_.flush();
@@ -156,17 +162,18 @@ class RunLoop {
     last_progress_ = Clock::now();
   }
 
-  /// Frame `index`'s files (NNN.obj, NNN.vtu, and the plan's own); a failure names the frame and what is kept.
-  void write_frame(int index, const ElasticTerm::Deformation& d) {
+  /// Frame `index`'s files (NNN.obj, NNN.vtu, and the plan's own; `prefix` and `note` as FrameWriter::write
+  /// takes them); a failure names the frame and what is kept.
+  void write_frame(int index, const ElasticTerm::Deformation& d, const std::string& prefix = "", const std::string& note = "") {
     const auto failure = [&](const char* what) {
       return fmt::format("{} {}: {} ({}stats.json and checkpoint.bin are kept: --resume continues once the output can be "
                          "written)",
                          word_, index, what, index > 0 ? fmt::format("frames 000 to {:03d}, ", index - 1) : "");
     };
     try {
-      frames_->write(index, index * plan_.frame_duration, sim_.x(), d);
+      frames_->write(index, index * plan_.frame_duration, sim_.x(), d, prefix, note);
       unsaved_ = true;
-      if (plan_.write_frame) plan_.write_frame(index, index * plan_.frame_duration, sim_.x());
+      if (plan_.write_frame) plan_.write_frame(index, index * plan_.frame_duration, sim_.x(), prefix);
     } catch (const WriteError& e) {
       throw WriteError(failure(e.what()));
     } catch (const OutputRefused& e) {  // something that is not a regular file where a frame goes
@@ -178,18 +185,22 @@ class RunLoop {
     result_.total_seconds = since(t_start_);
     result_.peak_memory_mib = peak_memory_mib();
     json extra = json::object();
-    if (plan_.finish) plan_.finish(extra);
+    if (plan_.finish) plan_.finish(result_, extra);
     write_progress(status, &extra);
     if (plan_.summary) log_ << plan_.summary(result_) << "\n";
     log_.flush();
     return result_;
   }
 
+  /// What frames.pvd says before a frame that did not converge.
+  std::string unconverged_note(const StepRecord& r) const { return fmt::format("{} {} did not converge: {}", word_, r.index, r.failure); }
+
   /// A frame that did not converge: the run's result says so (its failure names the first such frame).
   void not_converged(const StepRecord& r) {
     result_.all_converged = false;
     result_.unconverged.push_back(r.index);
     if (result_.failure.empty()) result_.failure = fmt::format("{} {}, {}", word_, r.index, r.failure);
+    if (!plan_.keep_going) result_.failed_frame = fmt::format("{}{:03d}.obj", kFailedPrefix, r.index);
   }
 
   RunResult interrupted() {
@@ -306,7 +317,12 @@ class RunLoop {
                                     word_, frame, r.time, word_, frame - 1);
       return Outcome::stopped;
     }
-    write_frame(frame, d);
+    // A frame that did not converge is no result. Where the run stops at it, its state (the last Newton
+    // iterate) is written as failed_NNN, outside the series, the caches and the report's frames; a run that
+    // goes on (keep_going) must keep its frames in order, so it is written as NNN, marked in frames.pvd and
+    // by the caches.
+    const bool stops_here = !r.converged && !plan_.keep_going;
+    write_frame(frame, d, stops_here ? kFailedPrefix : "", r.converged ? "" : unconverged_note(r));
     r.wall_seconds = since(t_frame);
     result_.records.push_back(r);
     if (plan_.line) log_ << plan_.line(r) << "\n";

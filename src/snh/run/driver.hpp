@@ -29,6 +29,7 @@ struct RunOutcome {
   bool all_converged = true;
   std::string failure;     ///< why the run stopped early, or its first frame that did not converge (empty when all did)
   std::vector<int> unconverged;  ///< the frames that did not converge (with keep_going, the run went on past them)
+  std::string failed_frame;      ///< the frame file where the run stopped without converging (failed_NNN.obj), or empty
   int interrupted_by = 0;  ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
   double total_seconds = 0.0;
   double peak_memory_mib = 0.0;  ///< peak resident memory of the process (VmHWM)
@@ -66,16 +67,18 @@ struct RunPlan {
   /// the initial state.
   std::function<void(StepRecord&, const StepReport* report)> fill;
   /// Writes a frame's own files besides NNN.obj and NNN.vtu (a flesh run's render surfaces), from the state
-  /// reached; a WriteError is reported as the frame's.
-  std::function<void(int index, double time, const Eigen::VectorXd& x)> write_frame;
+  /// reached, their names prefixed by `prefix` (kFailedPrefix for the frame where a run stopped without
+  /// converging, else empty); a WriteError is reported as the frame's.
+  std::function<void(int index, double time, const Eigen::VectorXd& x, const std::string& prefix)> write_frame;
   /// The log line of a completed frame (without newline).
   std::function<std::string(const StepRecord&)> line;
   /// The live progress text at a Newton iteration.
   std::function<std::string(int frame, int substep, int iteration, double residual)> live;
   /// A failed frame's failure text from its report (default: the report's own).
   std::function<std::string(const StepReport&)> failure;
-  /// Run-level results added to the final stats.json (the stretch test's middle width).
-  std::function<void(nlohmann::json& stats)> finish;
+  /// Run-level results added to the final stats.json (the stretch test's middle width), and files made from
+  /// the frames at the end (a flesh run's caches); `result` holds every frame's record, a resumed run's too.
+  std::function<void(const RunResult& result, nlohmann::json& stats)> finish;
   /// The last line (without newline).
   std::function<std::string(const RunResult&)> summary;
 };

@@ -14,6 +14,7 @@
 #include "snh/io/pc2.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/io/usda.hpp"
+#include "snh/run/output.hpp"
 #include "snh/run/stats.hpp"
 
 namespace snh {
@@ -160,7 +161,7 @@ std::string part_cache_name(const std::vector<ModelPart>& parts, std::size_t p) 
 
 /// flesh.usda from the surface/ and lbs/ frames on disk (so that a resumed run's stage holds them all), and
 /// bones.json (the bones' segments at every frame written, for the report). Nothing without frames.
-void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, double fps, json& stats) {
+void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, double fps, const RunResult& result, json& stats) {
   std::vector<UsdMesh> meshes{{.name = "flesh", .triangles = flesh.model.triangles, .frames = {}, .normals = {}, .uv = flesh.model.uv},
                               {.name = "linear_blend_skinning", .triangles = flesh.model.triangles, .frames = {}, .normals = {},
                                .uv = flesh.model.uv}};
@@ -173,6 +174,10 @@ void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, dou
     add(meshes[1], out / "lbs" / frame_name(i));
   }
   if (meshes[0].frames.empty()) return;
+  // A frame that did not converge, which a --keep-going run went past, is marked on the flesh.
+  meshes[0].converged.assign(meshes[0].frames.size(), true);
+  for (const StepRecord& r : result.records)
+    if (!r.converged && r.index >= 0 && static_cast<std::size_t>(r.index) < meshes[0].converged.size()) meshes[0].converged[r.index] = false;
   const RiggedModel& m = flesh.model;
   write_usda(out / "flesh.usda", "character", meshes, fps, m.meters_per_unit, m.up_axis == 2 && m.up_sign > 0 ? 'Z' : 'Y');
   stats["usd"] = "flesh.usda";
@@ -280,18 +285,20 @@ void add_flesh_output(const BuiltScene& b, const Simulation& sim, RunPlan& plan)
     r.lbs_volume_ratio = surface_volume(flesh, skinned_surface(flesh, r.time)) / rest_surface;
   };
   const std::filesystem::path out = plan.out;
-  plan.write_frame = [&flesh, out](int index, double time, const Eigen::VectorXd& x) {
+  plan.write_frame = [&flesh, out](int index, double time, const Eigen::VectorXd& x, const std::string& prefix) {
     ensure_writable_directory(out / "surface");
     ensure_writable_directory(out / "lbs");
     // The model's texture coordinates, and the normals of the surface as it is in each frame.
     const RiggedModel& m = flesh.model;
     const Eigen::Matrix3Xd skin = flesh_surface(flesh, x), lbs = skinned_surface(flesh, time);
-    write_obj(out / "surface" / frame_name(index), skin, m.uv, surface_normals(flesh, skin), m.triangles);
-    write_obj(out / "lbs" / frame_name(index), lbs, m.uv, surface_normals(flesh, lbs), m.triangles);
+    write_obj(out / "surface" / (prefix + frame_name(index)), skin, m.uv, surface_normals(flesh, skin), m.triangles);
+    write_obj(out / "lbs" / (prefix + frame_name(index)), lbs, m.uv, surface_normals(flesh, lbs), m.triangles);
+    if (prefix.empty())
+      for (const char* sub : {"surface", "lbs"}) remove_failed_frame(out / sub, index, {".obj"});
   };
   // The grid's own rate where the frames were put on it (flesh_time), exactly; else what the scene's frames make.
   const double fps = b.scene.time.frames ? b.frames / b.end_time : spec.fps;
-  plan.finish = [&flesh, out, fps](json& stats) { write_flesh_cache(flesh, out, fps, stats); };
+  plan.finish = [&flesh, out, fps](const RunResult& result, json& stats) { write_flesh_cache(flesh, out, fps, result, stats); };
 }
 
 }  // namespace snh

@@ -174,6 +174,7 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
   };
   plan.summary = [out = s.output.dir, frames](const RunResult& r) {
     std::string how = r.all_converged ? "finished" : "STOPPED: " + r.failure;
+    if (!r.failed_frame.empty()) how += "; its last iterate: " + r.failed_frame;
     // Converged frames that hold inverted elements are warned of on their lines; the last line counts them,
     // so that a run that "finished" is not read as clean.
     int inverted_frames = 0, most = 0, worst = 0;

@@ -215,7 +215,7 @@ RunPlan stretch_plan(const StretchConfig& c, const StretchSetup& st, const Simul
   plan.live = [steps = c.steps](int step, int, int it, double r) {
     return fmt::format("step {:>3}/{}: Newton iteration {}, |f| = {:.2e} ...", step, steps, it, r);
   };
-  plan.finish = [&st, &sim, &result](nlohmann::json& stats) { stats["middle_width"] = measure_middle(st, sim.x(), result); };
+  plan.finish = [&st, &sim, &result](const RunResult&, nlohmann::json& stats) { stats["middle_width"] = measure_middle(st, sim.x(), result); };
   plan.summary = [&c, &result](const RunResult& r) {
     std::string out;
     if (r.interrupted_by)
@@ -229,7 +229,7 @@ RunPlan stretch_plan(const StretchConfig& c, const StretchSetup& st, const Simul
                              "NNN.obj{}), stats.json and stats.csv in {}",
                              r.all_converged    ? "converged every step"
                              : r.interrupted_by ? "STOPPED: interrupted"
-                                                : "STOPPED: a step did not converge",
+                                                : "STOPPED: a step did not converge (its last iterate: " + r.failed_frame + ")",
                              r.total_seconds, r.peak_memory_mib, middle, c.write_vtu ? ", NNN.vtu, frames.pvd" : "",
                              c.out.string());
   };
