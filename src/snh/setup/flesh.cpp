@@ -20,6 +20,8 @@
 #include "snh/math/union_find.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/rig/skinning.hpp"
+#include "snh/solve/linear_solver.hpp"
+#include "snh/solve/memory_estimate.hpp"
 
 namespace snh {
 namespace {
@@ -397,7 +399,7 @@ int flesh_resolution(const std::vector<Bone>& bones, const BoneReach& reach, con
   return n;
 }
 
-Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
+Flesh build_flesh(const FleshSpec& spec, const std::string& where, std::string_view solver) {
   Flesh f;
   f.model = read_model(spec.model);
   f.bind = place_at_bind_pose(f.model);
@@ -441,6 +443,13 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where) {
 
   SolidLattices lattices;  // the lattice of each solid, where a cube is split into pieces
   if (spec.volume == FleshVolume::lattice) {
+    // A lattice too large to run is refused before it is built (at resolution 300, the limb's lattice took
+    // 30 s and 3.6 GiB before the run's own check refused it; at 1000 it grew past 6 GiB): its cells fill at
+    // least the skin's volume, a vertex per cell, so this estimate is below what the run's check will find.
+    const double h = longest / f.resolution, cells = std::floor(f.surface_volume / (h * h * h));
+    const ProblemSize least{.vertices = static_cast<std::int64_t>(cells), .cells = static_cast<std::int64_t>(cells), .nodes_per_cell = 8};
+    check_memory(least, solver == "auto" ? auto_linear_solver(3 * least.vertices, true) : solver,
+                 fmt::format("{}: a lattice at resolution {} (at least {:.3g} cells)", where, f.resolution, cells));
     const std::vector<char> used = used_vertices(m);
     lattices = build_solid_lattices(f, spec.join_meshes ? std::vector<int>(m.parts.size(), 0) : solids_of_parts(m, used), used,
                                     spec.split_cells ? 4 : 0);

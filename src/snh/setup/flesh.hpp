@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -131,8 +132,11 @@ struct Flesh {
 /// Reads the model and builds its flesh. Throws RigError (bad model, a surface that is not closed: the open
 /// and non-manifold edge counts; a joint of the spec that the model lacks), MeshError (tetgen failed) or
 /// std::invalid_argument (a bone whose user-set radius binds nothing, nothing bound at all), one line each
-/// naming `where` (the scene file or the command).
-[[nodiscard]] Flesh build_flesh(const FleshSpec& spec, const std::string& where);
+/// naming `where` (the scene file or the command). A lattice whose run cannot fit in memory with the linear
+/// solver `solver` (a registry name, "auto": chosen by size) is refused before it is built
+/// (MemoryEstimateError), as the run would be refused after (check_memory), from the fewest cells the skin's
+/// volume needs.
+[[nodiscard]] Flesh build_flesh(const FleshSpec& spec, const std::string& where, std::string_view solver = "auto");
 
 /// The bones' kinematic set: the bound vertices, moved rigidly with their bones' joints by the clip.
 [[nodiscard]] KinematicSet bone_kinematics(std::shared_ptr<const Flesh> flesh);

@@ -140,7 +140,7 @@ NewtonOptions newton_options(const SolverSpec& solver, const VolumeMesh& rest, d
 std::shared_ptr<const SceneBody> scene_body(const Scene& s) {
   auto out = std::make_shared<SceneBody>();
   if (s.flesh) {
-    auto flesh = std::make_shared<Flesh>(build_flesh(*s.flesh, s.source.string()));
+    auto flesh = std::make_shared<Flesh>(build_flesh(*s.flesh, s.source.string(), s.solver.linear));
     out->mesh = flesh->volume;
     out->digest = file_digest(s.flesh->model);
     out->flesh = std::move(flesh);
