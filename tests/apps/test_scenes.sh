@@ -44,6 +44,34 @@ out="$("$SNH" run "$SCENES/hand_fist.json" --check --out "$work/checked" 2>&1)";
 out="$("$SNH" run "$work/typo.json" --check 2>&1)"; code=$?
 [ "$code" -eq 2 ] && printf '%s' "$out" | grep -q "gravty: unknown key" && ok || bad "--check of a bad scene (exit $code): $out"
 
+# Shape colliders smaller than the surface's triangles: their barrier keeps them off the points only, so a
+# sphere of radius 0.1 between the 0.25-spaced vertices of a falling box passed through it with exit 0. Its
+# faces are checked now: a shape meeting them (swept at 50 m or 1e6 m in a frame) fails the frame, one that
+# starts on them or inside the body is refused, and one that stays clear runs as before.
+shape_scene() {  # FILE COLLIDER-JSON
+  printf '{"mesh": {"box": {"element": "hex", "res": 4, "min": [-0.5, 0, -0.5], "max": [0.5, 1, 0.5]}},
+  "material": {"name": "stable_neo_hookean", "youngs": 1e5, "poisson": 0.45}, "integrator": "backward_euler",
+  "end_time": 0.2, "frames": 4, "gravity": [0, -9.81, 0], "contact": {"dhat": 0.01},
+  "colliders": [{"type": "plane", "point": [0, -0.1, 0], "normal": [0, 1, 0]}, %s]}' "$2" > "$1"
+}
+shape_scene "$work/through.json" '{"type": "sphere", "center": [-25, 0.625, 0.125], "radius": 0.1,
+  "motion": [{"type": "translate", "by": [50, 0, 0], "start": 0.05, "end": 0.1}]}'
+shape_scene "$work/sweep.json" '{"type": "sphere", "center": [-5e5, 0.625, 0.125], "radius": 0.1,
+  "motion": [{"type": "translate", "by": [1e6, 0, 0], "start": 0.05, "end": 0.1}]}'
+for name in through sweep; do
+  out="$("$SNH" run "$work/$name.json" --no-report --out "$work/$name" 2>&1)"; code=$?
+  [ "$code" -eq 1 ] && printf '%s' "$out" | grep -q "^STOPPED: frame 2, colliders\[1\] (sphere) meets the mesh's surface at t = 0.07[0-9]*, triangle [0-9]*, between its points" \
+    && [ -f "$work/$name/failed_002.obj" ] && [ ! -e "$work/$name/002.obj" ] && ok || bad "$name (exit $code): $(printf '%s' "$out" | tail -2)"
+done
+shape_scene "$work/inside.json" '{"type": "sphere", "center": [0, 0.5, 0], "radius": 0.1}'
+shape_scene "$work/box_face.json" '{"type": "box", "center": [-0.5, 0.625, 0.125], "size": [0.1, 0.1, 0.1]}'
+shape_scene "$work/capsule_face.json" '{"type": "capsule", "a": [-0.6, 0.625, 0.125], "b": [-0.4, 0.625, 0.125], "radius": 0.05}'
+shape_scene "$work/clear.json" '{"type": "sphere", "center": [-0.7, 0.625, 0.125], "radius": 0.1}'
+expect_error inside "inside.json: colliders\[1\]: the sphere lies inside the mesh's surface at the start \\(winding number 1.00" -- "$SNH" run "$work/inside.json" --out "$work/bad_inside"
+expect_error box_face "box_face.json: colliders\[1\] \\(box\\) meets the mesh's surface at t = 0, triangle" -- "$SNH" run "$work/box_face.json" --out "$work/bad_box"
+expect_error capsule_face "capsule_face.json: colliders\[1\] \\(capsule\\) meets the mesh's surface at t = 0, triangle" -- "$SNH" run "$work/capsule_face.json" --out "$work/bad_capsule"
+"$SNH" run "$work/clear.json" --no-report --out "$work/clear" > "$work/clear.log" 2>&1 && ok || bad "clear: $(tail -2 "$work/clear.log")"
+
 # snh lab: tables by default, JSON with --json, lab.json and the runs' frames written.
 out="$("$SNH" lab --quick --energy stable_neo_hookean --out "$work/lab" 2>/dev/null)"; code=$?
 [ "$code" -eq 0 ] && printf '%s' "$out" | grep -q "^stable_neo_hookean .*stays at rest" && [ -f "$work/lab/lab.json" ] \

@@ -23,26 +23,6 @@ namespace {
 constexpr double kPad = 0.05;                          ///< margin around the bounding box, in cubes, each side
 constexpr std::int64_t kMaxCubes = std::int64_t{1} << 28;  ///< so (dims + 1)³ grid nodes still fit an int
 
-/// Separating-axis test of a triangle against the cube [−e, e]³ (Akenine-Möller 2001's 13 axes: the
-/// cube's normals, the triangle's normal, and the 9 products of an edge with a cube axis). v: the corners
-/// relative to the cube's centre. A degenerate triangle (a segment or a point) is tested exactly as well:
-/// its zero normal separates nothing and the other axes are those of a segment.
-bool triangle_overlaps_cube(const std::array<Eigen::Vector3d, 3>& v, double e) {
-  for (int a = 0; a < 3; ++a) {
-    const double lo = std::min({v[0][a], v[1][a], v[2][a]}), hi = std::max({v[0][a], v[1][a], v[2][a]});
-    if (lo > e || hi < -e) return false;
-  }
-  const auto separates = [&](const Eigen::Vector3d& axis) {
-    const double p0 = axis.dot(v[0]), p1 = axis.dot(v[1]), p2 = axis.dot(v[2]);
-    const double r = e * axis.cwiseAbs().sum();
-    return std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r;
-  };
-  const std::array<Eigen::Vector3d, 3> edge = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
-  for (const Eigen::Vector3d& f : edge)
-    for (int a = 0; a < 3; ++a)
-      if (separates(Eigen::Vector3d::Unit(a).cross(f))) return false;
-  return !separates(edge[0].cross(v[2] - v[0]));
-}
 
 /// The grid: `resolution` cubes along the longest side of the bounding box of the vertices the triangles use,
 /// with kPad of a cube to spare at either end; the other sides get as many cubes as cover them with at least
@@ -704,6 +684,23 @@ Eigen::Matrix3Xd Lattice::cell_samples(int cell) const {
   Eigen::Matrix3Xd m(3, static_cast<Eigen::Index>(out.size()));
   for (std::size_t i = 0; i < out.size(); ++i) m.col(static_cast<Eigen::Index>(i)) = out[i];
   return m;
+}
+
+bool triangle_overlaps_cube(const std::array<Eigen::Vector3d, 3>& v, double e) {
+  for (int a = 0; a < 3; ++a) {
+    const double lo = std::min({v[0][a], v[1][a], v[2][a]}), hi = std::max({v[0][a], v[1][a], v[2][a]});
+    if (lo > e || hi < -e) return false;
+  }
+  const auto separates = [&](const Eigen::Vector3d& axis) {
+    const double p0 = axis.dot(v[0]), p1 = axis.dot(v[1]), p2 = axis.dot(v[2]);
+    const double r = e * axis.cwiseAbs().sum();
+    return std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r;
+  };
+  const std::array<Eigen::Vector3d, 3> edge = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+  for (const Eigen::Vector3d& f : edge)
+    for (int a = 0; a < 3; ++a)
+      if (separates(Eigen::Vector3d::Unit(a).cross(f))) return false;
+  return !separates(edge[0].cross(v[2] - v[0]));
 }
 
 bool segment_meets_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& a,

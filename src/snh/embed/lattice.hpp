@@ -7,6 +7,7 @@
 // only where their material is connected (the virtual node algorithm, Molino et al. 2004).
 #include <cstdint>
 #include <utility>
+#include <array>
 #include <vector>
 
 #include <Eigen/Core>
@@ -77,6 +78,12 @@ struct Lattice {
 [[nodiscard]] Lattice lattice_grid(const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int resolution);
 /// lattice_for_surface on a given grid (from lattice_grid): the triangles of F must lie within it.
 [[nodiscard]] Lattice lattice_on_grid(const Lattice& grid, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F, int samples = 4);
+
+/// Separating-axis test of a triangle against the cube [−e, e]³ (Akenine-Möller 2001's 13 axes: the
+/// cube's normals, the triangle's normal, and the 9 products of an edge with a cube axis). v: the corners
+/// relative to the cube's centre. A degenerate triangle (a segment or a point) is tested exactly as well:
+/// its zero normal separates nothing and the other axes are those of a segment.
+[[nodiscard]] bool triangle_overlaps_cube(const std::array<Eigen::Vector3d, 3>& v, double e);
 
 /// Whether the segment [p, q] meets the triangle (a, b, c), touching included (a segment in the triangle's
 /// plane counts as not meeting it).

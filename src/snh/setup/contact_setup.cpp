@@ -2,10 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string_view>
 
 #include <fmt/format.h>
 
+#include "snh/contact/edge_edge_distance.hpp"
+#include "snh/contact/point_triangle_distance.hpp"
+#include "snh/embed/lattice.hpp"
+#include "snh/embed/winding_number.hpp"
 #include "snh/fem/contact_term.hpp"
 #include "snh/fem/friction_term.hpp"
 #include "snh/mesh/surface.hpp"
@@ -109,6 +114,121 @@ std::vector<std::shared_ptr<Term>> contact_terms(const ContactSpec& spec, const 
   return terms;
 }
 
+namespace {
+
+/// Whether the shape (in its base frame) meets the triangle (a, b, c), given in that frame: touching counts.
+bool shape_meets_triangle(const ColliderShape& s, const Vec3& a, const Vec3& b, const Vec3& c) {
+  switch (s.kind) {
+    case ColliderShape::Kind::sphere:
+      return contact::point_triangle_distance(s.a, a, b, c) <= s.radius * s.radius;
+    case ColliderShape::Kind::capsule: {
+      const double r2 = s.radius * s.radius;
+      if (segment_meets_triangle(s.a, s.b, a, b, c)) return true;
+      if (contact::point_triangle_distance(s.a, a, b, c) <= r2 || contact::point_triangle_distance(s.b, a, b, c) <= r2) return true;
+      return contact::edge_edge_distance(s.a, s.b, a, b) <= r2 || contact::edge_edge_distance(s.a, s.b, b, c) <= r2 ||
+             contact::edge_edge_distance(s.a, s.b, c, a) <= r2;
+    }
+    case ColliderShape::Kind::box: {  // the box scaled to the cube [−1, 1]³: overlap is kept by the scaling
+      const Vec3 inv = s.b.cwiseInverse();
+      return triangle_overlaps_cube({inv.cwiseProduct(a - s.a), inv.cwiseProduct(b - s.a), inv.cwiseProduct(c - s.a)}, 1.0);
+    }
+    case ColliderShape::Kind::plane:
+      break;
+  }
+  return false;
+}
+
+/// The centre of a shape and the radius of a sphere holding it (base frame), and its smallest size.
+struct ShapeBounds {
+  Vec3 centre;
+  double radius = 0.0, smallest = 0.0;
+};
+ShapeBounds shape_bounds(const ColliderShape& s) {
+  switch (s.kind) {
+    case ColliderShape::Kind::sphere:
+      return {s.a, s.radius, s.radius};
+    case ColliderShape::Kind::capsule:
+      return {0.5 * (s.a + s.b), 0.5 * (s.b - s.a).norm() + s.radius, s.radius};
+    case ColliderShape::Kind::box:
+      return {s.a, s.b.norm(), s.b.minCoeff()};
+    case ColliderShape::Kind::plane:
+      break;
+  }
+  return {Vec3::Zero(), 0.0, 0.0};
+}
+
+}  // namespace
+
+std::string shape_collider_crossing(const ContactSpec& spec, const ContactSurface& surface, const Eigen::VectorXd& x0,
+                                    const Eigen::VectorXd& x1, double t0, double t1, int max_samples) {
+  if (!spec.enabled) return {};
+  const Eigen::Index n = surface.points.size(), nf = surface.triangles.cols();
+  Eigen::Matrix3Xd p0(3, n), p1(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) p0.col(i) = surface.points.point(x0, i), p1.col(i) = surface.points.point(x1, i);
+  // The body's box over the frame (both ends: it moves linearly between them).
+  const Vec3 lo = p0.rowwise().minCoeff().cwiseMin(p1.rowwise().minCoeff()), hi = p0.rowwise().maxCoeff().cwiseMax(p1.rowwise().maxCoeff());
+  for (const ColliderSpec& c : spec.colliders) {
+    if (c.type == ColliderSpec::Type::mesh || c.type == ColliderSpec::Type::plane) continue;
+    const ColliderShape shape = collider_shape(c);
+    const ColliderPose pose = collider_pose(c);
+    const ShapeBounds bounds = shape_bounds(shape);
+    // Where the shape's bounding sphere is at time t (world), and how far it is from the body's box.
+    const auto reach = [&](double t) {
+      const ColliderFrame f = collider_frame(pose, t);
+      const Vec3 centre = f.rotation * (f.scale * bounds.centre) + f.translation;
+      return (centre.cwiseMax(lo).cwiseMin(hi) - centre).norm() - f.scale * bounds.radius;
+    };
+    // The path's length over the frame (16 chords: a frame may hold a key), and samples along it no farther
+    // apart than a quarter of the shape's smallest size, tested only where the shape is near the body: the
+    // frame is cut in at most 10 000 pieces, and a piece whose start and end are farther from the body's box
+    // than the piece's length is skipped whole.
+    const auto frame_at = [&](double s) { return collider_frame(pose, t0 + s * (t1 - t0)); };
+    double travel = 0.0, smallest_scale = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 16; ++k) {
+      const ColliderFrame a = frame_at(k / 16.0), b = frame_at((k + 1) / 16.0);
+      travel += (b.translation - a.translation).norm() + std::max(a.scale, b.scale) * bounds.radius * (b.rotation - a.rotation).norm() +
+                std::abs(b.scale - a.scale) * (bounds.centre.norm() + bounds.radius);
+      smallest_scale = std::min({smallest_scale, a.scale, b.scale});
+    }
+    const double step = 0.25 * smallest_scale * bounds.smallest;
+    const double samples = t1 > t0 ? std::max(1.0, std::ceil(travel / step)) : 0.0;
+    const double pieces = std::min(std::max(samples, 1.0), 1e4), per_piece = samples / pieces;
+    int near = 0;
+    for (double piece = 0.0; piece < pieces; piece += 1.0) {
+      if (samples > 0.0 && reach(t0 + piece / pieces * (t1 - t0)) > travel / pieces &&
+          reach(t0 + (piece + 1.0) / pieces * (t1 - t0)) > travel / pieces)
+        continue;  // nowhere near the body in this piece
+      for (double k = std::ceil(piece * per_piece); k <= (piece + 1.0) * per_piece; k += 1.0) {
+        const double s = samples > 0.0 ? k / samples : 1.0, t = t0 + s * (t1 - t0);
+        if (reach(t) > 0.0) continue;
+        if (++near > max_samples)
+          return fmt::format("colliders[{}] ({}) moves {:.3g} between t = {:g} and {:g}, near the body, in more than {} steps of a "
+                             "quarter of its size, too far to check that it does not pass through the surface: give it more "
+                             "frames (or substeps) for that motion",
+                             c.index, type_name(c.type), travel, t0, t1, max_samples);
+        const ColliderFrame f = collider_frame(pose, t);
+        const Vec3 centre = f.rotation * (f.scale * bounds.centre) + f.translation;
+        const double r = f.scale * bounds.radius;
+        for (Eigen::Index tri = 0; tri < nf; ++tri) {
+          std::array<Vec3, 3> v;
+          for (int j = 0; j < 3; ++j) {
+            const Eigen::Index id = surface.triangles(j, tri);
+            v[j] = (1.0 - s) * p0.col(id) + s * p1.col(id);
+          }
+          const Vec3 tlo = v[0].cwiseMin(v[1]).cwiseMin(v[2]), thi = v[0].cwiseMax(v[1]).cwiseMax(v[2]);
+          if ((centre.cwiseMax(tlo).cwiseMin(thi) - centre).norm() > r) continue;
+          if (shape_meets_triangle(shape, f.to_base(v[0]), f.to_base(v[1]), f.to_base(v[2])))
+            return fmt::format("colliders[{}] ({}) meets {} at t = {:g}, triangle {}, between its points (the barrier keeps a "
+                               "shape off the surface's points, not its faces: make the surface finer than the shape, or the "
+                               "shape larger)",
+                               c.index, type_name(c.type), surface.name, t, tri);
+        }
+      }
+    }
+  }
+  return {};
+}
+
 void check_contact_start(const ContactSpec& spec, const ContactSurface& surface, const Eigen::Matrix3Xd& rest,
                          const Eigen::VectorXd& x0, double dhat, const std::string& file) {
   if (!spec.enabled) return;
@@ -133,6 +253,21 @@ void check_contact_start(const ContactSpec& spec, const ContactSurface& surface,
                                    "separated start",
                                    file, c.index, surface.name, c.file.string()));
     }
+  }
+  // Faces too: no shape meets a triangle at the start, and none lies wholly inside the body.
+  if (const std::string crossing = shape_collider_crossing(spec, surface, x0, x0, 0.0, 0.0); !crossing.empty())
+    throw SceneError(fmt::format("{}: {} at the start (contact needs a separated start)", file, crossing));
+  Eigen::Matrix3Xd points(3, surface.points.size());
+  for (Eigen::Index i = 0; i < points.cols(); ++i) points.col(i) = surface.points.point(x0, i);
+  for (const ColliderSpec& c : spec.colliders) {
+    if (c.type == ColliderSpec::Type::mesh || c.type == ColliderSpec::Type::plane) continue;
+    const ColliderShape shape = collider_shape(c);
+    const ColliderFrame f = collider_frame(collider_pose(c), 0.0);
+    const Vec3 centre = f.rotation * (f.scale * shape_bounds(shape).centre) + f.translation;
+    if (const double w = winding_number(points, surface.triangles, centre); std::abs(w) > 0.5)
+      throw SceneError(fmt::format("{}: colliders[{}]: the {} lies inside {} at the start (winding number {:.2f} at its centre): "
+                                   "contact needs a separated start; move the collider out of the body",
+                                   file, c.index, type_name(c.type), surface.name, w));
   }
   if (spec.self && !std::isfinite(ContactTerm(surface.triangles, surface.points, rest, dhat, 1.0).energy(x0)))
     throw SceneError(fmt::format("{}: contact.self: {} touches itself at the start (two of its triangles at distance 0): contact "

@@ -64,4 +64,14 @@ struct ContactParameters {
 void check_contact_start(const ContactSpec& spec, const ContactSurface& surface, const Eigen::Matrix3Xd& rest,
                          const Eigen::VectorXd& x0, double dhat, const std::string& file);
 
+/// The barriers of shape colliders (sphere, capsule, box) keep the surface's points out of them, not its
+/// edges and faces: a shape smaller than the triangles can slip between points. This checks the faces: over
+/// a frame from t0 (the surface at x0) to t1 (at x1, the surface moving linearly between), the shape at
+/// sample times no farther apart than a quarter of its smallest size (radius, half extent), each tested
+/// exactly against every triangle near it. Returns one line naming the collider, the time and the triangle
+/// where a shape meets the surface, or why the frame cannot be checked (more than `max_samples` samples
+/// near the body); empty when every shape stays clear.
+[[nodiscard]] std::string shape_collider_crossing(const ContactSpec& spec, const ContactSurface& surface, const Eigen::VectorXd& x0,
+                                                  const Eigen::VectorXd& x1, double t0, double t1, int max_samples = 4096);
+
 }  // namespace snh

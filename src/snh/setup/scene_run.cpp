@@ -7,7 +7,9 @@
 #include <nlohmann/json.hpp>
 
 #include "snh/run/driver.hpp"
+#include "snh/setup/contact_setup.hpp"
 #include "snh/setup/flesh_scene.hpp"
+#include "snh/setup/scene_build.hpp"
 
 namespace snh {
 namespace {
@@ -156,6 +158,26 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
     f.gravity_energy = sim.inertia().gravity_energy(x);
     f.total_energy = f.elastic_energy + f.kinetic_energy + f.gravity_energy;
   };
+  // Shape colliders' faces: a frame whose shape met the surface between its points is no result.
+  const bool shapes = s.contact.enabled && std::any_of(s.contact.colliders.begin(), s.contact.colliders.end(), [](const ColliderSpec& c) {
+                        return c.type != ColliderSpec::Type::mesh && c.type != ColliderSpec::Type::plane;
+                      });
+  if (shapes) {
+    auto surface = std::make_shared<const ContactSurface>(contact_surface_of(*b.body));
+    auto previous = std::make_shared<Eigen::VectorXd>();  // the last frame's state (empty after a resume)
+    const double frame_duration = plan.frame_duration;
+    plan.fill = [&sim, &s, surface, previous, frame_duration, base = plan.fill](StepRecord& f, const StepReport* rep) {
+      base(f, rep);
+      const Eigen::VectorXd& x = sim.x();
+      if (rep && f.converged) {
+        const bool known = previous->size() == x.size();
+        const std::string crossing = shape_collider_crossing(s.contact, *surface, known ? *previous : x, x,
+                                                             known ? f.time - frame_duration : f.time, f.time);
+        if (!crossing.empty()) f.converged = false, f.failure = crossing;
+      }
+      *previous = x;
+    };
+  }
   const int frames = b.frames, substeps = b.substeps;
   plan.line = [frames](const StepRecord& f) {
     if (f.index == 0)
