@@ -297,11 +297,63 @@ Eigen::Matrix3Xd MeshColliderTerm::combined(const Eigen::VectorXd& x, const Eige
 std::vector<MeshColliderTerm::Candidate> MeshColliderTerm::candidates(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1,
                                                                       double dhat) const {
   const auto ns = static_cast<int>(surface_vertices_.size());
-  const contact::Candidates c = contact::broad_phase(V0, V1, F_, E_, dhat);
+  if (ns == 0) return {};
+  // Only the collider's primitives near the body can pair with it: those whose boxes over the step come
+  // within d̂ of the body's box over the step (pairs of two of the collider's own are never asked). The broad
+  // phase then runs on the body and what of the collider is near, at a cost in proportion to that, not to
+  // the collider's size (a 20 000-triangle collider 4 m away made a 0.16 s run take 38 s). The candidates
+  // are the same: ids are mapped back in order, so the lists keep their sorted order.
+  const Eigen::Vector3d lo = V0.leftCols(ns).rowwise().minCoeff().cwiseMin(V1.leftCols(ns).rowwise().minCoeff()).array() - dhat;
+  const Eigen::Vector3d hi = V0.leftCols(ns).rowwise().maxCoeff().cwiseMax(V1.leftCols(ns).rowwise().maxCoeff()).array() + dhat;
+  const auto near = [&](const auto& ids) {
+    Eigen::Vector3d a = V0.col(ids[0]), b = a;
+    for (Eigen::Index k = 0; k < ids.size(); ++k) {
+      a = a.cwiseMin(V0.col(ids[k])).cwiseMin(V1.col(ids[k]));
+      b = b.cwiseMax(V0.col(ids[k])).cwiseMax(V1.col(ids[k]));
+    }
+    return (a.array() <= hi.array()).all() && (b.array() >= lo.array()).all();
+  };
+  std::vector<int> vertex_of, triangle_of, edge_of;  // the kept primitives' original ids, ascending
+  std::vector<int> local(static_cast<std::size_t>(V0.cols()), -1);
+  for (int v = 0; v < ns; ++v) local[static_cast<std::size_t>(v)] = v;
+  for (int t = 0; t < static_cast<int>(F_.cols()); ++t)
+    if (t < triangles_simulated_ || near(F_.col(t))) triangle_of.push_back(t);
+  for (int e = 0; e < static_cast<int>(E_.cols()); ++e)
+    if (E_(0, e) < ns || near(E_.col(e))) edge_of.push_back(e);
+  if (static_cast<int>(triangle_of.size()) == triangles_simulated_ && !std::any_of(edge_of.begin(), edge_of.end(), [&](int e) {
+        return E_(0, e) >= ns;
+      })) {
+    bool any_vertex = false;  // a collider vertex near the body pairs with the body's triangles
+    for (Eigen::Index v = ns; v < V0.cols() && !any_vertex; ++v) any_vertex = near(Eigen::Matrix<int, 1, 1>(static_cast<int>(v)));
+    if (!any_vertex) return {};
+  }
+  std::vector<char> used(static_cast<std::size_t>(V0.cols()), 0);
+  for (const int t : triangle_of)
+    for (int k = 0; k < 3; ++k) used[static_cast<std::size_t>(F_(k, t))] = 1;
+  for (const int e : edge_of)
+    for (int k = 0; k < 2; ++k) used[static_cast<std::size_t>(E_(k, e))] = 1;
+  for (int v = 0; v < static_cast<int>(V0.cols()); ++v)
+    if (v < ns || used[static_cast<std::size_t>(v)] || near(Eigen::Matrix<int, 1, 1>(v))) {
+      local[static_cast<std::size_t>(v)] = static_cast<int>(vertex_of.size());
+      vertex_of.push_back(v);
+    }
+  const auto n = static_cast<Eigen::Index>(vertex_of.size());
+  Eigen::Matrix3Xd W0(3, n), W1(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) W0.col(i) = V0.col(vertex_of[i]), W1.col(i) = V1.col(vertex_of[i]);
+  Eigen::Matrix3Xi F(3, static_cast<Eigen::Index>(triangle_of.size()));
+  for (Eigen::Index i = 0; i < F.cols(); ++i)
+    for (int k = 0; k < 3; ++k) F(k, i) = local[static_cast<std::size_t>(F_(k, triangle_of[i]))];
+  Eigen::Matrix2Xi E(2, static_cast<Eigen::Index>(edge_of.size()));
+  for (Eigen::Index i = 0; i < E.cols(); ++i)
+    for (int k = 0; k < 2; ++k) E(k, i) = local[static_cast<std::size_t>(E_(k, edge_of[i]))];
+  const contact::Candidates c = contact::broad_phase(W0, W1, F, E, dhat);
   std::vector<Candidate> out;
-  for (const auto& [v, t] : c.vertex_triangle)
+  for (const auto& [vl, tl] : c.vertex_triangle) {
+    const int v = vertex_of[vl], t = triangle_of[tl];
     if ((v < ns) != (t < triangles_simulated_)) out.push_back({false, {v, F_(0, t), F_(1, t), F_(2, t)}, 0.0});
-  for (const auto& [a, b] : c.edge_edge) {
+  }
+  for (const auto& [al, bl] : c.edge_edge) {
+    const int a = edge_of[al], b = edge_of[bl];
     if ((E_(0, a) < ns) == (E_(0, b) < ns)) continue;  // both edges of one body
     const std::array<int, 4> id{E_(0, a), E_(1, a), E_(0, b), E_(1, b)};
     out.push_back({true, id,
