@@ -2,6 +2,8 @@
 // Small helpers that several test files use (the test files are compiled together, eight to a translation
 // unit: a helper they share lives here once, not in each file's anonymous namespace).
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include <Eigen/Core>
@@ -17,6 +19,14 @@ inline Eigen::Matrix3Xd unflatten(const Eigen::VectorXd& x) { return Eigen::Map<
 /// The rotation by `angle` radians about `axis` (normalised here).
 inline Eigen::Quaterniond about(const Eigen::Vector3d& axis, double angle) {
   return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis.normalized()));
+}
+
+/// The whole contents of a file, read as bytes ("" when it cannot be read).
+inline std::string file_text(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
 }
 
 /// A path in the temporary directory, `prefix + name + "_" + pid` (so that two test processes never share

@@ -23,18 +23,14 @@
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/mesh/surface.hpp"
+#include "test_support.hpp"
 
 namespace snh {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::file_text;
 
 /// The value of attribute `name` in `tag`, "" if it has none.
 std::string attribute(const std::string& tag, const std::string& name) {
@@ -56,7 +52,7 @@ struct Decoded {
 };
 Decoded decode(const fs::path& path) {
   Decoded d;
-  const std::string file = slurp(path);
+  const std::string file = file_text(path);
   const auto ad = file.find("<AppendedData encoding=\"raw\">\n_");
   if (ad == std::string::npos) {
     ADD_FAILURE() << "no raw appended data";
@@ -142,7 +138,7 @@ TEST(Vtu, HexFrameUsesVtkOrderAndCarriesData) {
   EXPECT_EQ(d.arrays.at("displacement").size(), 81u);
   EXPECT_EQ(d.arrays.at("displacement")[3 * 26], 0.5);  // the corner (1, 1, 1) moved to 1.5
   write_pvd(dir / "s.pvd", {{0.0, "f.vtu"}, {1.0, "g.vtu"}});
-  const std::string pvd = slurp(dir / "s.pvd");
+  const std::string pvd = file_text(dir / "s.pvd");
   EXPECT_NE(pvd.find("<DataSet timestep=\"1\" group=\"\" part=\"0\" file=\"g.vtu\"/>"), std::string::npos);
   // Nothing but the two files: the temporaries were renamed.
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 2);
@@ -194,7 +190,7 @@ TEST(Vtu, FramesReadBackBitForBit) {
     EXPECT_TRUE(same_bits(back.cell_data.at("psi").data(), psi.data(), 8));
     if (frame == 1) {
       write_vtu(dir / "once.vtu", m, Y, {{"displacement", Y - m.vertices}}, {{"psi", psi}}, {{"pinned", pinned}});
-      EXPECT_EQ(slurp(path), slurp(dir / "once.vtu"));
+      EXPECT_EQ(file_text(path), file_text(dir / "once.vtu"));
     }
   }
   fs::remove_all(dir);
@@ -241,7 +237,7 @@ TEST(Obj, VerticesAreWrittenAsPrintfsTenSignificantDigits) {
     want += line;
   }
   want += "f 1 2 3\n";
-  EXPECT_EQ(slurp(dir / "p.obj"), want);
+  EXPECT_EQ(file_text(dir / "p.obj"), want);
   fs::remove_all(dir);
 }
 
@@ -255,11 +251,11 @@ TEST(Obj, TextureCoordinatesAndNormalsAreWrittenPerVertexAndNamedByTheFaces) {
   T << 0, 1, 2;
   const fs::path dir = temp_dir("obj_uv");
   write_obj(dir / "all.obj", P, UV, N, T);
-  EXPECT_EQ(slurp(dir / "all.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 0.25\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1/1/1 2/2/2 3/3/3\n");
+  EXPECT_EQ(file_text(dir / "all.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 0.25\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1/1/1 2/2/2 3/3/3\n");
   write_obj(dir / "uv.obj", P, UV, Eigen::Matrix3Xd(3, 0), T);
-  EXPECT_EQ(slurp(dir / "uv.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 0.25\nf 1/1 2/2 3/3\n");
+  EXPECT_EQ(file_text(dir / "uv.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 0.25\nf 1/1 2/2 3/3\n");
   write_obj(dir / "n.obj", P, Eigen::Matrix2Xd(2, 0), N, T);
-  EXPECT_EQ(slurp(dir / "n.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1//1 2//2 3//3\n");
+  EXPECT_EQ(file_text(dir / "n.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1//1 2//2 3//3\n");
   // The mesh readers take such a frame back (positions and triangles).
   const SurfaceMesh back = read_surface(dir / "all.obj");
   EXPECT_EQ(back.vertices, P);

@@ -55,16 +55,11 @@ struct CleanUp : ::testing::Environment {
 };
 [[maybe_unused]] const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::file_text;
 
 /// The JSON of `prefix ... suffix` in a file (data.js: "window.SNH_REPORT = {...};").
 json js_payload(const fs::path& p, const std::string& prefix, const std::string& suffix) {
-  const std::string text = slurp(p);
+  const std::string text = file_text(p);
   EXPECT_EQ(text.compare(0, prefix.size(), prefix), 0) << p;
   const std::size_t end = text.rfind(suffix);
   return json::parse(text.substr(prefix.size(), end - prefix.size()));
@@ -256,9 +251,9 @@ TEST(RunReport, StretchRunSurfaceFramesAndRanges) {
       for (const json& s : p["series"]) EXPECT_EQ(s["y"].size(), 5u) << p["id"];
     }
     // The page loads the data, then the bundle, which is written beside it.
-    const std::string html = slurp(run.dir / "index.html");
+    const std::string html = file_text(run.dir / "index.html");
     EXPECT_LT(html.find("report/data.js"), html.find("report/snh-report.js"));
-    EXPECT_EQ(slurp(run.dir / "report" / "snh-report.js"), std::string(report_bundle()));
+    EXPECT_EQ(file_text(run.dir / "report" / "snh-report.js"), std::string(report_bundle()));
     EXPECT_GT(report_bundle().size(), 10000u);
     fs::remove_all(run.dir);
   }
@@ -355,7 +350,7 @@ FleshRun flesh_run(const std::string& name) {
   }
   std::ofstream(f.dir / "bones.json") << json{{"bones", f.bones}, {"frames", bone_frames}}.dump() << "\n";
   std::ofstream(f.dir / "flesh.usda") << "#usda 1.0\n";
-  json stats = json::parse(slurp(f.dir / "stats.json"));
+  json stats = json::parse(file_text(f.dir / "stats.json"));
   for (json& row : stats["frames"]) {
     const int i = row["frame"];
     row["surface_volume_ratio"] = 1.0 - 0.001 * i;
@@ -479,7 +474,7 @@ TEST(RunReport, FleshRunFilesAtFaultAreNamedInOneLine) {
   };
   ASSERT_EQ(message(), "no error");
   const fs::path s2 = f.dir / "surface" / "002.obj", l3 = f.dir / "lbs" / "003.obj", bones = f.dir / "bones.json";
-  const std::string good_s2 = slurp(s2), good_l3 = slurp(l3), good_bones = slurp(bones);
+  const std::string good_s2 = file_text(s2), good_l3 = file_text(l3), good_bones = file_text(bones);
 
   std::ofstream(s2) << "v 0 0 0\nv 1 0 x\n";  // malformed
   std::string m = message();
@@ -619,7 +614,7 @@ TEST(LabReport, TablesCurvesAndAReportPerSimulation) {
       ++linked;
       const std::string href = r[3]["href"];
       EXPECT_TRUE(fs::exists(o.out / href)) << href;
-      const std::string html = slurp(o.out / href);
+      const std::string html = file_text(o.out / href);
       EXPECT_NE(html.find("src=\"../../../report/snh-report.js\""), std::string::npos) << href;
       EXPECT_FALSE(fs::exists((o.out / href).parent_path() / "report" / "snh-report.js")) << href;
     } else {
@@ -683,7 +678,7 @@ TEST(Render, ABrowserThatNeverAnswersIsKilledAtTheTimeoutAndLeavesNothing) {
   }
   tmpdir ? ::setenv("TMPDIR", saved.c_str(), 1) : ::unsetenv("TMPDIR");
   EXPECT_EQ(message, fmt::format("the browser {} did not finish within 1 s (waiting for Target.createTarget)", browser.string()));
-  const pid_t pid = std::stoi(slurp(pid_file));
+  const pid_t pid = std::stoi(file_text(pid_file));
   EXPECT_NE(::kill(pid, 0), 0) << "the browser (process " << pid << ") is still running";
   EXPECT_TRUE(fs::is_empty(tmp)) << "the render's temporary directory was left";
   EXPECT_FALSE(fs::exists(o.out));

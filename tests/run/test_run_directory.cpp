@@ -150,16 +150,14 @@ TEST(FrameWriter, AFailedFrameIsKeptOutOfTheSeriesAndANoteMarksAFrameInIt) {
   EXPECT_TRUE(fs::exists(d / "failed_001.obj"));
   EXPECT_TRUE(fs::exists(d / "failed_001.vtu"));
   EXPECT_FALSE(fs::exists(d / "001.obj"));
-  std::ifstream pvd(d / "frames.pvd");
-  const std::string text((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
+  const std::string text = test::file_text(d / "frames.pvd");
   EXPECT_EQ(text.find("failed_"), std::string::npos) << text;
   EXPECT_EQ(read_pvd(d / "frames.pvd").size(), 1u);
   frames.write(1, 0.5, x, def, "", "frame 1 did not converge -- twice");
   frames.write_series();
   EXPECT_FALSE(fs::exists(d / "failed_001.obj"));
   EXPECT_FALSE(fs::exists(d / "failed_001.vtu"));
-  std::ifstream pvd2(d / "frames.pvd");
-  const std::string text2((std::istreambuf_iterator<char>(pvd2)), std::istreambuf_iterator<char>());
+  const std::string text2 = test::file_text(d / "frames.pvd");
   EXPECT_NE(text2.find("<!-- frame 1 did not converge - twice -->\n<DataSet timestep=\"0.5\""), std::string::npos) << text2;
   EXPECT_EQ(read_pvd(d / "frames.pvd").size(), 2u);
   fs::remove_all(d);

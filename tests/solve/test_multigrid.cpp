@@ -406,12 +406,7 @@ namespace fs = std::filesystem;
 
 fs::path multigrid_dir(const std::string& name) { return test::fresh_dir("snh_test_mg_", name); }
 
-std::string contents(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::file_text;
 
 /// The stretch test at res 10 (hexes: 3 267 free DOFs, a two-level hierarchy) to a 2× stretch in 8 steps.
 StretchResult stretch(const std::string& solver, const fs::path& out, CellType element = CellType::hex8) {
@@ -446,7 +441,7 @@ TEST_P(StretchRun, MatchesTheDirectSolverAndIsTheSameForOneAndTwoThreads) {
   for (const StepStats& s : mg1.steps) cg += s.linear_iterations;
   EXPECT_GT(cg, 0) << "conjugate gradients ran";
   // Every frame's positions (OBJ, 10 significant digits) within 2e-4 of the direct solver's.
-  std::istringstream a(contents(direct_dir / "008.obj")), b(contents(one / "008.obj"));
+  std::istringstream a(file_text(direct_dir / "008.obj")), b(file_text(one / "008.obj"));
   double worst = 0.0;
   for (std::string la, lb; std::getline(a, la) && std::getline(b, lb);) {
     if (la.rfind("v ", 0) != 0) continue;
@@ -461,8 +456,8 @@ TEST_P(StretchRun, MatchesTheDirectSolverAndIsTheSameForOneAndTwoThreads) {
   EXPECT_LT(worst, 2e-4);
   EXPECT_GT(worst, 0.0) << "CG and the direct solver stop at different residuals";
   // The exact state (checkpoint.bin holds the positions as doubles) and the frames: bit-identical.
-  EXPECT_EQ(contents(one / "checkpoint.bin"), contents(two / "checkpoint.bin"));
-  EXPECT_EQ(contents(one / "008.vtu"), contents(two / "008.vtu"));
+  EXPECT_EQ(file_text(one / "checkpoint.bin"), file_text(two / "checkpoint.bin"));
+  EXPECT_EQ(file_text(one / "008.vtu"), file_text(two / "008.vtu"));
   for (const fs::path& d : {direct_dir, one, two}) fs::remove_all(d);
 }
 
