@@ -320,13 +320,6 @@ std::vector<MeshColliderTerm::Candidate> MeshColliderTerm::candidates(const Eige
     if (t < triangles_simulated_ || near(F_.col(t))) triangle_of.push_back(t);
   for (int e = 0; e < static_cast<int>(E_.cols()); ++e)
     if (E_(0, e) < ns || near(E_.col(e))) edge_of.push_back(e);
-  if (static_cast<int>(triangle_of.size()) == triangles_simulated_ && !std::any_of(edge_of.begin(), edge_of.end(), [&](int e) {
-        return E_(0, e) >= ns;
-      })) {
-    bool any_vertex = false;  // a collider vertex near the body pairs with the body's triangles
-    for (Eigen::Index v = ns; v < V0.cols() && !any_vertex; ++v) any_vertex = near(Eigen::Matrix<int, 1, 1>(static_cast<int>(v)));
-    if (!any_vertex) return {};
-  }
   std::vector<char> used(static_cast<std::size_t>(V0.cols()), 0);
   for (const int t : triangle_of)
     for (int k = 0; k < 3; ++k) used[static_cast<std::size_t>(F_(k, t))] = 1;
@@ -337,6 +330,7 @@ std::vector<MeshColliderTerm::Candidate> MeshColliderTerm::candidates(const Eige
       local[static_cast<std::size_t>(v)] = static_cast<int>(vertex_of.size());
       vertex_of.push_back(v);
     }
+  if (static_cast<int>(vertex_of.size()) == ns) return {};  // nothing of the collider near: no pair
   const auto n = static_cast<Eigen::Index>(vertex_of.size());
   Eigen::Matrix3Xd W0(3, n), W1(3, n);
   for (Eigen::Index i = 0; i < n; ++i) W0.col(i) = V0.col(vertex_of[i]), W1.col(i) = V1.col(vertex_of[i]);

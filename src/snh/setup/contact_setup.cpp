@@ -142,6 +142,8 @@ bool shape_meets_triangle(const ColliderShape& s, const Vec3& a, const Vec3& b, 
 struct ShapeBounds {
   Vec3 centre;
   double radius = 0.0, smallest = 0.0;
+  /// The centre placed by the frame f (world).
+  [[nodiscard]] Vec3 centre_at(const ColliderFrame& f) const { return f.rotation * (f.scale * centre) + f.translation; }
 };
 ShapeBounds shape_bounds(const ColliderShape& s) {
   switch (s.kind) {
@@ -159,6 +161,8 @@ ShapeBounds shape_bounds(const ColliderShape& s) {
 
 }  // namespace
 
+bool is_shape_collider(const ColliderSpec& c) { return c.type != ColliderSpec::Type::mesh && c.type != ColliderSpec::Type::plane; }
+
 std::string shape_collider_crossing(const ContactSpec& spec, const ContactSurface& surface, const Eigen::VectorXd& x0,
                                     const Eigen::VectorXd& x1, double t0, double t1, int max_samples) {
   if (!spec.enabled) return {};
@@ -168,14 +172,14 @@ std::string shape_collider_crossing(const ContactSpec& spec, const ContactSurfac
   // The body's box over the frame (both ends: it moves linearly between them).
   const Vec3 lo = p0.rowwise().minCoeff().cwiseMin(p1.rowwise().minCoeff()), hi = p0.rowwise().maxCoeff().cwiseMax(p1.rowwise().maxCoeff());
   for (const ColliderSpec& c : spec.colliders) {
-    if (c.type == ColliderSpec::Type::mesh || c.type == ColliderSpec::Type::plane) continue;
+    if (!is_shape_collider(c)) continue;
     const ColliderShape shape = collider_shape(c);
     const ColliderPose pose = collider_pose(c);
     const ShapeBounds bounds = shape_bounds(shape);
     // Where the shape's bounding sphere is at time t (world), and how far it is from the body's box.
     const auto reach = [&](double t) {
       const ColliderFrame f = collider_frame(pose, t);
-      const Vec3 centre = f.rotation * (f.scale * bounds.centre) + f.translation;
+      const Vec3 centre = bounds.centre_at(f);
       return (centre.cwiseMax(lo).cwiseMin(hi) - centre).norm() - f.scale * bounds.radius;
     };
     // The path's length over the frame (16 chords: a frame may hold a key), and samples along it no farther
@@ -207,7 +211,7 @@ std::string shape_collider_crossing(const ContactSpec& spec, const ContactSurfac
                              "frames (or substeps) for that motion",
                              c.index, type_name(c.type), travel, t0, t1, max_samples);
         const ColliderFrame f = collider_frame(pose, t);
-        const Vec3 centre = f.rotation * (f.scale * bounds.centre) + f.translation;
+        const Vec3 centre = bounds.centre_at(f);
         const double r = f.scale * bounds.radius;
         for (Eigen::Index tri = 0; tri < nf; ++tri) {
           std::array<Vec3, 3> v;
@@ -260,10 +264,10 @@ void check_contact_start(const ContactSpec& spec, const ContactSurface& surface,
   Eigen::Matrix3Xd points(3, surface.points.size());
   for (Eigen::Index i = 0; i < points.cols(); ++i) points.col(i) = surface.points.point(x0, i);
   for (const ColliderSpec& c : spec.colliders) {
-    if (c.type == ColliderSpec::Type::mesh || c.type == ColliderSpec::Type::plane) continue;
+    if (!is_shape_collider(c)) continue;
     const ColliderShape shape = collider_shape(c);
     const ColliderFrame f = collider_frame(collider_pose(c), 0.0);
-    const Vec3 centre = f.rotation * (f.scale * shape_bounds(shape).centre) + f.translation;
+    const Vec3 centre = shape_bounds(shape).centre_at(f);
     if (const double w = winding_number(points, surface.triangles, centre); std::abs(w) > 0.5)
       throw SceneError(fmt::format("{}: colliders[{}]: the {} lies inside {} at the start (winding number {:.2f} at its centre): "
                                    "contact needs a separated start; move the collider out of the body",

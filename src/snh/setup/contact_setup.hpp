@@ -64,6 +64,9 @@ struct ContactParameters {
 void check_contact_start(const ContactSpec& spec, const ContactSurface& surface, const Eigen::Matrix3Xd& rest,
                          const Eigen::VectorXd& x0, double dhat, const std::string& file);
 
+/// A sphere, capsule or box: a collider whose barrier acts on the surface's points only.
+[[nodiscard]] bool is_shape_collider(const ColliderSpec& c);
+
 /// The barriers of shape colliders (sphere, capsule, box) keep the surface's points out of them, not its
 /// edges and faces: a shape smaller than the triangles can slip between points. This checks the faces: over
 /// a frame from t0 (the surface at x0) to t1 (at x1, the surface moving linearly between), the shape at

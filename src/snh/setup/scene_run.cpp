@@ -159,9 +159,7 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
     f.total_energy = f.elastic_energy + f.kinetic_energy + f.gravity_energy;
   };
   // Shape colliders' faces: a frame whose shape met the surface between its points is no result.
-  const bool shapes = s.contact.enabled && std::any_of(s.contact.colliders.begin(), s.contact.colliders.end(), [](const ColliderSpec& c) {
-                        return c.type != ColliderSpec::Type::mesh && c.type != ColliderSpec::Type::plane;
-                      });
+  const bool shapes = s.contact.enabled && std::any_of(s.contact.colliders.begin(), s.contact.colliders.end(), is_shape_collider);
   if (shapes) {
     auto surface = std::make_shared<const ContactSurface>(contact_surface_of(*b.body));
     auto previous = std::make_shared<Eigen::VectorXd>();  // the last frame's state (empty after a resume)
