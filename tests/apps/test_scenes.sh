@@ -72,6 +72,16 @@ expect_error box_face "box_face.json: colliders\[1\] \\(box\\) meets the mesh's 
 expect_error capsule_face "capsule_face.json: colliders\[1\] \\(capsule\\) meets the mesh's surface at t = 0, triangle" -- "$SNH" run "$work/capsule_face.json" --out "$work/bad_capsule"
 "$SNH" run "$work/clear.json" --no-report --out "$work/clear" > "$work/clear.log" 2>&1 && ok || bad "clear: $(tail -2 "$work/clear.log")"
 
+# Self-contact at a d̂ near the surface's spacing or above it: the barrier would push the surface apart from
+# itself everywhere, and at d̂ = 1 on the 20 cm hand every primitive paired with every other (915 529 pairs,
+# 4.2 GB, over 3 minutes without finishing a frame). Refused before the first frame, naming a d̂ to give.
+printf '{"mesh": {"box": {"element": "hex", "res": 4}}, "material": {"name": "stable_neo_hookean"}, "contact": {"dhat": 0.6, "self": true}}' > "$work/crowd.json"
+expect_error crowded_box "crowd.json: contact.self: dhat 0.6 puts 100% of the vertices of the mesh's surface \\(98 of 98\\) within dhat of parts of the surface they do not share at the start \\(.* pairs, the closest .* apart\\): the barrier would push the surface apart from itself; give a dhat below" -- "$SNH" run "$work/crowd.json" --out "$work/crowd"
+data="$(cd "$SCENES/../data" && pwd)"
+sed -e "s|\.\./data/|$data/|" -e 's/"self": true/"self": true, "dhat": 1/' "$SCENES/hand_fist_contact.json" > "$work/hand_dhat.json"
+expect_error hand_dhat_1 "hand_dhat.json: contact.self: dhat 1 is too large for the render surface \\(welded\\): more than [0-9]* pairs of its primitives \\(64 a primitive\\) lie within it at the start, .* give a dhat well below its mean edge length 0.0067" -- "$SNH" run "$work/hand_dhat.json" --out "$work/hand_dhat"
+[ ! -e "$work/hand_dhat" ] && ok || bad "hand_dhat_1: wrote its directory"
+
 # snh lab: tables by default, JSON with --json, lab.json and the runs' frames written.
 out="$("$SNH" lab --quick --energy stable_neo_hookean --out "$work/lab" 2>/dev/null)"; code=$?
 [ "$code" -eq 0 ] && printf '%s' "$out" | grep -q "^stable_neo_hookean .*stays at rest" && [ -f "$work/lab/lab.json" ] \

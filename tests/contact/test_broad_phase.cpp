@@ -167,6 +167,29 @@ TEST(BroadPhase, EveryPairWithinDhatIsACandidate) {
   EXPECT_GT(close, 100);
 }
 
+/// With a limit the search stops past it (complete false), and below it finds the same pairs as without.
+TEST(BroadPhase, StopsPastItsLimit) {
+  std::mt19937_64 rng(44);
+  Mesh mesh = random_mesh(rng, 200, 400, 0.05);
+  mesh.V1.col(7) += Eigen::Vector3d(0.6, 0.6, 0.6);  // oversize boxes too (each pair of them met once)
+  mesh.V1.col(8) -= Eigen::Vector3d(0.6, 0.6, 0.6);
+  const Eigen::Matrix2Xi E = surface_edges(mesh.F);
+  const Candidates all = broad_phase(mesh.V0, mesh.V1, mesh.F, E, 0.1);
+  const std::size_t n = all.vertex_triangle.size() + all.edge_edge.size();
+  ASSERT_TRUE(all.complete);
+  ASSERT_GT(n, 1000u);
+  const Candidates exact = broad_phase(mesh.V0, mesh.V1, mesh.F, E, 0.1, n);
+  EXPECT_TRUE(exact.complete);
+  EXPECT_EQ(exact.vertex_triangle, all.vertex_triangle);
+  EXPECT_EQ(exact.edge_edge, all.edge_edge);
+  for (const std::size_t limit : {std::size_t{0}, std::size_t{10}, n / 2, n - 1}) {
+    const Candidates cut = broad_phase(mesh.V0, mesh.V1, mesh.F, E, 0.1, limit);
+    EXPECT_FALSE(cut.complete) << limit;
+    EXPECT_GT(cut.vertex_triangle.size() + cut.edge_edge.size(), limit);
+    EXPECT_LE(cut.vertex_triangle.size() + cut.edge_edge.size(), n);
+  }
+}
+
 TEST(BroadPhase, BadInputThrows) {
   std::mt19937_64 rng(43);
   Mesh mesh = random_mesh(rng, 10, 10, 0.0);

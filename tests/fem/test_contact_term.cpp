@@ -422,6 +422,34 @@ TEST(ContactTerm, NothingInRangeChangesNothingBitForBit) {
   }
 }
 
+TEST(ContactTerm, CrowdingCountsTheSurfaceInRangeOfItselfWithinItsLimit) {
+  // A cube's surface ([−1, 1]³, 4 cells a side: edges 0.5): at a d̂ well below its spacing no vertex is
+  // within d̂ of a part it does not share; at a d̂ above it, every vertex is (parts two rings away on the same
+  // face); with a small limit the search stops.
+  const VolumeMesh m = box_tets(4);
+  const Eigen::Matrix3Xi F = boundary_triangles(m);
+  const Eigen::VectorXd x = flatten(m.vertices);
+  const ContactTerm fine(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, 0.05, 1.0);
+  const Crowding quiet = fine.crowding(x, 1'000'000);
+  EXPECT_TRUE(quiet.complete);
+  EXPECT_EQ(quiet.in_range, 0);
+  EXPECT_EQ(quiet.pairs, 0u);
+  EXPECT_EQ(quiet.min_distance, 0.05);
+  EXPECT_EQ(quiet.vertices, 98);  // 6·25 − 12·5 + 8: the 5×5×5 grid's surface
+  const ContactTerm coarse(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, 0.6, 1.0);
+  const Crowding crowded = coarse.crowding(x, 1'000'000);
+  EXPECT_TRUE(crowded.complete);
+  EXPECT_EQ(crowded.in_range, crowded.vertices);
+  EXPECT_EQ(crowded.pairs, coarse.pairs(x).size());  // what the term itself would act on
+  EXPECT_EQ(crowded.min_distance, coarse.min_distance(x));
+  EXPECT_LT(crowded.min_distance, 0.5);
+  EXPECT_GT(crowded.candidates, crowded.pairs);
+  const Crowding cut = coarse.crowding(x, 100);
+  EXPECT_FALSE(cut.complete);
+  EXPECT_GT(cut.candidates, 100u);
+  EXPECT_EQ(cut.in_range, 0);  // not counted past the limit
+}
+
 TEST(ContactTerm, ACubeDroppedOnTheGroundComesToRestAboveIt) {
   const VolumeMesh m = box_tets(1);  // [−1, 1]³
   const Eigen::Matrix3Xi F = boundary_triangles(m);

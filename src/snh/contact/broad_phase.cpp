@@ -14,6 +14,7 @@ struct Box {
   Eigen::Vector3d lo, hi;
   int kind = 0;  ///< 0 vertex, 1 edge, 2 triangle
   int id = 0;
+  bool oversize = false;  ///< over more than kMaxCells cells: tested against every box
   Eigen::Matrix<long long, 3, 1> low_cell = Eigen::Matrix<long long, 3, 1>::Zero();  ///< the grid cell of lo
 };
 
@@ -62,7 +63,7 @@ Eigen::Matrix2Xi surface_edges(const Eigen::Matrix3Xi& F) {
 }
 
 Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, const Eigen::Matrix3Xi& F,
-                       const Eigen::Matrix2Xi& E, double dhat) {
+                       const Eigen::Matrix2Xi& E, double dhat, std::size_t max_candidates) {
   if (V0.cols() != V1.cols())
     throw std::invalid_argument("broad_phase: V0 has " + std::to_string(V0.cols()) + " vertices, V1 " +
                                 std::to_string(V1.cols()));
@@ -126,6 +127,7 @@ Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, c
     boxes[i].low_cell = a;
     if ((b - a + Eigen::Matrix<long long, 3, 1>::Ones()).prod() > kMaxCells) {
       oversize.push_back(static_cast<int>(i));
+      boxes[i].oversize = true;
       continue;
     }
     for (long long z = a[2]; z <= b[2]; ++z)
@@ -141,20 +143,22 @@ Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, c
     while (from < to && boxes[entries[from] & mask].kind < kind) ++from;
     return from;
   };
+  const auto over_limit = [&] { return out.vertex_triangle.size() + out.edge_edge.size() > max_candidates; };
   for (std::size_t g = 0; g < entries.size();) {
+    if (over_limit()) break;
     std::size_t end = g;
     const std::uint64_t here = entries[g] >> kIndexBits;
     while (end < entries.size() && entries[end] >> kIndexBits == here) ++end;
     const std::size_t edges = begin_of(1, g, end), triangles = begin_of(2, edges, end);
     const auto reported_here = [&](const Box& a, const Box& b) { return key(a.low_cell.cwiseMax(b.low_cell)) == here; };
-    for (std::size_t i = g; i < edges; ++i) {
+    for (std::size_t i = g; i < edges && !over_limit(); ++i) {
       const Box& v = boxes[entries[i] & mask];
       for (std::size_t j = triangles; j < end; ++j) {
         const Box& t = boxes[entries[j] & mask];
         if (overlap(v, t) && reported_here(v, t)) vertex_triangle(v, t);
       }
     }
-    for (std::size_t i = edges; i < triangles; ++i) {
+    for (std::size_t i = edges; i < triangles && !over_limit(); ++i) {
       const Box& a = boxes[entries[i] & mask];
       for (std::size_t j = i + 1; j < triangles; ++j) {
         const Box& b = boxes[entries[j] & mask];
@@ -164,20 +168,24 @@ Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, c
     g = end;
   }
   for (const int i : oversize) {
+    if (over_limit()) break;
     const Box& a = boxes[static_cast<std::size_t>(i)];
-    for (const Box& b : boxes) {
-      if (!overlap(a, b)) continue;
+    for (std::size_t j = 0; j < boxes.size(); ++j) {
+      const Box& b = boxes[j];
+      if ((b.oversize && j < static_cast<std::size_t>(i)) || !overlap(a, b)) continue;  // two oversize boxes: met once
       if (a.kind == 1 && b.kind == 1 && a.id != b.id) edge_edge(a, b);
       else if (a.kind == 0 && b.kind == 2) vertex_triangle(a, b);
       else if (a.kind == 2 && b.kind == 0) vertex_triangle(b, a);
     }
   }
+  // Each pair is met once (the grid reports it from one cell; of two oversize boxes, the first reports it), so
+  // the count is exact: past the limit (checked per box) the lists hold only some, at most a box's pairs more.
+  if (over_limit()) {
+    out.complete = false;
+    return out;
+  }
   std::sort(out.vertex_triangle.begin(), out.vertex_triangle.end());
   std::sort(out.edge_edge.begin(), out.edge_edge.end());
-  // The grid meets each pair once; two oversize boxes meet twice (once from each): unique() drops the second.
-  out.vertex_triangle.erase(std::unique(out.vertex_triangle.begin(), out.vertex_triangle.end()),
-                            out.vertex_triangle.end());
-  out.edge_edge.erase(std::unique(out.edge_edge.begin(), out.edge_edge.end()), out.edge_edge.end());
   return out;
 }
 

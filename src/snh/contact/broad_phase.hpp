@@ -12,6 +12,8 @@
 // sweep along one axis, which tested each box against every box open across the surface's cross-section:
 // on a closed surface that is most of its boxes.)
 #include <array>
+#include <cstddef>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -22,6 +24,9 @@ namespace snh::contact {
 struct Candidates {
   std::vector<std::array<int, 2>> vertex_triangle;  ///< (vertex, triangle column of F)
   std::vector<std::array<int, 2>> edge_edge;        ///< (edge, edge) column indices of E, first < second
+  /// False when the search stopped at its limit (broad_phase's max_candidates): the lists then hold some of
+  /// the pairs only, more than the limit in all.
+  bool complete = true;
 };
 
 /// The undirected edges of a triangle list: 2 by #E, each column (lower id, higher id), columns sorted.
@@ -30,9 +35,12 @@ struct Candidates {
 /// Candidates of the step from V0 to V1 (3 by #V each; pass V0 twice for a static test).
 ///   F  3 by #F triangles, E  2 by #E edges (e.g. surface_edges(F)), vertex ids in [0, #V)
 ///   dhat  the distance below which pairs interact (≥ 0)
+///   max_candidates  the search stops (complete false) once it has found more pairs than this: a caller that
+///                   must not spend memory in proportion to the square of the surface's size bounds it
 /// Throws std::invalid_argument (one line) for non-finite positions, V0 and V1 of different sizes, an
 /// index out of range, or dhat negative or non-finite.
 [[nodiscard]] Candidates broad_phase(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, const Eigen::Matrix3Xi& F,
-                                     const Eigen::Matrix2Xi& E, double dhat);
+                                     const Eigen::Matrix2Xi& E, double dhat,
+                                     std::size_t max_candidates = std::numeric_limits<std::size_t>::max());
 
 }  // namespace snh::contact

@@ -134,7 +134,7 @@ void ContactTerm::scatter(const Derivatives<N>& d, const std::array<int, 4>& ids
 const std::vector<ContactPair>& ContactTerm::pairs_at(const Eigen::VectorXd& x, const Eigen::Matrix3Xd** P) const {
   if (!(cache_x_.size() == x.size() && cache_x_ == x) || !x.allFinite()) {
     cache_positions_ = positions(x);
-    cache_pairs_ = local_pairs(cache_positions_);
+    cache_pairs_ = local_pairs(cache_positions_, candidates_near(cache_positions_));
     if (x.allFinite()) cache_x_ = x;
     else cache_x_.resize(0);
   }
@@ -163,8 +163,7 @@ const contact::Candidates& ContactTerm::candidates_near(const Eigen::Matrix3Xd& 
   return candidates_;
 }
 
-std::vector<ContactPair> ContactTerm::local_pairs(const Eigen::Matrix3Xd& V) const {
-  const contact::Candidates& c = candidates_near(V);
+std::vector<ContactPair> ContactTerm::local_pairs(const Eigen::Matrix3Xd& V, const contact::Candidates& c) const {
   const double s_hat = dhat_ * dhat_;
   std::vector<ContactPair> raw;  // in local vertex ids (same order as the global ones)
   for (const auto& [v, t] : c.vertex_triangle) {
@@ -303,6 +302,26 @@ void ContactTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
     return;
   }
   for (const ContactPair& p : pairs_at(x)) points_.couple(p.vertices, p.arity(), out.vertices);
+}
+
+Crowding ContactTerm::crowding(const Eigen::VectorXd& x, std::size_t max_candidates) const {
+  const Eigen::Matrix3Xd V = positions(x);
+  const contact::Candidates c = contact::broad_phase(V, V, local_F_, local_E_, dhat_, max_candidates);
+  Crowding out;
+  out.complete = c.complete;
+  out.candidates = c.vertex_triangle.size() + c.edge_edge.size();
+  out.vertices = V.cols();
+  out.min_distance = dhat_;
+  if (!c.complete) return out;
+  const std::vector<ContactPair> pairs = local_pairs(V, c);
+  std::vector<bool> in(static_cast<std::size_t>(V.cols()), false);
+  for (const ContactPair& p : pairs) {
+    for (int i = 0; i < p.arity(); ++i) in[static_cast<std::size_t>(p.vertices[i])] = true;
+    out.min_distance = std::min(out.min_distance, std::sqrt(std::max(p.squared_distance, 0.0)));
+  }
+  out.pairs = pairs.size();
+  out.in_range = static_cast<Eigen::Index>(std::count(in.begin(), in.end(), true));
+  return out;
 }
 
 double ContactTerm::min_distance(const Eigen::VectorXd& x) const {

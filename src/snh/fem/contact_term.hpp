@@ -73,6 +73,16 @@ struct ContactPair {
   [[nodiscard]] int arity() const { return kind == Kind::point_point ? 2 : kind == Kind::point_edge ? 3 : 4; }
 };
 
+/// How much of a surface lies within d̂ of other parts of itself (ContactTerm::crowding).
+struct Crowding {
+  bool complete = true;             ///< false: the broad phase passed its limit (then only `candidates` is set)
+  std::size_t candidates = 0;       ///< broad-phase pairs (boxes grown by d̂/2)
+  Eigen::Index in_range = 0;        ///< surface vertices in an active pair
+  Eigen::Index vertices = 0;        ///< surface vertices in all
+  std::size_t pairs = 0;            ///< active pairs (merged)
+  double min_distance = 0.0;        ///< the smallest distance of an active pair; d̂ with none
+};
+
 class ContactTerm final : public ContactTermBase {
  public:
   /// F            3 by #F triangles over the points (ids into `points`)
@@ -100,6 +110,9 @@ class ContactTerm final : public ContactTermBase {
   [[nodiscard]] int active_pairs(const Eigen::VectorXd& x) const override;
   /// The smallest distance (not squared) over all candidate pairs within d̂ at x; d̂ if there is none.
   [[nodiscard]] double min_distance(const Eigen::VectorXd& x) const override;
+  /// How crowded the surface is at x, found with at most max_candidates broad-phase pairs (memory bounded:
+  /// a d̂ as large as the body would otherwise pair every primitive with every other).
+  [[nodiscard]] Crowding crowding(const Eigen::VectorXd& x, std::size_t max_candidates) const;
   /// The surface's vertex positions at x (3 by #surface vertices: the points that F uses, in increasing
   /// order).
   [[nodiscard]] Eigen::Matrix3Xd positions(const Eigen::VectorXd& x) const;
@@ -118,8 +131,8 @@ class ContactTerm final : public ContactTermBase {
   void number_surface(Eigen::Index id_count);
   /// The volume vertex of local surface vertex i (plain points).
   [[nodiscard]] int vertex_of(Eigen::Index i) const { return points_.vertex()(0, i); }
-  /// The active pairs at the surface positions P, in local ids.
-  std::vector<ContactPair> local_pairs(const Eigen::Matrix3Xd& P) const;
+  /// The active pairs at the surface positions P among the candidates c, in local ids.
+  std::vector<ContactPair> local_pairs(const Eigen::Matrix3Xd& P, const contact::Candidates& c) const;
   /// Adds a pair's derivatives (over its local points `ids`) to the volume's gradient and Hessian.
   template <int N>
   void scatter(const contact::Derivatives<N>& d, const std::array<int, 4>& ids, Eigen::VectorXd* gradient,

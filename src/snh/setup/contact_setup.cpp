@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "snh/contact/broad_phase.hpp"
 #include "snh/contact/edge_edge_distance.hpp"
 #include "snh/contact/point_triangle_distance.hpp"
 #include "snh/embed/lattice.hpp"
@@ -159,7 +160,40 @@ ShapeBounds shape_bounds(const ColliderShape& s) {
   return {Vec3::Zero(), 0.0, 0.0};
 }
 
+/// The surface's mean edge length at x.
+double mean_edge_length(const ContactTerm& term, const Eigen::VectorXd& x) {
+  const Eigen::Matrix3Xd P = term.positions(x);
+  const Eigen::Matrix2Xi E = contact::surface_edges(term.triangles());
+  std::vector<int> ids(term.triangles().data(), term.triangles().data() + term.triangles().size());
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  const auto local = [&](int v) { return std::lower_bound(ids.begin(), ids.end(), v) - ids.begin(); };
+  double sum = 0.0;
+  for (Eigen::Index e = 0; e < E.cols(); ++e) sum += (P.col(local(E(0, e))) - P.col(local(E(1, e)))).norm();
+  return E.cols() > 0 ? sum / static_cast<double>(E.cols()) : 0.0;
+}
+
 }  // namespace
+
+void check_self_crowding(const ContactTerm& self, const ContactSurface& surface, const Eigen::VectorXd& x0, const std::string& file) {
+  const std::size_t primitives =
+      static_cast<std::size_t>(self.positions(x0).cols() + self.edges().cols() + self.triangles().cols());
+  const std::size_t limit = kCrowdedCandidates * std::max<std::size_t>(primitives, 1);
+  const Crowding c = self.crowding(x0, limit);
+  const double dhat = self.dhat(), edge = mean_edge_length(self, x0);
+  if (!c.complete)
+    throw SceneError(fmt::format("{}: contact.self: dhat {:g} is too large for {}: more than {} pairs of its primitives ({} a "
+                                 "primitive) lie within it at the start, so the barrier would act between neighbours everywhere; "
+                                 "give a dhat well below its mean edge length {:.3g}",
+                                 file, dhat, surface.name, limit, kCrowdedCandidates, edge));
+  if (static_cast<double>(c.in_range) > kCrowdedShare * static_cast<double>(c.vertices))
+    throw SceneError(fmt::format("{}: contact.self: dhat {:g} puts {:.0f}% of the vertices of {} ({} of {}) within dhat of parts "
+                                 "of the surface they do not share at the start ({} pairs, the closest {:.3g} apart): the barrier "
+                                 "would push the surface apart from itself; give a dhat below {:.3g} (half that distance; its "
+                                 "mean edge length is {:.3g})",
+                                 file, dhat, 100.0 * static_cast<double>(c.in_range) / static_cast<double>(c.vertices),
+                                 surface.name, c.in_range, c.vertices, c.pairs, c.min_distance, 0.5 * c.min_distance, edge));
+}
 
 bool is_shape_collider(const ColliderSpec& c) { return c.type != ColliderSpec::Type::mesh && c.type != ColliderSpec::Type::plane; }
 
@@ -273,7 +307,10 @@ void check_contact_start(const ContactSpec& spec, const ContactSurface& surface,
                                    "contact needs a separated start; move the collider out of the body",
                                    file, c.index, type_name(c.type), surface.name, w));
   }
-  if (spec.self && !std::isfinite(ContactTerm(surface.triangles, surface.points, rest, dhat, 1.0).energy(x0)))
+  if (!spec.self) return;
+  const ContactTerm self(surface.triangles, surface.points, rest, dhat, 1.0);
+  check_self_crowding(self, surface, x0, file);
+  if (!std::isfinite(self.energy(x0)))
     throw SceneError(fmt::format("{}: contact.self: {} touches itself at the start (two of its triangles at distance 0): contact "
                                  "needs a separated start",
                                  file, surface.name));

@@ -4,6 +4,7 @@
 // code serves a volume mesh's own boundary (its vertices as plain points) and a flesh's render surface
 // embedded in the volume (points with weights) alike: the terms take their points either way
 // (fem/embedded_points.hpp).
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "snh/fem/collider_term.hpp"
+#include "snh/fem/contact_term.hpp"
 #include "snh/fem/embedded_points.hpp"
 #include "snh/fem/term.hpp"
 #include "snh/mesh/volume_mesh.hpp"
@@ -63,6 +65,16 @@ struct ContactParameters {
 /// the collider and the point.
 void check_contact_start(const ContactSpec& spec, const ContactSurface& surface, const Eigen::Matrix3Xd& rest,
                          const Eigen::VectorXd& x0, double dhat, const std::string& file);
+
+/// Self-contact needs a d̂ below the surface's own spacing: at a d̂ near its edge length every vertex lies
+/// within d̂ of triangles two rings away, and the barrier pushes the surface apart from itself everywhere
+/// (and at a d̂ as large as the body, every primitive pairs with every other: memory and time grow as the
+/// square of the surface). Throws SceneError naming `file`, d̂ and what to give instead when, at x0, more than
+/// kCrowdedShare of the surface's vertices are in an active pair, or the broad phase finds more than
+/// kCrowdedCandidates pairs a primitive (it stops there, so the check's memory stays bounded).
+inline constexpr double kCrowdedShare = 0.25;
+inline constexpr std::size_t kCrowdedCandidates = 64;
+void check_self_crowding(const ContactTerm& self, const ContactSurface& surface, const Eigen::VectorXd& x0, const std::string& file);
 
 /// A sphere, capsule or box: a collider whose barrier acts on the surface's points only.
 [[nodiscard]] bool is_shape_collider(const ColliderSpec& c);
