@@ -186,7 +186,8 @@ void check_self_crowding(const ContactTerm& self, const ContactSurface& surface,
                                  "primitive) lie within it at the start, so the barrier would act between neighbours everywhere; "
                                  "give a dhat well below its mean edge length {:.3g}",
                                  file, dhat, surface.name, limit, kCrowdedCandidates, edge));
-  if (static_cast<double>(c.in_range) > kCrowdedShare * static_cast<double>(c.vertices))
+  // (A surface that touches itself is refused as such after this.)
+  if (c.min_distance > 0.0 && static_cast<double>(c.in_range) > kCrowdedShare * static_cast<double>(c.vertices))
     throw SceneError(fmt::format("{}: contact.self: dhat {:g} puts {:.0f}% of the vertices of {} ({} of {}) within dhat of parts "
                                  "of the surface they do not share at the start ({} pairs, the closest {:.3g} apart): the barrier "
                                  "would push the surface apart from itself; give a dhat below {:.3g} (half that distance; its "
