@@ -162,9 +162,10 @@ std::string part_cache_name(const std::vector<ModelPart>& parts, std::size_t p) 
 /// flesh.usda from the surface/ and lbs/ frames on disk (so that a resumed run's stage holds them all), and
 /// bones.json (the bones' segments at every frame written, for the report). Nothing without frames.
 void write_flesh_cache(const Flesh& flesh, const std::filesystem::path& out, double fps, const RunResult& result, json& stats) {
-  std::vector<UsdMesh> meshes{{.name = "flesh", .triangles = flesh.model.triangles, .frames = {}, .normals = {}, .uv = flesh.model.uv},
+  std::vector<UsdMesh> meshes{{.name = "flesh", .triangles = flesh.model.triangles, .frames = {}, .normals = {}, .uv = flesh.model.uv,
+                               .converged = {}},
                               {.name = "linear_blend_skinning", .triangles = flesh.model.triangles, .frames = {}, .normals = {},
-                               .uv = flesh.model.uv}};
+                               .uv = flesh.model.uv, .converged = {}}};
   const auto add = [&](UsdMesh& mesh, const std::filesystem::path& file) {
     mesh.frames.push_back(read_surface(file).vertices);
     mesh.normals.push_back(surface_normals(flesh, mesh.frames.back()));  // of the surface as it is in the frame
