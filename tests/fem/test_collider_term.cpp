@@ -233,6 +233,48 @@ TEST(MeshColliderTerm, MatchesFiniteDifferencesWithEachPairKind) {
   }
 }
 
+TEST(MeshColliderTerm, ATurnedScaledMovedColliderFindsWhatOneBuiltWhereItIsFinds) {
+  // A fine plane (30 × 30 cells, 1 800 triangles) turned, tilted, scaled and moved by its pose to just above
+  // a cube's top: its tree is searched in its base frame through the inverse pose. A still collider built
+  // from the placed vertices finds the same candidates, distances and steps, bit for bit (not the same
+  // energy: its rest is where it is placed, so its edges' mollifier thresholds are 1.3² times larger).
+  const VolumeMesh m = box_tets(3);
+  const Eigen::Matrix3Xi F = boundary_triangles(m);
+  const int n = 30;
+  Eigen::Matrix3Xd W(3, (n + 1) * (n + 1));
+  Eigen::Matrix3Xi T(3, 2 * n * n);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) W.col(j * (n + 1) + i) << -2.0 + 4.0 * i / n, 0.0, -2.0 + 4.0 * j / n;
+  for (int j = 0, f = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i;
+      T.col(f++) << a, a + n + 2, a + 1;
+      T.col(f++) << a, a + n + 1, a + n + 2;
+    }
+  const ColliderPose pose = [](double t) {
+    return Eigen::Affine3d(Eigen::Translation3d(0.1 * t, 1.005, 0.0) * Eigen::AngleAxisd(0.7 * t, Vec3::UnitY()) *
+                           Eigen::AngleAxisd(0.003, Vec3::UnitX()) * Eigen::Scaling(1.3));
+  };
+  const Eigen::VectorXd x = flatten(m.vertices);
+  Eigen::VectorXd up = Eigen::VectorXd::Zero(x.size());
+  for (Eigen::Index v = 0; v < m.vertex_count(); ++v) up[3 * v + 1] = 0.01 * (1.0 + m.vertices(1, v));
+  MeshColliderTerm posed(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, W, T, pose, 0.02, 1.0);
+  for (const double t : {0.0, 0.3, 1.0, 2.5}) {
+    posed.at_time(t);
+    const MeshColliderTerm still(F, EmbeddedPoints::every(m.vertices.cols()), m.vertices, posed.collider_vertices(), T, {}, 0.02, 1.0);
+    EXPECT_GT(posed.active_pairs(x), 0) << "t " << t;
+    EXPECT_EQ(posed.active_pairs(x), still.active_pairs(x)) << "t " << t;
+    Stencil a, b;  // every candidate's simulated vertices, in order: the same candidates
+    posed.stencil(x, a);
+    still.stencil(x, b);
+    EXPECT_EQ(a.vertices, b.vertices) << "t " << t;
+    EXPECT_FALSE(a.vertices.empty());
+    EXPECT_EQ(posed.min_distance(x), still.min_distance(x)) << "t " << t;
+    EXPECT_EQ(posed.max_step(x, up), still.max_step(x, up)) << "t " << t;
+    EXPECT_LT(posed.max_step(x, up), 1.0) << "t " << t;
+  }
+}
+
 TEST(MeshColliderTerm, MaxStepAndSweepNeverCrossOnRandomSteps) {
   // A cube's surface against a slab: random steps of the cube (max_step) and random jumps of the slab
   // (sweep, the cube still); where the whole jump crosses, the bounded one does not, and the distance stays

@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace snh::contact {
 namespace {
@@ -47,18 +48,26 @@ void check_ids(const Matrix& ids, Eigen::Index n, const char* name) {
 
 }  // namespace
 
-Eigen::Matrix2Xi surface_edges(const Eigen::Matrix3Xi& F) {
-  std::vector<std::array<int, 2>> edges;
-  edges.reserve(3 * F.cols());
+Eigen::Matrix2Xi surface_edges(const Eigen::Matrix3Xi& F, Eigen::Matrix3Xi* of_triangle) {
+  // Each triangle side as one integer (lower id in the high half: the order of (lower, higher)) with its
+  // place (3 t + k), sorted: a run of equal keys is one edge.
+  std::vector<std::pair<std::uint64_t, int>> sides;
+  sides.reserve(static_cast<std::size_t>(3 * F.cols()));
   for (Eigen::Index f = 0; f < F.cols(); ++f)
     for (int k = 0; k < 3; ++k) {
-      const int a = F(k, f), b = F((k + 1) % 3, f);
-      edges.push_back({std::min(a, b), std::max(a, b)});
+      const auto a = static_cast<std::uint32_t>(F(k, f)), b = static_cast<std::uint32_t>(F((k + 1) % 3, f));
+      sides.push_back({static_cast<std::uint64_t>(std::min(a, b)) << 32 | std::max(a, b), static_cast<int>(3 * f + k)});
     }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  Eigen::Matrix2Xi E(2, static_cast<Eigen::Index>(edges.size()));
-  for (std::size_t e = 0; e < edges.size(); ++e) E.col(static_cast<Eigen::Index>(e)) << edges[e][0], edges[e][1];
+  std::sort(sides.begin(), sides.end());
+  std::vector<std::uint64_t> keys;
+  if (of_triangle) of_triangle->resize(3, F.cols());
+  for (const auto& [key, place] : sides) {
+    if (keys.empty() || keys.back() != key) keys.push_back(key);
+    if (of_triangle) (*of_triangle)(place % 3, place / 3) = static_cast<int>(keys.size() - 1);
+  }
+  Eigen::Matrix2Xi E(2, static_cast<Eigen::Index>(keys.size()));
+  for (std::size_t e = 0; e < keys.size(); ++e)
+    E.col(static_cast<Eigen::Index>(e)) << static_cast<int>(keys[e] >> 32), static_cast<int>(keys[e] & 0xffffffffU);
   return E;
 }
 

@@ -30,7 +30,8 @@ struct Candidates {
 };
 
 /// The undirected edges of a triangle list: 2 by #E, each column (lower id, higher id), columns sorted.
-[[nodiscard]] Eigen::Matrix2Xi surface_edges(const Eigen::Matrix3Xi& F);
+/// With `of_triangle`: 3 by #F, the column of triangle t's edge (F(k, t), F(k + 1 mod 3, t)) at (k, t).
+[[nodiscard]] Eigen::Matrix2Xi surface_edges(const Eigen::Matrix3Xi& F, Eigen::Matrix3Xi* of_triangle = nullptr);
 
 /// Candidates of the step from V0 to V1 (3 by #V each; pass V0 twice for a static test).
 ///   F  3 by #F triangles, E  2 by #E edges (e.g. surface_edges(F)), vertex ids in [0, #V)

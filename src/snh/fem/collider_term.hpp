@@ -21,7 +21,9 @@
 //
 // MeshColliderTerm: a triangle mesh against the simulated surface: simulated vertex – collider triangle,
 // collider vertex – simulated triangle and simulated edge – collider edge candidates (the broad phase over
-// both surfaces at once, pairs within one body left out), each adding κ B with B its pair barrier
+// the simulated surface and the part of the collider near it, pairs within one body left out; what is near
+// is found by a box tree over the collider's triangles built once in its base frame, so the cost follows
+// what is near, not the collider's size), each adding κ B with B its pair barrier
 // (contact/pair_barrier.hpp: b of the classified point–triangle distance; m·b of the edge–edge distance,
 // mollified where the edges are nearly parallel). The energy is IPC's sum over candidates (no merging:
 // with the collider fixed the duplicates are few). Only the simulated vertices' blocks of each pair's
@@ -61,6 +63,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "snh/contact/box_tree.hpp"
 #include "snh/fem/contact_term_base.hpp"
 #include "snh/fem/embedded_points.hpp"
 #include "snh/math/types.hpp"
@@ -178,17 +181,30 @@ class MeshColliderTerm final : public ContactTermBase {
  private:
   struct Candidate {
     bool edge_edge;
-    std::array<int, 4> local;  ///< combined ids (simulated surface vertices first, then the collider's)
+    std::array<int, 4> local;  ///< ids into Near's columns (the simulated surface's vertices first, then the collider's near ones)
     double mollifier_threshold;
   };
-  /// Both surfaces' vertices: the simulated ones at x, the collider's at `collider`.
-  [[nodiscard]] Eigen::Matrix3Xd combined(const Eigen::VectorXd& x, const Eigen::Matrix3Xd& collider) const;
-  /// The candidates between the two bodies over the step V0 → V1 within dhat.
-  [[nodiscard]] std::vector<Candidate> candidates(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& V1, double dhat) const;
-  /// A candidate's combined ids with the collider's replaced by −1 (EmbeddedPoints::scatter's slots).
+  /// The candidates between the two bodies over a step, on the vertices they use: the simulated surface's
+  /// (all, in local order) and then the collider's near the body (ascending), at the step's start (V) and
+  /// its motion (D: empty for a static test).
+  struct Near {
+    Eigen::Matrix3Xd V, D;
+    std::vector<Candidate> pairs;
+  };
+  /// The simulated surface's points at x (3 by #points).
+  [[nodiscard]] Eigen::Matrix3Xd surface_at(const Eigen::VectorXd& x) const;
+  /// The candidates within dhat of the step from S (the simulated surface's points) and C (the collider's
+  /// vertices) by DS and DC (null: still). `indexed`: C is the collider at the current pose, and its tree
+  /// finds what is near (otherwise every triangle of the collider is tested).
+  [[nodiscard]] Near near(const Eigen::Matrix3Xd& S, const Eigen::Matrix3Xd* DS, const Eigen::Matrix3Xd& C, const Eigen::Matrix3Xd* DC,
+                          bool indexed, double dhat) const;
+  /// The collider's triangles (ids into T) whose box may come near [lo, hi] (world) at the current pose: from
+  /// the tree where the pose can be inverted, else all of them; a superset, ascending.
+  [[nodiscard]] std::vector<int> triangles_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
+  /// A candidate's ids with the collider's replaced by −1 (EmbeddedPoints::scatter's slots).
   [[nodiscard]] std::array<int, 4> simulated_slots(const std::array<int, 4>& local) const;
-  /// The smallest CCD fraction of the candidates for the step V0 → V0 + D (their count added to *tested).
-  [[nodiscard]] double ccd(const Eigen::Matrix3Xd& V0, const Eigen::Matrix3Xd& D, long long* tested = nullptr) const;
+  /// The smallest CCD fraction of the candidates for their step (their count added to *tested).
+  [[nodiscard]] double ccd(const Near& n, long long* tested = nullptr) const;
   [[nodiscard]] Eigen::Matrix3Xd placed_at(double t) const;
   /// The squared distances of the candidates within d̂ at x (the statistics).
   [[nodiscard]] std::vector<double> close_distances(const Eigen::VectorXd& x) const;
@@ -197,11 +213,16 @@ class MeshColliderTerm final : public ContactTermBase {
   bool embedded_ = false;              ///< points with weights (not plain: scattered through them)
   Eigen::Index volume_vertices_ = 0;
   int triangles_simulated_ = 0;        ///< triangles below this index are the simulated surface's
-  Eigen::Matrix3Xi F_;                 ///< combined triangles
-  Eigen::Matrix2Xi E_;                 ///< combined edges
-  Eigen::Matrix3Xd rest_;              ///< combined rest positions
+  Eigen::Matrix3Xi F_;                 ///< the simulated surface's triangles (local ids)
+  Eigen::Matrix2Xi E_;                 ///< its edges
+  Eigen::Matrix3Xd rest_;              ///< its points at rest
   Eigen::Matrix3Xd base_, placed_;     ///< collider vertices: base and at the current pose
   Eigen::Matrix3Xi collider_T_;
+  Eigen::Matrix2Xi collider_E_;        ///< the collider's edges (its vertex ids), sorted
+  Eigen::Matrix3Xi triangle_edges_;    ///< the columns of collider_E_ of each triangle's three edges
+  std::vector<int> loose_;             ///< the collider's vertices in no triangle (tested one by one)
+  contact::BoxTree tree_;              ///< over the collider's triangles in its base frame
+  Eigen::Affine3d pose_now_ = Eigen::Affine3d::Identity();  ///< the current pose (at_time)
   ColliderPose pose_;
   double dhat_, kappa_;
 };
