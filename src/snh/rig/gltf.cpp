@@ -1,9 +1,6 @@
 #include "snh/rig/gltf.hpp"
 
-// Debian's libtinygltf is built with its stb_image loaders and file-system callbacks, so the header is
-// included as is (no TINYGLTF_NO_* macros: the defaults the header's inline constructor names are the
-// library's). Images are never decoded: a loader that ignores them is installed before every load.
-#include <tiny_gltf.h>
+#include "snh/rig/gltf_load.hpp"
 
 #include <algorithm>
 #include <array>
@@ -20,7 +17,6 @@
 #include <Eigen/SVD>
 #include <fmt/format.h>
 
-#include "snh/math/json_depth.hpp"
 #include "snh/rig/model_build.hpp"
 
 namespace snh {
@@ -33,122 +29,6 @@ using rig_build::fail;
 using rig_build::max_coordinate;
 using rig_build::one_line;
 static_assert(std::endian::native == std::endian::little, "glTF buffers are little-endian; this reader copies them as is");
-
-/// The whole file, checked to be a readable regular file of a sensible size, followed by 16 zero bytes (a
-/// margin for tinygltf's GLB chunk parsing, which may look a few bytes past a chunk that ends the file).
-std::vector<unsigned char> read_file(const fs::path& path, std::size_t& size) {
-  const std::uintmax_t n = check_file(path, "glTF");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, "cannot open the file");
-  // A GLB's header says its length: checked before the rest is read, so that a file of something else named
-  // .glb, or a GLB with hundreds of megabytes after its end, is refused without reading it whole.
-  unsigned char head[12] = {};
-  in.read(reinterpret_cast<char*>(head), 12);
-  const auto got = static_cast<std::uintmax_t>(in.gcount());
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (got >= 4 && std::memcmp(head, "glTF", 4) == 0) {
-    std::uint32_t length = 0;
-    if (got == 12) std::memcpy(&length, head + 8, 4);
-    if (got < 12 || length != n)
-      fail(path, fmt::format("not a valid glTF binary: its header says {} bytes, the file has {}", got < 12 ? 0 : length, n));
-    std::uint32_t version = 0;
-    std::memcpy(&version, head + 4, 4);
-    if (version != 2) fail(path, fmt::format("a glTF binary of version {}: snh reads version 2", version));
-  } else if (ext == ".glb") {
-    fail(path, "not a glTF binary (it does not start with \"glTF\")");
-  }
-  in.seekg(0);
-  std::vector<unsigned char> bytes(static_cast<std::size_t>(n) + 16, 0);
-  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(n));
-  if (static_cast<std::uintmax_t>(in.gcount()) != n)
-    fail(path, fmt::format("cannot read the file (read {} of {} bytes)", in.gcount(), n));
-  size = static_cast<std::size_t>(n);
-  return bytes;
-}
-
-/// tinygltf's file access for the files a glTF names (external buffers and images), checked as the model file
-/// is: only a regular file (a FIFO would block the open forever, a device never end), of at most
-/// max_file_bytes, read no further than its size. Existence is asked without opening the file.
-bool resource_exists(const std::string& path, void*) {
-  std::error_code ec;
-  return fs::exists(fs::status(path, ec));
-}
-bool read_resource(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  std::string why;
-  std::uintmax_t n = 0;
-  if (!fs::exists(st)) why = "no such file";
-  else if (!fs::is_regular_file(st)) why = fs::is_directory(st) ? "a directory" : "not a regular file (a FIFO, device or socket)";
-  else if (n = fs::file_size(path, ec); ec) why = "cannot read its size";
-  else if (n > rig_build::max_file_bytes) why = fmt::format("too large ({} bytes; at most {})", n, rig_build::max_file_bytes);
-  if (why.empty()) {
-    std::ifstream in(path, std::ios::binary);
-    out->assign(static_cast<std::size_t>(n), 0);
-    if (n > 0) in.read(reinterpret_cast<char*>(out->data()), static_cast<std::streamsize>(n));
-    if (!in || static_cast<std::uintmax_t>(in.gcount()) != n) why = "cannot read it";
-  }
-  if (why.empty()) return true;
-  if (err) *err += path + ": " + why + "\n";
-  return false;
-}
-bool refuse_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
-  if (err) *err += "snh does not write glTF files\n";
-  return false;
-}
-
-bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
-  return true;
-}
-
-constexpr std::size_t kMaxGltfDepth = 64;
-
-/// The file parsed by tinygltf: a GLB container if it starts with "glTF", else glTF JSON.
-tinygltf::Model load(const fs::path& path) {
-  std::size_t size = 0;
-  const std::vector<unsigned char> bytes = read_file(path, size);
-  const bool binary = size >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
-  if (!binary) {  // (a .glb without the magic was refused by read_file)
-    std::size_t i = size >= 3 && bytes[0] == 0xEF && bytes[1] == 0xBB && bytes[2] == 0xBF ? 3 : 0;  // UTF-8 BOM
-    while (i < size && (bytes[i] == ' ' || bytes[i] == '\t' || bytes[i] == '\n' || bytes[i] == '\r')) ++i;
-    if (i == size || bytes[i] != '{') fail(path, "not glTF (neither a glTF binary nor a JSON object)");
-  }
-  if (size > std::numeric_limits<unsigned int>::max()) fail(path, "too large for tinygltf");
-  // tinygltf copies extras into nested values recursively: a file that nests thousands of arrays would
-  // overflow the stack. A glTF's own structure is a few levels deep; extras get room to spare.
-  std::string_view json_text(reinterpret_cast<const char*>(bytes.data()), size);
-  if (binary && size >= 20) {  // the first chunk of a GLB is its JSON: 12-byte header, then length and type
-    std::uint32_t length = 0;
-    std::memcpy(&length, bytes.data() + 12, 4);
-    json_text = json_text.substr(20, std::min<std::size_t>(length, size - 20));
-  }
-  if (json_depth(json_text, kMaxGltfDepth) > kMaxGltfDepth)
-    fail(path, fmt::format("its JSON is nested deeper than {} levels (a glTF needs a handful)", kMaxGltfDepth));
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(&ignore_image, nullptr);
-  loader.SetFsCallbacks(tinygltf::FsCallbacks{&resource_exists, &tinygltf::ExpandFilePath, &read_resource, &refuse_write, nullptr});
-  tinygltf::Model model;
-  std::string err, warn;
-  bool ok = false;
-  const std::string base = path.parent_path().string();
-  try {
-    if (binary)
-      ok = loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(size), base);
-    else
-      ok = loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
-                                      static_cast<unsigned int>(size), base);
-  } catch (const std::exception& e) {  // tinygltf indexes with .at() in places
-    ok = false;
-    err = e.what();
-  }
-  if (!ok) {
-    std::string why = one_line(err.empty() ? warn : err);
-    if (why.empty()) why = "tinygltf could not load it";
-    fail(path, fmt::format("not a valid glTF {}: {}", binary ? "binary" : "file", why));
-  }
-  return model;
-}
 
 int type_components(int type) {
   switch (type) {
@@ -763,7 +643,7 @@ class Builder {
 }  // namespace
 
 RiggedModel read_gltf(const std::filesystem::path& path) {
-  const tinygltf::Model model = load(path);
+  const tinygltf::Model model = gltf::load(path);
   return Builder(path, model).build();
 }
 
