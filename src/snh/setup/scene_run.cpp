@@ -115,10 +115,12 @@ void add_contact_statistics(Simulation& sim, RunPlan& plan) {
     r.contact_seconds = c.seconds;
   };
   const auto base_line = plan.line;
+  // (A shape's or plane's distance is signed: below 0 only at a frame that failed, a point behind or inside it.)
   plan.line = [base_line](const StepRecord& r) {
-    return base_line(r) + (r.contact_pairs > 0 ? fmt::format(", {} contact pairs, min distance {:.3g}", r.contact_pairs,
-                                                             r.min_contact_distance)
-                                               : std::string(", no contact pairs"));
+    if (r.contact_pairs == 0) return base_line(r) + ", no contact pairs";
+    if (r.min_contact_distance < 0.0)
+      return base_line(r) + fmt::format(", {} contact pairs, a point {:.3g} inside a collider", r.contact_pairs, -r.min_contact_distance);
+    return base_line(r) + fmt::format(", {} contact pairs, min distance {:.3g}", r.contact_pairs, r.min_contact_distance);
   };
 }
 
