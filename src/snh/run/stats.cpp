@@ -180,8 +180,11 @@ StepRecord from_json(const RecordTable& table, const json& j) {
 
 std::string csv_header(const RecordTable& table) {
   std::string out;
-  for (const RecordField& f : table.fields)
-    if (f.csv) out += (out.empty() ? "" : ",") + std::string(f.key);
+  for (const RecordField& f : table.fields) {
+    if (!f.csv) continue;
+    if (!out.empty()) out += ',';
+    out += f.key;
+  }
   return out;
 }
 
