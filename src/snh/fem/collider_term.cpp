@@ -406,7 +406,9 @@ MeshColliderTerm::Near MeshColliderTerm::near(const Eigen::Matrix3Xd& S, const E
   for (std::size_t i = 0; i < kept_edges.size(); ++i)
     for (int k = 0; k < 2; ++k) E(k, E_.cols() + static_cast<Eigen::Index>(i)) = compact(collider_E_(k, kept_edges[i]));
   const contact::Candidates c = contact::broad_phase(out.V, W1, F, E, dhat);
-  const auto rest_of = [&](int id) { return id < ns ? Eigen::Vector3d(rest_.col(id)) : Eigen::Vector3d(base_.col(vertices[static_cast<std::size_t>(id - ns)])); };
+  const auto rest_of = [&](int id) {  // the simulated points at rest; the collider in its base frame
+    return id < ns ? Eigen::Vector3d(rest_.col(id)) : Eigen::Vector3d(base_.col(vertices[static_cast<std::size_t>(id - ns)]));
+  };
   for (const auto& [v, t] : c.vertex_triangle)
     if ((v < ns) != (t < triangles_simulated_)) out.pairs.push_back({false, {v, F(0, t), F(1, t), F(2, t)}, 0.0});
   for (const auto& [a, b] : c.edge_edge) {
