@@ -595,6 +595,10 @@ TEST_F(Gltf, MalformedFilesAreRefusedInOneLine) {
   std::ofstream(dir_ / "lost.bin").put('\0');
   fs::resize_file(dir_ / "lost.bin", (std::uintmax_t{1} << 30) + 1);  // sparse
   refuses(external, "lost.bin: too large");
+  // A buffer's file of another size than its byteLength is refused without being read (900 MB were read whole
+  // before tinygltf's "File size mismatch").
+  fs::resize_file(dir_ / "lost.bin", std::uintmax_t{900} << 20);
+  refuses(external, "lost.bin: 943718400 bytes, where the glTF's buffer says");
   // A GLB is measured by its header first: bytes after its end, or a file of zeros named .glb, are refused
   // without reading the rest.
   const fs::path padded = text("padded.glb", hand);

@@ -56,17 +56,25 @@ std::vector<unsigned char> read_file(const fs::path& path, std::size_t& size) {
   return bytes;
 }
 
-/// The files a glTF's images name, as tinygltf will ask for them (their URIs decoded, joined to the model's
-/// directory and to "."), normalised, less any that a buffer names too. snh never decodes an image, so these
-/// are not read at all (tinygltf takes a failed read of an image as a warning): an unused 900 MB texture
-/// used to cost its size in memory.
-std::vector<fs::path> unread_images(std::string_view json_text, const std::string& base) {
+/// The files a glTF names, as tinygltf will ask for them (their URIs decoded, joined to the model's directory
+/// and to "."), normalised: its images' and its buffers', each buffer's with the byteLength it must have.
+struct NamedFiles {
+  /// Not read at all: snh never decodes an image (tinygltf takes a failed read of an image as a warning), and
+  /// an unused 900 MB texture used to cost its size in memory. Less any file that a buffer names too.
+  std::vector<fs::path> images;
+  /// Refused without being read when their size is not the length the glTF gives (a 900 MB .bin for a buffer
+  /// of 1 kB was read whole before tinygltf's "File size mismatch").
+  std::vector<std::pair<fs::path, std::uintmax_t>> buffers;
+};
+
+NamedFiles named_files(std::string_view json_text, const std::string& base) {
+  NamedFiles out;
   const nlohmann::json j = nlohmann::json::parse(json_text, nullptr, false);
-  if (j.is_discarded() || !j.is_object()) return {};
-  const auto files = [&](const char* key) {
-    std::vector<fs::path> out;
+  if (j.is_discarded() || !j.is_object()) return out;
+  // Each external file of the list `key` with the object naming it.
+  const auto each_file = [&](const char* key, const auto& take) {
     const auto list = j.find(key);
-    if (list == j.end() || !list->is_array()) return out;
+    if (list == j.end() || !list->is_array()) return;
     for (const nlohmann::json& e : *list) {
       const auto uri = e.is_object() ? e.find("uri") : e.end();
       if (uri == e.end() || !uri->is_string() || uri->get<std::string>().rfind("data:", 0) == 0) continue;
@@ -83,27 +91,33 @@ std::vector<fs::path> unread_images(std::string_view json_text, const std::strin
         } else decoded += text[i];
       }
       for (const std::string& dir : {base, std::string(".")})
-        out.push_back(fs::path(dir.empty() ? decoded : dir + (dir.back() == '/' ? "" : "/") + decoded).lexically_normal());
+        take(fs::path(dir.empty() ? decoded : dir + (dir.back() == '/' ? "" : "/") + decoded).lexically_normal(), e);
     }
-    return out;
   };
-  std::vector<fs::path> images = files("images");
-  const std::vector<fs::path> buffers = files("buffers");
-  std::erase_if(images, [&](const fs::path& p) { return std::find(buffers.begin(), buffers.end(), p) != buffers.end(); });
-  return images;
+  each_file("buffers", [&](const fs::path& p, const nlohmann::json& e) {
+    const auto length = e.find("byteLength");
+    if (length != e.end() && length->is_number_unsigned()) out.buffers.emplace_back(p, length->get<std::uintmax_t>());
+    else out.buffers.emplace_back(p, std::numeric_limits<std::uintmax_t>::max());  // (tinygltf refuses it)
+  });
+  each_file("images", [&](const fs::path& p, const nlohmann::json&) {
+    if (std::none_of(out.buffers.begin(), out.buffers.end(), [&](const auto& b) { return b.first == p; })) out.images.push_back(p);
+  });
+  return out;
 }
 
 /// tinygltf's file access for the files a glTF names (external buffers and images), checked as the model file
 /// is: only a regular file (a FIFO would block the open forever, a device never end), of at most
-/// max_file_bytes, read no further than its size. Existence is asked without opening the file. The files of
-/// `unread` (user data: unread_images) are not read.
+/// max_file_bytes, read no further than its size. Existence is asked without opening the file. With the
+/// glTF's NamedFiles (user data), its images are not read, nor a buffer's file of another size than its
+/// byteLength.
 bool resource_exists(const std::string& path, void*) {
   std::error_code ec;
   return fs::exists(fs::status(path, ec));
 }
-bool read_resource(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* unread) {
-  if (const auto* skip = static_cast<const std::vector<fs::path>*>(unread);
-      skip && std::find(skip->begin(), skip->end(), fs::path(path).lexically_normal()) != skip->end()) {
+bool read_resource(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  const auto* named = static_cast<const NamedFiles*>(user);
+  const fs::path normal = fs::path(path).lexically_normal();
+  if (named && std::find(named->images.begin(), named->images.end(), normal) != named->images.end()) {
     if (err) *err += path + ": an image (snh does not use images)\n";
     return false;
   }
@@ -115,6 +129,14 @@ bool read_resource(std::vector<unsigned char>* out, std::string* err, const std:
   else if (!fs::is_regular_file(st)) why = fs::is_directory(st) ? "a directory" : "not a regular file (a FIFO, device or socket)";
   else if (n = fs::file_size(path, ec); ec) why = "cannot read its size";
   else if (n > rig_build::max_file_bytes) why = fmt::format("too large ({} bytes; at most {})", n, rig_build::max_file_bytes);
+  else if (named) {
+    std::uintmax_t expected = 0;
+    bool is_buffer = false, fits = false;
+    for (const auto& [p, length] : named->buffers)
+      if (p == normal) is_buffer = true, expected = length, fits = fits || length == n;
+    if (is_buffer && !fits && expected != std::numeric_limits<std::uintmax_t>::max())
+      why = fmt::format("{} bytes, where the glTF's buffer says {} (byteLength)", n, expected);
+  }
   if (why.empty()) {
     std::ifstream in(path, std::ios::binary);
     out->assign(static_cast<std::size_t>(n), 0);
@@ -161,8 +183,8 @@ tinygltf::Model load(const fs::path& path) {
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&ignore_image, nullptr);
   const std::string base = path.parent_path().string();
-  std::vector<fs::path> unread = unread_images(json_text, base);
-  loader.SetFsCallbacks(tinygltf::FsCallbacks{&resource_exists, &tinygltf::ExpandFilePath, &read_resource, &refuse_write, &unread});
+  NamedFiles named = named_files(json_text, base);
+  loader.SetFsCallbacks(tinygltf::FsCallbacks{&resource_exists, &tinygltf::ExpandFilePath, &read_resource, &refuse_write, &named});
   tinygltf::Model model;
   std::string err, warn;
   bool ok = false;
