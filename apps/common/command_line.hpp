@@ -15,13 +15,17 @@ inline std::string quoted_command_line(int argc, char** argv) {
     for (char c : a)
       if (!(std::isalnum(static_cast<unsigned char>(c)) || std::string_view("-_./=:,+@%^").find(c) != std::string_view::npos))
         plain = false;
-    std::string q = a;
-    if (!plain) {
-      q = "'";
-      for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-      q += "'";
+    if (i) out.push_back(' ');
+    if (plain) {
+      out += a;
+      continue;
     }
-    out += (i ? " " : "") + q;
+    out.push_back('\'');  // (appended piece by piece: GCC 12 warns of a false overlap in `q = "'"`)
+    for (char c : a) {
+      if (c == '\'') out += "'\\''";
+      else out.push_back(c);
+    }
+    out.push_back('\'');
   }
   return out;
 }
