@@ -1,18 +1,23 @@
 #include "material_command.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "../common/out_option.hpp"
 #include "parameter_options.hpp"
+#include "snh/material/fibre.hpp"
 #include "snh/material/printable.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/material/stability.hpp"
@@ -32,7 +37,38 @@ struct MaterialOptions {
   bool json = false, stability = false, list = false;
   int samples = 200;
   unsigned seed = 1;
+  std::vector<double> fibre;  ///< a fibre direction (3 numbers): the fibre and muscle sections are printed
+  std::string fibre_model = "signed_arap";
+  double fibre_stiffness = std::numeric_limits<double>::quiet_NaN();  ///< unset: the material's mu
+  double contraction = 0.0;  ///< active strain alpha in [0, 1)
 };
+
+/// The fibre, its energy and the active strain given by --fibre, --fibre-model, --fibre-stiffness and
+/// --contraction (none without --fibre).
+struct FibreSetup {
+  Vec3 a;
+  FibreEnergy energy;
+  ActiveStrain active;
+};
+std::optional<FibreSetup> fibre_setup(const MaterialOptions& o, double mu) {
+  if (o.fibre.empty()) {
+    if (o.contraction != 0.0 || !std::isnan(o.fibre_stiffness) || o.fibre_model != "signed_arap")
+      throw std::invalid_argument("--fibre-model, --fibre-stiffness and --contraction need --fibre X Y Z");
+    return std::nullopt;
+  }
+  FibreSetup f;
+  const Vec3 a(o.fibre[0], o.fibre[1], o.fibre[2]);
+  if (!(a.norm() > 0.0)) throw std::invalid_argument("--fibre: the direction (0, 0, 0) has no length");
+  f.a = a.normalized();
+  if (o.fibre_model == "quadratic") f.energy.model = FibreModel::quadratic;
+  else if (o.fibre_model == "signed_arap") f.energy.model = FibreModel::signed_arap;
+  else throw std::invalid_argument(fmt::format("--fibre-model must be quadratic or signed_arap, got '{}'", printable(o.fibre_model)));
+  f.energy.stiffness = std::isnan(o.fibre_stiffness) ? mu : o.fibre_stiffness;
+  if (!(o.contraction >= 0.0 && o.contraction < 1.0))
+    throw std::invalid_argument(fmt::format("--contraction must be in [0, 1), got {:g}", o.contraction));
+  f.active = ActiveStrain::along(f.a, o.contraction);
+  return f;
+}
 
 /// Nine finite numbers separated by spaces or commas: vec(F), column by column.
 Mat3 parse_F(const std::string& text) {
@@ -85,6 +121,71 @@ std::string matrix_text(const Mat3& A, const std::string& indent) {
   return out;
 }
 
+/// The fibre and muscle sections: the base material and the fibre on the elastic part F_e = F F_a⁻¹, their
+/// sum, and the muscle's P = (P + P_fibre)(F_e) F_a⁻¹.
+template <class M>
+int run_muscle(const MaterialOptions& o, const M& m, const Mat3& F, const FibreSetup& f, PsdProjection projection) {
+  const Mat3 E = f.active.elastic(F);
+  const bool defined = m.defined(E);
+  const double sign = fibre_sign(E, f.a), I4 = (E * f.a).squaredNorm();
+  const Eigensystem9 es = f.energy.eigensystem(E, f.a);
+  const double psi_fibre = f.energy.psi(E, f.a);
+  const Mat3 P_fibre = f.energy.pk1(E, f.a);
+  constexpr std::array<std::string_view, 3> labels = {"along the fibre", "across the fibre", "across the fibre"};
+  if (o.json) {
+    json j;
+    j["material"] = std::string(M::name);
+    j["mu"] = m.params().mu;
+    j["lambda"] = m.params().lambda;
+    j["F"] = matrix_json(F);
+    j["fibre"] = {{"direction", {f.a[0], f.a[1], f.a[2]}}, {"model", std::string(to_string(f.energy.model))},
+                  {"stiffness", f.energy.stiffness}, {"contraction", o.contraction}, {"F_a", matrix_json(f.active.deformation())},
+                  {"F_e", matrix_json(E)}, {"I4", I4}, {"sign", sign}, {"psi", psi_fibre}, {"P", matrix_json(P_fibre)}};
+    json eig = json::array();
+    for (int i = 0; i < 9; ++i)
+      eig.push_back({{"label", i < 3 ? std::string(labels[static_cast<std::size_t>(i)]) : std::string("cross-section")},
+                     {"value", es.values[static_cast<std::size_t>(i)]},
+                     {"projected", project_eigenvalue(es.values[static_cast<std::size_t>(i)], projection)}});
+    j["fibre"]["eigenvalues"] = eig;
+    j["defined"] = defined;
+    j["projection"] = o.projection;
+    if (defined) {
+      j["psi_material"] = m.psi(E);
+      j["psi"] = m.psi(E) + psi_fibre;
+      j["P"] = matrix_json(f.active.pk1(m.pk1(E) + P_fibre));
+    } else {
+      j["psi"] = nullptr;
+      j["reason"] = fmt::format("{} is undefined for J <= 0 (J = {:g})", M::name, E.determinant());
+    }
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << fmt::format("material   {}: psi = {}\n", M::name, M::formula);
+  std::cout << fmt::format("parameters {}\n", describe(m.params()));
+  std::cout << fmt::format("fibre      {} along a = ({:.6g}, {:.6g}, {:.6g}), stiffness k = {:g}\n", to_string(f.energy.model), f.a[0],
+                           f.a[1], f.a[2], f.energy.stiffness);
+  std::cout << "F\n" << matrix_text(F, "  ");
+  if (o.contraction > 0.0) {
+    std::cout << fmt::format("active strain, contraction {:g}: the fibre's rest length is {:g}; the energies act on F_e = F F_a^-1\n",
+                             o.contraction, 1.0 - o.contraction);
+    std::cout << "F_a\n" << matrix_text(f.active.deformation(), "  ") << "F_e\n" << matrix_text(E, "  ");
+  }
+  std::cout << fmt::format("I4 = |F_e a|^2 = {:.10g}   sign(a^T S a) = {:+g}   psi_fibre = {:.12g}\n", I4, sign, psi_fibre);
+  std::cout << "P_fibre = dpsi_fibre/dF_e\n" << matrix_text(P_fibre, "  ");
+  std::cout << fmt::format("eigenvalues of dP_fibre/dF_e   {:>16} {:>16}\n", "value", "projected(" + o.projection + ")");
+  for (int i = 0; i < 3; ++i)
+    std::cout << fmt::format("  {:<28} {:>16.9g} {:>16.9g}\n", labels[static_cast<std::size_t>(i)], es.values[static_cast<std::size_t>(i)],
+                             project_eigenvalue(es.values[static_cast<std::size_t>(i)], projection));
+  std::cout << fmt::format("  {:<28} {:>16} {:>16}\n", "cross-section (six)", 0, 0);
+  if (!defined) {
+    std::cout << fmt::format("psi = +inf: {} is undefined for J <= 0 (J = {:g})\n", M::name, E.determinant());
+    return 0;
+  }
+  std::cout << fmt::format("psi = psi_material + psi_fibre = {:.12g} + {:.12g} = {:.12g}\n", m.psi(E), psi_fibre, m.psi(E) + psi_fibre);
+  std::cout << "P = dpsi/dF\n" << matrix_text(f.active.pk1(m.pk1(E) + P_fibre), "  ");
+  return 0;
+}
+
 int run_inspect(const MaterialOptions& o) {
   if (o.name.empty()) throw std::invalid_argument("give a material NAME (see --list), or --stability");
   if (o.F_text.empty() == o.stretch.empty())
@@ -105,6 +206,7 @@ int run_inspect(const MaterialOptions& o) {
       [&](const auto& m) {
         using M = std::decay_t<decltype(m)>;
         const Lame used = m.params();
+        if (const std::optional<FibreSetup> fibre = fibre_setup(o, used.mu)) return run_muscle(o, m, F, *fibre, *projection);
         const Svd3 svd = rotation_variant_svd(F);
         const bool defined = m.defined(F);
         Eigensystem9 es;
@@ -240,13 +342,22 @@ void add_material_command(CLI::App& app, int& exit_code) {
   auto* st = cmd->add_option("--stretch", opts->stretch, "Deformation gradient diag(sx, sy, sz)")->expected(3);
   Fopt->excludes(st);
   cmd->add_option("--projection", opts->projection, "PSD projection of dP/dF: none, clamp (default) or abs");
+  auto* fib = cmd->add_option("--fibre", opts->fibre,
+                              "A fibre direction a (3 numbers, normalised): adds a fibre energy along a to the material, a muscle")
+                  ->expected(3);
+  cmd->add_option("--fibre-model", opts->fibre_model, "Fibre energy: signed_arap (default: (k/2)(s - 1)^2, s the signed stretch) or quadratic ((k/8)(I4 - 1)^2)");
+  cmd->add_option("--fibre-stiffness", opts->fibre_stiffness, "Fibre stiffness k (default: the material's mu)")
+      ->check(finite_number(Sign::non_negative));
+  cmd->add_option("--contraction", opts->contraction,
+                  "Active strain: the fibre's rest length shortened to 1 - c, c in [0, 1) (default 0); the energies act on F F_a^-1")
+      ->check(finite_number(Sign::non_negative));
   cmd->add_flag("--json", opts->json, "Machine-readable JSON output");
   cmd->add_flag("--list", opts->list, "List the energies and their formulas");
   auto* stability = cmd->add_flag("--stability", opts->stability,
                 "Measure, for every energy, the paper's four stability properties (inversion, reflection, rest, "
                 "collapse along F = sI)");
   // --stability measures every energy on its own sampled F: a given energy or F was silently ignored.
-  stability->excludes(Fopt)->excludes(st);
+  stability->excludes(Fopt)->excludes(st)->excludes(fib);
   cmd->add_option("--samples", opts->samples, "Number of sampled F with J <= 0 for --stability (default 200)")
       ->check(CLI::Range(1, 1000000));
   cmd->add_option("--seed", opts->seed, "Seed of the samples for --stability (default 1)");

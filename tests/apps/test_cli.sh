@@ -31,6 +31,16 @@ check "list" 0 "neo_hookean_b +mu/2 \(J\^\(-2/3\) I_C - 3\)" -- material --list
 check "stability table" 0 "stable_neo_hookean_log +ok 50/50" -- material --stability --samples 50
 check "stability json" 0 '"energy": "corotated"' -- material --stability --json --samples 10
 check "help" 0 "--reparametrize" -- material --help
+# A muscle: the material plus a fibre along a, with active strain.
+check "fibre reversed" 0 "I4 = \|F_e a\|\^2 = 1   sign\(a\^T S a\) = -1   psi_fibre = 4$" -- material stable_neo_hookean --fibre 1 0 0 --fibre-stiffness 2 --stretch -1 1 1
+check "fibre eigenvalues" 0 "along the fibre +2 +2$" -- material stable_neo_hookean --fibre 0 0 3 --fibre-stiffness 2 --stretch 1 1 0.5
+check "fibre across clamped" 0 "across the fibre +-2 +0$" -- material stable_neo_hookean --fibre 0 0 3 --fibre-stiffness 2 --stretch 1 1 0.5
+check "contraction rest" 0 "I4 = \|F_e a\|\^2 = 1 " -- material stable_neo_hookean --fibre 1 0 0 --contraction 0.36 --stretch 0.64 1.25 1.25
+check "fibre json" 0 '"model": "quadratic"' -- material stable_neo_hookean --json --fibre 0 1 0 --fibre-model quadratic --stretch 1 1.2 1
+check "contraction without fibre" input "--fibre-model, --fibre-stiffness and --contraction need --fibre X Y Z" -- material stable_neo_hookean --contraction 0.2 --stretch 1 1 1
+check "contraction 1" input "--contraction must be in \[0, 1\), got 1" -- material stable_neo_hookean --fibre 1 0 0 --contraction 1 --stretch 1 1 1
+check "fibre zero" input "--fibre: the direction \(0, 0, 0\) has no length" -- material stable_neo_hookean --fibre 0 0 0 --stretch 1 1 1
+check "fibre model" input "--fibre-model must be quadratic or signed_arap, got 'stiff'" -- material stable_neo_hookean --fibre 1 0 0 --fibre-model stiff --stretch 1 1 1
 
 # Errors: one line, non-zero exit.
 check "unknown material" input "unknown material 'stable_neohookean' \(known: stable_neo_hookean," -- material stable_neohookean --stretch 1 1 1
