@@ -122,23 +122,36 @@ template <class M>
 constexpr bool has_hessian_slices = requires(const M& m, const Mat3& F) { m.weighted_hessian_slices(F, 1.0); };
 
 /// Energy, gradient (3 by N) and packed stiffness (packed_size<N> values) of one element at node positions X.
+/// A muscle point's terms: the material and the fibre on the elastic part F A, pulled back to F
+/// (docs/math.md §14.2).
+template <class M>
+PointTerms muscle_point_terms(const M& m, const CellFibre& f, const Mat3& F, bool want_P, bool want_H, PsdProjection p) {
+  const Mat3 E = f.active.elastic(F);
+  PointTerms t = point_terms(m, E, want_P, want_H, p);
+  t.psi += f.energy.psi(E, f.direction);
+  if (want_P) t.P = f.active.pk1(t.P + f.energy.pk1(E, f.direction));
+  if (want_H) t.H = f.active.hessian(t.H + f.energy.projected_hessian(E, f.direction, p));
+  return t;
+}
+
 template <class M, int N, int Q>
 double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix<double, 3, N>& X,
-                     Eigen::Matrix<double, 3, N>* grad, double* K, PsdProjection p) {
+                     Eigen::Matrix<double, 3, N>* grad, double* K, PsdProjection p, const CellFibre* fibre = nullptr) {
   double psi = 0.0;
   if (grad) grad->setZero();
   if (K) std::fill(K, K + packed_size<N>, 0.0);
   // The analytic Hessian of an energy of the invariants comes as its six slices straight from its formula,
   // the same values as the 9x9 matrix scaled by w (tested), without building it (cheaper: bench_assembly,
-  // docs/results.md).
+  // docs/results.md). A muscle cell's Hessian is the whole 9x9 matrix, pulled back through its active strain.
   constexpr bool sliced = has_hessian_slices<M>;
-  const bool slices = sliced && K && p == PsdProjection::none;
+  const bool slices = sliced && K && p == PsdProjection::none && !fibre;
   std::array<std::array<Mat3, 6>, Q> h;  // the points' slices (sliced Hessians)
   for (int q = 0; q < Q; ++q) {
     const Eigen::Matrix<double, N, 3>& G = r.G[q];
     const double w = r.weight[q];
     const Mat3 F = deformation_gradient<N>(X, G);
-    PointTerms t = point_terms(m, F, grad != nullptr, K != nullptr && !slices, p);  // one SVD at most
+    PointTerms t = fibre ? muscle_point_terms(m, *fibre, F, grad != nullptr, K != nullptr, p)
+                         : point_terms(m, F, grad != nullptr, K != nullptr && !slices, p);  // one SVD at most
     psi += w * t.psi;
     if (grad) grad->noalias() += (w * t.P) * G.transpose();
     if (!K) continue;
@@ -455,7 +468,7 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
       for (Eigen::Index c = begin; c < end; ++c)
         errors.run(c, [&] {
           per[static_cast<std::size_t>(c)] = element_terms(m, rest[record(c)], gather_nodes<R::nodes>(mesh_, c, x),
-                                                           no_gradient, nullptr, projection);
+                                                           no_gradient, nullptr, projection, fibre(c));
         });
       errors.rethrow();
     });
@@ -472,7 +485,8 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
           for (int i = pieces[p]; i < pieces[p + 1]; ++i) {
             const int c = group_cells_[static_cast<std::size_t>(i)];
             per[static_cast<std::size_t>(c)] = element_terms(m, rest[record(c)], gather_nodes<N>(mesh_, c, x),
-                                                             gradient ? &gc : nullptr, values ? K.data() : nullptr, projection);
+                                                             gradient ? &gc : nullptr, values ? K.data() : nullptr, projection,
+                                                             fibre(c));
             if (gradient)
               for (int a = 0; a < N; ++a) gradient->segment<3>(3 * mesh_.cells(a, c)) += gc.col(a);
             if (values) {
@@ -489,6 +503,29 @@ double ElasticTerm::assemble(const Eigen::VectorXd& x, Eigen::VectorXd* gradient
   double total = 0.0;
   for (double e : per) total += e;  // fixed order: deterministic
   return total;
+}
+
+void ElasticTerm::set_fibres(std::vector<int> fibre_of_cell, std::vector<CellFibre> fibres) {
+  if (!fibre_of_cell.empty() && static_cast<Eigen::Index>(fibre_of_cell.size()) != mesh_.cell_count())
+    throw std::invalid_argument(fmt::format("fibres: {} cells given, the mesh has {}", fibre_of_cell.size(), mesh_.cell_count()));
+  for (std::size_t c = 0; c < fibre_of_cell.size(); ++c)
+    if (fibre_of_cell[c] < -1 || fibre_of_cell[c] >= static_cast<int>(fibres.size()))
+      throw std::invalid_argument(fmt::format("cell {}: fibre index {} (there are {} fibre sets)", c, fibre_of_cell[c], fibres.size()));
+  for (std::size_t f = 0; f < fibres.size(); ++f) {
+    const CellFibre& fib = fibres[f];
+    if (!fib.direction.allFinite() || std::abs(fib.direction.norm() - 1.0) > 1e-12)
+      throw std::invalid_argument(fmt::format("fibre set {}: the direction must be a unit vector", f));
+    if (!(fib.energy.stiffness >= 0.0) || !std::isfinite(fib.energy.stiffness))
+      throw std::invalid_argument(fmt::format("fibre set {}: the stiffness must be a finite number >= 0, got {}", f, fib.energy.stiffness));
+  }
+  fibre_of_ = std::move(fibre_of_cell);
+  fibres_ = std::move(fibres);
+}
+
+void ElasticTerm::set_active_strain(int f, const ActiveStrain& active) {
+  if (f < 0 || f >= static_cast<int>(fibres_.size()))
+    throw std::invalid_argument(fmt::format("fibre set {} does not exist (there are {})", f, fibres_.size()));
+  fibres_[static_cast<std::size_t>(f)].active = active;
 }
 
 ElasticTerm::Deformation ElasticTerm::deformation(const Eigen::VectorXd& x) const {
@@ -508,7 +545,8 @@ ElasticTerm::Deformation ElasticTerm::deformation(const Eigen::VectorXd& x) cons
         const double J = F.determinant();
         lo = std::min(lo, J);
         vol += r.weight[q] * J;
-        psi += r.weight[q] * m.psi(F);
+        const CellFibre* f = fibre(c);
+        psi += r.weight[q] * (f ? muscle_point_terms(m, *f, F, false, false, PsdProjection::none).psi : m.psi(F));
         weight += r.weight[q];
       }
       out.min_J[c] = lo;

@@ -14,10 +14,19 @@
 
 #include "snh/fem/rest_state.hpp"
 #include "snh/fem/term.hpp"
+#include "snh/material/fibre.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/volume_mesh.hpp"
 
 namespace snh {
+
+/// A muscle cell's fibres: the direction a (unit, rest frame), their energy (added to the cell's material)
+/// and the active strain (the cell's energies act on F F_a⁻¹): material/fibre.hpp.
+struct CellFibre {
+  Vec3 direction = Vec3::UnitX();
+  FibreEnergy energy;
+  ActiveStrain active;
+};
 
 class ElasticTerm final : public Term {
  public:
@@ -58,6 +67,20 @@ class ElasticTerm final : public Term {
   void share_rest(bool on);
   /// The rest records kept.
   [[nodiscard]] int rest_records() const;
+  /// Muscle cells: fibre_of_cell (#C indices into fibres, −1 for a cell without; empty: none). A muscle
+  /// cell's energy at each point is ψ(F A) + ψ_fibre(F A; a), A = F_a⁻¹ (docs/math.md §14). Without fibres
+  /// every value is bit-identical to a term that never had any. Throws std::invalid_argument (one line) for
+  /// an index out of range or a count that is not #C.
+  void set_fibres(std::vector<int> fibre_of_cell, std::vector<CellFibre> fibres);
+  /// The active strain of fibre set f (a muscle's activation changing over time).
+  void set_active_strain(int f, const ActiveStrain& active);
+  [[nodiscard]] const std::vector<CellFibre>& fibres() const { return fibres_; }
+  /// The fibres of cell c, or null.
+  [[nodiscard]] const CellFibre* fibre(Eigen::Index c) const {
+    if (fibre_of_.empty()) return nullptr;
+    const int f = fibre_of_[static_cast<std::size_t>(c)];
+    return f < 0 ? nullptr : &fibres_[static_cast<std::size_t>(f)];
+  }
   [[nodiscard]] const std::vector<AnyMaterial>& materials() const { return materials_; }
   /// The material of cell c.
   [[nodiscard]] const AnyMaterial& material(Eigen::Index c) const {
@@ -107,6 +130,8 @@ class ElasticTerm final : public Term {
   VolumeMesh mesh_;
   std::vector<AnyMaterial> materials_;
   std::vector<int> material_of_;                  ///< per cell (empty: all materials_[0])
+  std::vector<int> fibre_of_;                     ///< per cell, its fibres in fibres_ or −1 (empty: none)
+  std::vector<CellFibre> fibres_;
   RestState rest_;                                ///< distinct records (share_rest())
   std::vector<int> rest_of_cell_;                 ///< per cell, its record in rest_
   [[nodiscard]] std::size_t record(Eigen::Index c) const { return static_cast<std::size_t>(rest_of_cell_[static_cast<std::size_t>(c)]); }
