@@ -323,9 +323,12 @@ std::vector<int> MeshColliderTerm::triangles_near(const Eigen::Vector3d& lo, con
     const double slack = 1e-9 * ((b - a).norm() + std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff()));
     if (a.allFinite() && b.allFinite()) return tree_.near(a.array() - slack, b.array() + slack);
   }
-  std::vector<int> all;  // a pose that cannot be inverted: every triangle
-  all.resize(static_cast<std::size_t>(collider_T_.cols()));
-  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+  return all_triangles();  // a pose that cannot be inverted
+}
+
+std::vector<int> MeshColliderTerm::all_triangles() const {
+  std::vector<int> all(static_cast<std::size_t>(collider_T_.cols()));
+  std::iota(all.begin(), all.end(), 0);
   return all;
 }
 
@@ -354,12 +357,7 @@ MeshColliderTerm::Near MeshColliderTerm::near(const Eigen::Matrix3Xd& S, const E
     }
     return (a.array() <= hi.array()).all() && (b.array() >= lo.array()).all();
   };
-  std::vector<int> triangles;
-  if (indexed) triangles = triangles_near(lo, hi);
-  else {
-    triangles.resize(static_cast<std::size_t>(collider_T_.cols()));
-    std::iota(triangles.begin(), triangles.end(), 0);
-  }
+  const std::vector<int> triangles = indexed ? triangles_near(lo, hi) : all_triangles();
   std::vector<int> kept_triangles, edges, vertices;  // the collider's near primitives, ascending
   for (const int t : triangles)
     if (is_near(collider_T_.col(t))) {

@@ -201,6 +201,8 @@ class MeshColliderTerm final : public ContactTermBase {
   /// The collider's triangles (ids into T) whose box may come near [lo, hi] (world) at the current pose: from
   /// the tree where the pose can be inverted, else all of them; a superset, ascending.
   [[nodiscard]] std::vector<int> triangles_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
+  /// Every collider triangle's id, ascending.
+  [[nodiscard]] std::vector<int> all_triangles() const;
   /// A candidate's ids with the collider's replaced by −1 (EmbeddedPoints::scatter's slots).
   [[nodiscard]] std::array<int, 4> simulated_slots(const std::array<int, 4>& local) const;
   /// The smallest CCD fraction of the candidates for their step (their count added to *tested).

@@ -312,6 +312,8 @@ Crowding ContactTerm::crowding(const Eigen::VectorXd& x, std::size_t max_candida
   out.candidates = c.vertex_triangle.size() + c.edge_edge.size();
   out.vertices = V.cols();
   out.min_distance = dhat_;
+  for (Eigen::Index e = 0; e < local_E_.cols(); ++e) out.mean_edge += (V.col(local_E_(0, e)) - V.col(local_E_(1, e))).norm();
+  if (local_E_.cols() > 0) out.mean_edge /= static_cast<double>(local_E_.cols());
   if (!c.complete) return out;
   const std::vector<ContactPair> pairs = local_pairs(V, c);
   std::vector<bool> in(static_cast<std::size_t>(V.cols()), false);

@@ -81,6 +81,7 @@ struct Crowding {
   Eigen::Index vertices = 0;        ///< surface vertices in all
   std::size_t pairs = 0;            ///< active pairs (merged)
   double min_distance = 0.0;        ///< the smallest distance of an active pair; d̂ with none
+  double mean_edge = 0.0;           ///< the surface's mean edge length (0 without edges)
 };
 
 class ContactTerm final : public ContactTermBase {
@@ -113,6 +114,10 @@ class ContactTerm final : public ContactTermBase {
   /// How crowded the surface is at x, found with at most max_candidates broad-phase pairs (memory bounded:
   /// a d̂ as large as the body would otherwise pair every primitive with every other).
   [[nodiscard]] Crowding crowding(const Eigen::VectorXd& x, std::size_t max_candidates) const;
+  /// The surface's vertices, edges and triangles, counted together.
+  [[nodiscard]] std::size_t primitive_count() const {
+    return surface_vertices_.size() + static_cast<std::size_t>(local_E_.cols() + local_F_.cols());
+  }
   /// The surface's vertex positions at x (3 by #surface vertices: the points that F uses, in increasing
   /// order).
   [[nodiscard]] Eigen::Matrix3Xd positions(const Eigen::VectorXd& x) const;

@@ -7,7 +7,6 @@
 
 #include <fmt/format.h>
 
-#include "snh/contact/broad_phase.hpp"
 #include "snh/contact/edge_edge_distance.hpp"
 #include "snh/contact/point_triangle_distance.hpp"
 #include "snh/embed/lattice.hpp"
@@ -160,27 +159,12 @@ ShapeBounds shape_bounds(const ColliderShape& s) {
   return {Vec3::Zero(), 0.0, 0.0};
 }
 
-/// The surface's mean edge length at x.
-double mean_edge_length(const ContactTerm& term, const Eigen::VectorXd& x) {
-  const Eigen::Matrix3Xd P = term.positions(x);
-  const Eigen::Matrix2Xi E = contact::surface_edges(term.triangles());
-  std::vector<int> ids(term.triangles().data(), term.triangles().data() + term.triangles().size());
-  std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  const auto local = [&](int v) { return std::lower_bound(ids.begin(), ids.end(), v) - ids.begin(); };
-  double sum = 0.0;
-  for (Eigen::Index e = 0; e < E.cols(); ++e) sum += (P.col(local(E(0, e))) - P.col(local(E(1, e)))).norm();
-  return E.cols() > 0 ? sum / static_cast<double>(E.cols()) : 0.0;
-}
-
 }  // namespace
 
 void check_self_crowding(const ContactTerm& self, const ContactSurface& surface, const Eigen::VectorXd& x0, const std::string& file) {
-  const std::size_t primitives =
-      static_cast<std::size_t>(self.positions(x0).cols() + self.edges().cols() + self.triangles().cols());
-  const std::size_t limit = kCrowdedCandidates * std::max<std::size_t>(primitives, 1);
+  const std::size_t limit = kCrowdedCandidates * std::max<std::size_t>(self.primitive_count(), 1);
   const Crowding c = self.crowding(x0, limit);
-  const double dhat = self.dhat(), edge = mean_edge_length(self, x0);
+  const double dhat = self.dhat(), edge = c.mean_edge;
   if (!c.complete)
     throw SceneError(fmt::format("{}: contact.self: dhat {:g} is too large for {}: more than {} pairs of its primitives ({} a "
                                  "primitive) lie within it at the start, so the barrier would act between neighbours everywhere; "
