@@ -81,6 +81,24 @@ Simulation::Simulation(SimulationSetup setup)
   v_ = Eigen::VectorXd::Zero(n);
   previous_ = x_;
   rest_volume_ = elastic_.rest_volumes().sum();
+  if (!setup_.fibre_of_cell.empty() || !setup_.fibres.empty()) elastic_.set_fibres(setup_.fibre_of_cell, setup_.fibres);
+  activate(time_);
+}
+
+void Simulation::activate(double t) {
+  if (!setup_.fibre_strain) return;
+  const std::vector<CellFibre>& fibres = elastic_.fibres();
+  const bool first = alpha_.size() != fibres.size();  // every entry is set at the first call
+  if (first) alpha_.assign(fibres.size(), 0.0);
+  std::vector<double> alpha = alpha_;
+  setup_.fibre_strain(t, alpha);
+  if (alpha.size() != fibres.size())
+    throw std::invalid_argument(fmt::format("muscles: {} active strains for {} fibre sets", alpha.size(), fibres.size()));
+  for (std::size_t f = 0; f < fibres.size(); ++f)
+    if (first || alpha[f] != alpha_[f]) {
+      elastic_.set_active_strain(static_cast<int>(f), ActiveStrain::along(fibres[f].direction, alpha[f]));
+      alpha_[f] = alpha[f];
+    }
 }
 
 void Simulation::place_kinematic(Eigen::VectorXd& state, double t) const {
@@ -244,6 +262,7 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
   else if (steps_ >= 1) guess = 2.0 * x_ - previous_;
   else guess = setup_.first_guess ? setup_.first_guess(x_, t) : x_;
   place_kinematic(guess, t);
+  activate(t);
   problem_.at_time(t);
   for (const std::shared_ptr<Term>& term : setup_.terms) term->begin_step(x_n, time_, t);  // lagged data (friction)
   inertia_.begin_step(x_n, v_);
@@ -394,6 +413,7 @@ void Simulation::restore(const SimulationState& s) {
   else previous2_.resize(0);
   time_ = s.time;
   steps_ = s.steps;
+  activate(time_);
 }
 
 }  // namespace snh

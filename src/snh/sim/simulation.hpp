@@ -58,6 +58,13 @@ struct SimulationSetup {
   /// state carried from its time to t; the linear and quadratic extrapolations of the carried states),
   /// and the lowest energy among all decides: at a keyframe's kink the bones turn, and the flesh with them.
   std::function<void(double t, std::vector<Eigen::Matrix<double, 3, 4>>& frames)> carrier;
+  /// Muscle cells (ElasticTerm::set_fibres): #C indices into `fibres`, −1 for a cell without (empty: none).
+  std::vector<int> fibre_of_cell;
+  std::vector<CellFibre> fibres;
+  /// Optional: the fibres' active strain over time. Given t, it sets alpha[f] = γ · activation ∈ [0, 1) for
+  /// each entry of `fibres` (alpha holds the values of the last call, zeros at first); called at the start,
+  /// before each solve and when a state is restored. Empty: each entry's own active strain throughout.
+  std::function<void(double t, std::vector<double>& alpha)> fibre_strain;
 };
 
 /// The kinematic flag of every DOF (3 #V) of these sets. Throws std::invalid_argument (one line, naming
@@ -148,6 +155,8 @@ class Simulation {
   /// Quasi-static with a carrier and a moving collider (a flesh's bones' capsules): the free vertices are
   /// taken along with the carrier (not held still) in the step's check and as the guess's base.
   [[nodiscard]] bool carried_check() const;
+  /// The fibres' active strain at time t (setup.fibre_strain), set where it changed.
+  void activate(double t);
   /// x carried by the carrier's frames from time `from` to `to` (every vertex: frame(to) · frame(from)⁻¹).
   [[nodiscard]] Eigen::VectorXd carry(const Eigen::VectorXd& x, double from, double to) const;
   SimulationSetup setup_;
@@ -160,6 +169,7 @@ class Simulation {
   double time_ = 0.0;
   int steps_ = 0;
   double rest_volume_ = 0.0;
+  std::vector<double> alpha_;  ///< per fibres entry, the active strain's α set last (fibre_strain)
 };
 
 }  // namespace snh
