@@ -555,6 +555,11 @@ ElasticTerm::Deformation ElasticTerm::deformation(const Eigen::VectorXd& x) cons
     }
   });
   out.volume = volume.sum();  // a fixed order for any thread count
+  if (!fibre_of_.empty()) {
+    out.contraction = Eigen::VectorXd::Zero(mesh_.cell_count());
+    for (Eigen::Index c = 0; c < mesh_.cell_count(); ++c)
+      if (const CellFibre* f = fibre(c)) out.contraction[c] = f->active.alpha;
+  }
   return out;
 }
 

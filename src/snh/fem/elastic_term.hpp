@@ -109,6 +109,8 @@ class ElasticTerm final : public Term {
     Eigen::VectorXd min_J;           ///< per element, the smallest det F over its quadrature points
     Eigen::VectorXd energy_density;  ///< per element, Σ_q w_q ψ(F_q) / Σ_q w_q (+∞ where ψ is undefined)
     double volume = 0.0;             ///< Σ_e Σ_q w_q det F_q (signed)
+    /// Per element, α of its fibres' active strain (0 for a cell without); empty when the term has no fibres.
+    Eigen::VectorXd contraction;
   };
   [[nodiscard]] Deformation deformation(const Eigen::VectorXd& x) const;
 

@@ -126,6 +126,7 @@ ActiveStrain ActiveStrain::along(const Vec3& a, double alpha) {
   const Mat3 aa = u * u.transpose();
   ActiveStrain s;
   s.inverse = aa / (1.0 - alpha) + std::sqrt(1.0 - alpha) * (Mat3::Identity() - aa);
+  s.alpha = alpha;
   return s;
 }
 

@@ -64,6 +64,7 @@ struct FibreEnergy {
 /// (a congruence: a PSD-projected ∂P/∂F stays PSD). A body that nothing holds rests where F = R F_a.
 struct ActiveStrain {
   Mat3 inverse = Mat3::Identity();  ///< A = F_a⁻¹ = (1 − α)⁻¹ a aᵀ + (1 − α)^(1/2) (I − a aᵀ)
+  double alpha = 0.0;               ///< α (for output)
 
   /// Throws std::invalid_argument (one line) unless a is finite and nonzero (it is normalised) and α is
   /// finite in [0, 1).

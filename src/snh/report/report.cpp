@@ -274,6 +274,8 @@ std::vector<Field> report_fields(const VtuData& first) {
   std::vector<Field> fields;
   if (first.cell_data.count("J")) fields.push_back({"J", "volume change J (smallest det F per element)", "cell", "diverging", {}});
   if (first.cell_data.count("psi")) fields.push_back({"psi", "energy density ψ (mean per element)", "cell", "sequential", {}});
+  if (first.cell_data.count("contraction"))
+    fields.push_back({"contraction", "muscle contraction α = γ × activation (per element)", "cell", "sequential", {}});
   fields.push_back({"displacement", "displacement |x − X|", "vertex", "sequential", {}});
   return fields;
 }

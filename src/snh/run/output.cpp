@@ -45,7 +45,9 @@ void FrameWriter::write(int index, double time, const Eigen::VectorXd& x, const 
   write_obj(out_ / (stem + ".obj"), X, faces_);
   if (prefix.empty()) remove_failed_frame(out_, index, {".obj", ".vtu"});
   if (!vtu_) return;
-  vtu_->write(out_ / (stem + ".vtu"), X, {{"displacement", X - rest_}}, {{"J", d.min_J}, {"psi", d.energy_density}}, {{"pinned", pinned_}});
+  std::vector<std::pair<std::string, Eigen::VectorXd>> cells{{"J", d.min_J}, {"psi", d.energy_density}};
+  if (d.contraction.size() > 0) cells.emplace_back("contraction", d.contraction);  // muscles
+  vtu_->write(out_ / (stem + ".vtu"), X, {{"displacement", X - rest_}}, cells, {{"pinned", pinned_}});
   if (!prefix.empty()) return;
   series_.emplace_back(time, stem + ".vtu");
   notes_.push_back(note);

@@ -35,7 +35,8 @@ class FrameWriter {
   /// frame shares (the surface's face lines, the .vtu cell arrays) is made here, once.
   FrameWriter(std::filesystem::path out, const VolumeMesh& mesh, bool write_vtu, const std::vector<bool>& pinned);
   /// Writes frame `index` at `time`: NNN.obj, and NNN.vtu (point fields displacement and pinned; cell
-  /// fields J, the min det F, and psi, the mean energy density), and adds it to the series that
+  /// fields J, the min det F, psi, the mean energy density, and for a mesh with muscle cells contraction,
+  /// each cell's active strain α), and adds it to the series that
   /// write_series writes, with `note` (a frame that did not converge says so there) where not empty.
   /// A frame of `kFailedPrefix`: failed_NNN.obj and .vtu, outside the series (the state where a run
   /// stopped, not a result). A frame written in the series removes a failed one of its index.

@@ -120,7 +120,7 @@ void files_of_ours(const fs::path& dir, const std::regex& ours,
 }  // namespace
 
 int clear_previous_run(const fs::path& dir, const RunDirectoryLock& lock) {
-  static const std::regex ours(R"((?:(?:failed_)?\d{3,}\.(?:obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html|flesh\.usda|bones\.json))"
+  static const std::regex ours(R"((?:(?:failed_)?\d{3,}\.(?:obj|vtu)|frames\.pvd|stats\.json|stats\.csv|checkpoint\.bin|index\.html|flesh\.usda|bones\.json|muscles\.json))"
                                R"((?:\.tmp\.\d+)?|\.snh-write-test\.\d+)");
   // Inside surface/ and lbs/ only NNN.obj (or failed_NNN.obj); inside report/ (and report/frames/) only its scripts.
   static const std::regex frames(R"((?:failed_)?\d{3,}\.obj(?:\.tmp\.\d+)?)");

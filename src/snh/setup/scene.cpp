@@ -31,6 +31,7 @@ Scene parse_scene(const nlohmann::json& j, const std::filesystem::path& source) 
   s.initial = scene::parse_initial(top);
   s.solver = scene::parse_solver(top);
   s.contact = scene::parse_contact(top, source, s.time.end_time.value_or(TimeSpec::default_end_time));
+  s.muscles = scene::parse_muscles(top, source, s.flesh.has_value());
   s.output = scene::parse_output(top, source);
   top.finish();
   s.settings = j.dump();  // object keys sorted: the same text for the same scene

@@ -27,6 +27,7 @@
 #include "snh/mesh/volume_mesh.hpp"
 #include "snh/run/run_directory.hpp"
 #include "snh/setup/flesh.hpp"
+#include "snh/setup/muscle_spec.hpp"
 #include "snh/sim/kinematics.hpp"
 #include "snh/sim/simulation.hpp"
 #include "snh/solve/newton.hpp"
@@ -49,10 +50,7 @@ struct MeshSpec {
 };
 
 /// "material" and "density".
-struct MaterialSpec {
-  std::string name = "stable_neo_hookean";
-  Lame params{1.0, 10.0};
-  bool reparametrize = false;
+struct MaterialSpec : MaterialChoice {
   double density = 1.0;
 };
 
@@ -204,6 +202,8 @@ struct Scene {
   std::vector<InitialOp> initial;
   SolverSpec solver;
   ContactSpec contact;
+  /// "tissues", then "muscles": regions with their own materials, muscles' fibres and activation (muscle_spec.hpp).
+  std::vector<MuscleSpec> muscles;
   OutputSpec output;
   RunControl run;
 };

@@ -197,7 +197,9 @@ BuiltScene build_scene(const Scene& s) {
   // The pins must select something on the body and hold each coordinate once; contact needs a separated start.
   b.x0 = initial_positions(s, mesh);
   check_coordinates(s, mesh, b.x0);
-  const std::vector<KinematicSet> sets = scene::as_scene_error([&] { return scene_kinematics(s, *b.body, b.x0); });
+  b.muscles = build_muscles(s, *b.body);
+  std::vector<KinematicSet> sets = scene::as_scene_error([&] { return scene_kinematics(s, *b.body, b.x0); });
+  if (b.muscles) sets.insert(sets.end(), b.muscles->bones.begin(), b.muscles->bones.end());
   (void)scene::as_scene_error([&] { return kinematic_dof_flags(sets, mesh.vertex_count()); });
   check_shared_pins(s, b.end_time, sets);
   if (s.contact.enabled)
@@ -223,6 +225,14 @@ SimulationSetup simulation_setup(const BuiltScene& b) {
   setup.mass_damping = s.forces.mass_damping;
   setup.stiffness_damping = s.forces.stiffness_damping;
   setup.kinematic = scene_kinematics(s, *b.body, b.x0);
+  if (const std::shared_ptr<const BuiltMuscles>& m = b.muscles) {
+    setup.materials = m->materials;
+    setup.material_of_cell = m->material_of_cell;
+    setup.fibre_of_cell = m->fibre_of_cell;
+    setup.fibres = m->fibres;
+    if (!m->muscles.empty()) setup.fibre_strain = [m](double t, std::vector<double>& alpha) { m->fibre_strain(t, alpha); };
+    setup.kinematic.insert(setup.kinematic.end(), m->bones.begin(), m->bones.end());
+  }
   std::vector<std::shared_ptr<Term>> bones;  // a flesh's bones against its skin, among the contact terms
   if (b.body->flesh) add_flesh_terms(b, setup, bones);
   if (s.contact.enabled)

@@ -14,6 +14,7 @@
 #include "snh/fem/term.hpp"
 #include "snh/setup/contact_setup.hpp"
 #include "snh/setup/flesh.hpp"
+#include "snh/setup/muscles.hpp"
 #include "snh/setup/scene.hpp"
 #include "snh/sim/simulation.hpp"
 
@@ -42,6 +43,7 @@ struct BuiltScene {
   ContactParameters contact;               ///< d̂, κ, friction, ε_v (where contact is enabled)
   std::string contact_stiffness_rule;      ///< how κ came about ("given", or the rule that chose it), for the header
   Eigen::VectorXd x0;                      ///< the rest positions with the initial operations applied
+  std::shared_ptr<const BuiltMuscles> muscles;  ///< the tissues and muscles (null: none)
 };
 
 /// Builds and checks a parsed scene (see the header). Throws SceneError (one line naming the scene file and

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "snh/io/atomic_file.hpp"
 #include "snh/run/driver.hpp"
 #include "snh/setup/contact_setup.hpp"
 #include "snh/setup/flesh_scene.hpp"
@@ -96,6 +97,8 @@ void write_header(const BuiltScene& b, const Simulation& sim, std::ostream& o) {
     o << fmt::format("contact: dhat {:.4g}, stiffness {:.4g} ({}){}{}{}\n", b.contact.dhat, b.contact.stiffness, b.contact_stiffness_rule,
                      s.contact.self ? ", self-contact" : "", s.contact.planes.size() + s.contact.colliders.size() == 0 ? "" : fmt::format(", {} colliders", s.contact.planes.size() + s.contact.colliders.size()),
                      s.contact.friction > 0.0 ? fmt::format(", friction {:g}", s.contact.friction) : "");
+  if (b.muscles)
+    for (const std::string& line : b.muscles->summary) o << line << "\n";
 }
 
 /// The contact terms' statistics in every frame's record (contact_table): active pairs and the smallest
@@ -132,6 +135,30 @@ std::string inverted_note(const StepRecord& f) {
   if (f.inverted == 0) return "";
   return fmt::format(", {} inverted element{}{}", f.inverted, f.inverted == 1 ? "" : "s",
                      f.converged ? " (warning: converged with flesh turned inside out)" : "");
+}
+
+/// A scene with muscles: each frame's line gives their activation; muscles.json (muscles_json) is written at
+/// the end, for the frames the run recorded, and stats.json names it.
+void add_muscle_output(const BuiltScene& b, RunPlan& plan) {
+  const std::shared_ptr<const BuiltMuscles> m = b.muscles;
+  if (!m->muscles.empty()) {
+    const auto base_line = plan.line;
+    plan.line = [m, base_line](const StepRecord& r) {
+      std::string s = base_line(r);
+      const std::vector<double> a = m->activation(r.time);
+      for (std::size_t i = 0; i < a.size(); ++i) s += fmt::format("{} {} {:.3f}", i ? "," : ", activation", m->muscles[i].name, a[i]);
+      return s;
+    };
+  }
+  const auto base_finish = plan.finish;
+  plan.finish = [&b, m, out = plan.out, base_finish](const RunResult& result, nlohmann::json& stats) {
+    if (base_finish) base_finish(result, stats);
+    std::vector<double> times;
+    for (const StepRecord& r : result.records) times.push_back(r.time);
+    const nlohmann::json j = muscles_json(*m, b.scene, b.body->mesh, times);
+    write_atomically(out / "muscles.json", [&](std::ostream& o) { o << j.dump() << '\n'; });
+    stats["muscles_file"] = "muscles.json";
+  };
 }
 
 RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
@@ -216,6 +243,7 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
                        r.peak_memory_mib, out.string());
   };
   if (b.body->flesh) add_flesh_output(b, sim, plan);
+  if (b.muscles) add_muscle_output(b, plan);
   const auto& terms = sim.problem().terms();
   if (std::any_of(terms.begin(), terms.end(), [](const Term* t) { return t->reports_contact(); })) add_contact_statistics(sim, plan);
   return plan;

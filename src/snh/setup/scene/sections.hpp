@@ -30,6 +30,12 @@ auto as_scene_error(F&& f) {
 [[nodiscard]] std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& source);
 /// "material" and "density", from `defaults` where the scene gives none (a flesh scene's differ).
 [[nodiscard]] MaterialSpec parse_material(Keys& top, const MaterialSpec& defaults);
+/// A material object ({name, mu and lambda or youngs and poisson, reparametrize}) at `path`, from `defaults`
+/// where it gives no value.
+[[nodiscard]] MaterialChoice parse_material_object(const json& j, const std::string& path, const std::string& file,
+                                                   const MaterialChoice& defaults);
+/// "tissues" and "muscles" (regions' mesh files relative to the scene file's directory, read by the build).
+[[nodiscard]] std::vector<MuscleSpec> parse_muscles(Keys& top, const std::filesystem::path& source, bool flesh);
 /// "integrator", "dt", "end_time", "frames".
 [[nodiscard]] TimeSpec parse_time(Keys& top);
 /// "gravity" and "damping".
