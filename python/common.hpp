@@ -61,6 +61,30 @@ struct Matrices {
 };
 [[nodiscard]] Matrices matrices(const pyb::handle& obj, std::string_view what, bool entry_range);
 
+/// Runs body(k) for every matrix, in parallel over a batch, without the GIL.
+template <class Body>
+void for_each(const Matrices& F, Body&& body) {
+  pyb::gil_scoped_release release;
+  const auto n = static_cast<long>(F.count);
+#pragma omp parallel for schedule(static) if (n > 64)
+  for (long k = 0; k < n; ++k) body(k);
+}
+
+/// (n, rest...) for a batch, (rest...) for one matrix.
+inline Doubles output(const Matrices& F, std::initializer_list<pyb::ssize_t> rest) {
+  std::vector<pyb::ssize_t> shape;
+  if (F.batch) shape.push_back(F.count);
+  shape.insert(shape.end(), rest);
+  return Doubles(shape);
+}
+
+/// A 3x3 (or 9x9) Eigen matrix into row-major array storage.
+template <class M>
+void store(const M& A, double* out) {
+  Eigen::Map<Eigen::Matrix<double, M::RowsAtCompileTime, M::ColsAtCompileTime, Eigen::RowMajor>> target(out);
+  target = A;
+}
+
 /// parse_projection, or ValueError.
 [[nodiscard]] PsdProjection projection(const std::string& name);
 
@@ -80,6 +104,7 @@ struct Matrices {
 [[nodiscard]] const AnyMaterial& any_material(const pyb::handle& obj);
 
 void add_materials(pyb::module_& m);
+void add_muscles(pyb::module_& m);
 void add_meshes(pyb::module_& m);
 void add_simulation(pyb::module_& m);
 

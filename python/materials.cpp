@@ -46,30 +46,6 @@ struct type_caster<snh::py::PyMaterial> : snh::py::checked_caster<snh::py::PyMat
 namespace snh::py {
 namespace {
 
-/// Runs body(k) for every matrix, in parallel over a batch, without the GIL.
-template <class Body>
-void for_each(const Matrices& F, Body&& body) {
-  pyb::gil_scoped_release release;
-  const auto n = static_cast<long>(F.count);
-#pragma omp parallel for schedule(static) if (n > 64)
-  for (long k = 0; k < n; ++k) body(k);
-}
-
-/// (n, rest...) for a batch, (rest...) for one matrix.
-Doubles output(const Matrices& F, std::initializer_list<pyb::ssize_t> rest) {
-  std::vector<pyb::ssize_t> shape;
-  if (F.batch) shape.push_back(F.count);
-  shape.insert(shape.end(), rest);
-  return Doubles(shape);
-}
-
-/// A 3x3 (or 9x9) Eigen matrix into row-major array storage.
-template <class M>
-void store(const M& A, double* out) {
-  Eigen::Map<Eigen::Matrix<double, M::RowsAtCompileTime, M::ColsAtCompileTime, Eigen::RowMajor>> target(out);
-  target = A;
-}
-
 pyb::object scalar_or_array(const Matrices& F, Doubles a) {
   if (F.batch) return a;
   return pyb::float_(a.data()[0]);

@@ -140,6 +140,7 @@ PYBIND11_MODULE(snh, m) {
     }
   });
   snh::py::add_materials(m);
+  snh::py::add_muscles(m);
   snh::py::add_meshes(m);
   snh::py::add_simulation(m);
 }
