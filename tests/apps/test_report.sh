@@ -32,6 +32,21 @@ cp -r "$work/flesh" "$work/flesh-bad" && printf 'v 1 2\n' > "$work/flesh-bad/sur
 out="$("$SNH" report "$work/flesh-bad" 2>&1)"; code=$?
 [ "$code" -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] && printf '%s' "$out" | grep -q "^snh: error: $work/flesh-bad/surface/005.obj:1: " \
   && ok || bad "report with a malformed surface frame (exit $code): $out"
+# A run with muscles: muscles.json gives the report the fibres of every frame; a malformed one is named in one line.
+cat > "$work/muscle.json" <<'EOF'
+{"mesh": {"box": {"min": [0, 0, 0], "max": [4, 1, 1], "res": 4}}, "material": {"youngs": 1000, "poisson": 0.45},
+ "integrator": "quasi_static", "end_time": 1, "frames": 4,
+ "pins": [{"region": {"min": [-0.1, -1, -1], "max": [0.1, 2, 2]}}],
+ "muscles": [{"name": "belly", "region": {"min": [-1, -1, -1], "max": [5, 2, 2]}, "fibre": [1, 0, 0], "contraction": 0.3,
+              "activation": [{"time": 0, "value": 0}, {"time": 1, "value": 1}]}]}
+EOF
+out="$("$SNH" run "$work/muscle.json" --out "$work/muscle" 2>&1)"; code=$?
+[ "$code" -eq 0 ] && grep -q '"fibres":{"count":64,' "$work/muscle/report/data.js" \
+  && grep -q '"fibres":{"activation":\[1.0\],"segments":"' "$work/muscle/report/frames/004.js" && ok || bad "a run with muscles: its report's fibres (exit $code): $out"
+cp -r "$work/muscle" "$work/muscle-bad" && echo '{"regions": 3}' > "$work/muscle-bad/muscles.json"
+out="$("$SNH" report "$work/muscle-bad" 2>&1)"; code=$?
+[ "$code" -eq 2 ] && [ "$out" = "snh: error: $work/muscle-bad/muscles.json: not a muscles file: it needs a \"regions\" array" ] \
+  && ok || bad "report with a malformed muscles.json (exit $code): $out"
 "$SNH" stretch --res 2 --steps 2 --no-report --out "$work/quiet" > "$work/quiet.log" 2>&1
 [ -f "$work/quiet/stats.json" ] && [ ! -e "$work/quiet/index.html" ] && ! grep -q "^report:" "$work/quiet.log" \
   && ok || bad "--no-report writes no report"
@@ -117,6 +132,7 @@ else
   [ "$code" -eq 0 ] && [ "$out" = "$work/flesh.png (640x480)" ] && ok || bad "snh render of a flesh run (exit $code): $out"
   run_node "flesh run and its render" SNH_TEST_FLESH_DIR="$work/flesh" SNH_TEST_RENDER_PNG="$work/flesh.png" SNH_TEST_RENDER_SIZE=640x480
   run_node "a lab simulation's own report" SNH_TEST_RUN_DIR="$work/lab/inversion/reflected/stable_neo_hookean"
+  run_node "muscle fibres" SNH_TEST_MUSCLE_DIR="$work/muscle"
 fi
 
 echo "$pass passed, $fail failed"

@@ -20,7 +20,8 @@ export class FrameStore {
 
   /**
    * The decoded frame {x: Float32Array, fields: {name: Float32Array}, render: {flesh, lbs, bones} (a flesh
-   * run: Float32Arrays; bones only with bones) or null}; loads its file once.
+   * run: Float32Arrays; bones only with bones) or null, fibres: {segments, activation} (a run with muscles) or
+   * null}; loads its file once.
    */
   get(index) {
     if (!Number.isInteger(index) || index < 0 || index >= this.count) {
@@ -91,7 +92,20 @@ export class FrameStore {
       if (v.length !== n) throw new Error(`field "${f.name}" has ${v.length} values, expected ${n} (one per ${f.per})`);
       fields[f.name] = v;
     }
-    return { x, fields, render: this.render ? this.decodeRender(raw.render) : null };
+    return { x, fields, render: this.render ? this.decodeRender(raw.render) : null, fibres: this.mesh.fibres ? this.decodeFibres(raw.fibres) : null };
+  }
+
+  /** A run with muscles: the fibres' segments (6 per fibre) and each muscle's activation at the frame. */
+  decodeFibres(raw) {
+    const f = this.mesh.fibres;
+    if (!raw || typeof raw !== 'object') throw new Error('no "fibres" in the frame, though the report has muscles');
+    const segments = decodeBase64(raw.segments, Float32Array, 'fibre segments');
+    if (segments.length !== 6 * f.count) throw new Error(`"fibres" has ${segments.length} values, expected ${6 * f.count} (6 per fibre)`);
+    const activation = raw.activation;
+    if (!Array.isArray(activation) || activation.length !== f.muscles.length || activation.some((a) => typeof a !== 'number')) {
+      throw new Error(`the fibres' "activation" must hold one number per muscle (${f.muscles.length})`);
+    }
+    return { segments, activation };
   }
 
   decodeRender(raw) {

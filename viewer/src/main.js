@@ -26,7 +26,7 @@ window.addEventListener('unhandledrejection', (e) => record(e.reason));
 
 /**
  * Settings from the location hash: #render&frame=5&field=psi&wireframe=1, or #frame=N&field=NAME; a flesh
- * run also show=flesh|lbs|volume and bones=0.
+ * run also show=flesh|lbs|volume and bones=0; a run with muscles fibres=0.
  */
 function hashSettings() {
   const h = location.hash.replace(/^#/, '');
@@ -40,6 +40,7 @@ function hashSettings() {
     pins: flag('pins', true),
     show: q.get('show'),
     bones: flag('bones', true),
+    fibres: flag('fibres', true),
   };
 }
 
@@ -93,6 +94,7 @@ async function renderMode(root, data, s) {
     view.setWireframe(s.wireframe);
     view.setPinsVisible(s.pins);
     view.setBonesVisible(s.bones);
+    view.setFibresVisible(s.fibres);
     const player = new Player({ mesh, store: new FrameStore(mesh, render), view, hooks, parts, onError: record });
     const field = s.field || mesh.default_field || (mesh.fields[0] && mesh.fields[0].name);
     if (field) await player.setField(field);
@@ -139,7 +141,8 @@ function meshSection(data, s) {
       view.setWireframe(s.wireframe);
       view.setPinsVisible(s.pins);
       view.setBonesVisible(s.bones);
-      section.append(player.buildControls({ frame, wireframe: s.wireframe, pins: s.pins, bones: s.bones }));
+      view.setFibresVisible(s.fibres);
+      section.append(player.buildControls({ frame, wireframe: s.wireframe, pins: s.pins, bones: s.bones, fibres: s.fibres }));
       if (field) await player.setField(field);
       if (show) player.setShow(show);
       try {

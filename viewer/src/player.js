@@ -28,6 +28,10 @@ export class Player {
     hooks.setBones = (on) => this.setBonesVisible(on);
     hooks.visible = () => view.visibility();
     hooks.bones = () => Array.from(view.bonePositions || []);
+    hooks.setFibres = (on) => this.setFibresVisible(on);
+    hooks.fibres = () => Array.from(view.fibrePositions || []);
+    hooks.fibreColors = () => Array.from(view.fibreColors || []);
+    hooks.activation = () => (view.fibreActivation || []).slice();
   }
 
   fieldByName(name) {
@@ -69,6 +73,7 @@ export class Player {
     this.view.setPositions(data.x);
     if (this.field) this.view.setColors(this.field, data.fields[this.field.name], this.colors);
     if (data.render) this.view.setRender(data.render);
+    if (data.fibres) this.view.setFibres(data.fibres);
     this.view.render();
     this.showMessage('');
     const label = this.frameLabel(this.frame);
@@ -102,6 +107,12 @@ export class Player {
   setBonesVisible(on) {
     this.view.setBonesVisible(on);
     if (this.ui && this.ui.bones) this.ui.bones.checked = !!on;
+    this.view.render();
+  }
+
+  setFibresVisible(on) {
+    this.view.setFibresVisible(on);
+    if (this.ui && this.ui.fibres) this.ui.fibres.checked = !!on;
     this.view.render();
   }
 
@@ -212,6 +223,10 @@ export class Player {
     const boneCount = flesh ? this.view.boneNames.length : 0;
     ui.bones = flesh ? el('input', { type: 'checkbox', id: 'snh-bones', checked: initial.bones, disabled: !boneCount }) : null;
     if (ui.bones) ui.bones.addEventListener('change', () => this.setBonesVisible(ui.bones.checked));
+    // A run with muscles: their fibres.
+    const fibreCount = this.view.fibreMuscle ? this.view.fibreMuscle.length : 0;
+    ui.fibres = fibreCount ? el('input', { type: 'checkbox', id: 'snh-fibres', checked: initial.fibres !== false }) : null;
+    if (ui.fibres) ui.fibres.addEventListener('change', () => this.setFibresVisible(ui.fibres.checked));
     ui.field.disabled = this.view.show !== 'volume';
     this.ui = ui;
     this.updatePlayButton();
@@ -227,7 +242,8 @@ export class Player {
       el('div', { class: 'snh-controls-row' },
         el('label', { class: 'snh-control' }, 'Colour by ', ui.field),
         el('label', { class: 'snh-control' }, ui.wire, ' wireframe'),
-        el('label', { class: 'snh-control' }, ui.pins, ` pinned vertices (${this.view.pinIndex.length})`)));
+        el('label', { class: 'snh-control' }, ui.pins, ` pinned vertices (${this.view.pinIndex.length})`),
+        ui.fibres ? el('label', { class: 'snh-control' }, ui.fibres, ` muscle fibres (${fibreCount}), coloured by activation`) : null));
   }
 
   onKey(e) {

@@ -1,7 +1,8 @@
 // The 3D view: the run's boundary surface, coloured by a field, with orbit controls.
 // The geometry is non-indexed (3 vertices per triangle) so that cell colours and normals stay flat.
 // A flesh run adds its render surface (smooth, indexed), simulated or posed by linear blend skinning, and
-// its bones as lines drawn over everything: one of flesh, lbs or the volume is shown at a time.
+// its bones as lines drawn over everything: one of flesh, lbs or the volume is shown at a time. A run with
+// muscles draws their fibres over everything too, coloured by their muscle's activation.
 import {
   AmbientLight, BufferAttribute, BufferGeometry, Color, DirectionalLight, DoubleSide, LineBasicMaterial,
   LineSegments, Mesh, MeshBasicMaterial, MeshLambertMaterial, Object3D, PerspectiveCamera, Points, PointsMaterial,
@@ -11,6 +12,7 @@ import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import { LineMaterial } from 'three/examples/jsm/lines/LineMaterial.js';
 import { LineSegments2 } from 'three/examples/jsm/lines/LineSegments2.js';
 import { LineSegmentsGeometry } from 'three/examples/jsm/lines/LineSegmentsGeometry.js';
+import { fieldColors } from './colormap.js';
 import { decodeBase64 } from './util.js';
 
 /** The background colour (sRGB 0-255); tests compare pixels against it. */
@@ -23,6 +25,9 @@ export const SHOWS = [['flesh', 'flesh'], ['lbs', 'skinning (LBS)'], ['volume', 
 const SKIN_SRGB = { flesh: [226, 168, 142], lbs: [146, 170, 206] }; // warm for the flesh, cool for the comparison
 const BONE_COLOR = 0x16233f;
 const BONE_WIDTH = 3; // CSS pixels
+const FIBRE_WIDTH = 2; // CSS pixels
+/** A fibre's colour: its muscle's activation, 0 to 1, on the sequential map. */
+const ACTIVATION_COLORS = fieldColors({ colormap: 'sequential', min: 0, max: 1 });
 
 /** The surface's edges as [a, b, t1, t2] (vertices, triangles; t2 = -1 on an open edge). */
 function surfaceEdges(tris, n) {
@@ -110,7 +115,10 @@ export class MeshView {
     this.renderData = null; // the render part of the frame drawn
     this.renderFrame = 0; // counts the frames given, so that a surface shown again is filled only if stale
     this.skins = null;
+    this.fibresOn = true;
+    this.fibreLines = null;
     if (render) this.addRender(render);
+    if (mesh.fibres) this.addFibres(mesh.fibres);
 
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.addEventListener('change', () => this.render());
@@ -219,6 +227,45 @@ export class MeshView {
     this.applyVisibility();
   }
 
+  /** The fibres of a run with muscles (data.mesh.fibres): segments coloured by activation, drawn over everything. */
+  addFibres(f) {
+    this.fibreMuscle = decodeBase64(f.muscle, Uint32Array, 'fibres muscle');
+    if (!Array.isArray(f.muscles) || this.fibreMuscle.length !== f.count) throw new Error('fibres: the fibre count does not match');
+    if (this.fibreMuscle.some((m) => m >= f.muscles.length)) throw new Error('fibres: a fibre refers to a muscle past the list');
+    this.fibreNames = f.muscles;
+    this.fibrePositions = new Float32Array(6 * f.count);
+    this.fibreColors = new Float32Array(6 * f.count);
+    this.fibreActivation = [];
+    this.fibreGeometry = new LineSegmentsGeometry();
+    this.fibreMaterial = new LineMaterial({ vertexColors: true, linewidth: FIBRE_WIDTH, depthTest: false, transparent: true });
+    this.fibreLines = new LineSegments2(this.fibreGeometry, this.fibreMaterial);
+    this.fibreLines.frustumCulled = false;
+    this.fibreLines.renderOrder = 9;
+    this.fibreLines.visible = false; // until a frame gives the segments
+    this.scene.add(this.fibreLines);
+  }
+
+  /** A frame's fibres ({segments, activation}). */
+  setFibres(fr) {
+    if (!this.fibreLines || !fr) return;
+    this.fibrePositions.set(fr.segments);
+    this.fibreActivation = fr.activation.slice();
+    for (let k = 0; k < this.fibreMuscle.length; k++) {
+      ACTIVATION_COLORS.fill(this.fibreColors, 6 * k, fr.activation[this.fibreMuscle[k]]);
+      this.fibreColors.copyWithin(6 * k + 3, 6 * k, 6 * k + 3);
+    }
+    if (this.fibrePositions.length) {
+      this.fibreGeometry.setPositions(this.fibrePositions);
+      this.fibreGeometry.setColors(this.fibreColors);
+    }
+    this.fibreLines.visible = this.fibresOn && this.fibrePositions.length > 0;
+  }
+
+  setFibresVisible(on) {
+    this.fibresOn = !!on;
+    if (this.fibreLines) this.fibreLines.visible = this.fibresOn && this.fibreActivation.length > 0 && this.fibrePositions.length > 0;
+  }
+
   /** A frame's render part ({flesh, lbs, bones}: Float32Arrays); only the surface in view is updated now. */
   setRender(r) {
     if (!this.skins || !r) return;
@@ -271,6 +318,7 @@ export class MeshView {
     return {
       volume: this.solid.visible, flesh: !!s && s.flesh.solid.visible, lbs: !!s && s.lbs.solid.visible,
       bones: !!s && this.boneLines.visible,
+      fibres: !!this.fibreLines && this.fibreLines.visible,
     };
   }
 
@@ -312,6 +360,7 @@ export class MeshView {
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
     if (this.boneMaterial) this.boneMaterial.resolution.set(w, h);
+    if (this.fibreMaterial) this.fibreMaterial.resolution.set(w, h);
     if (!this.userMoved) this.frameBounds();
     this.render();
   }

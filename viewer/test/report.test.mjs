@@ -5,6 +5,8 @@
 //   SNH_TEST_LAB_DIR        a lab report's directory: tables and plots
 //   SNH_TEST_FLESH_DIR      a flesh run's directory (or one made by test/make-flesh-run.mjs): the switch among
 //                           flesh, skinning and volume, the bones and their frames, the render volume plot
+//   SNH_TEST_MUSCLE_DIR     a run with muscles (muscles.json): the fibres drawn, moved and coloured by each frame's
+//                           activation, and their switch
 //   SNH_TEST_RENDER_PNG     a PNG taken in render mode, with SNH_TEST_RENDER_SIZE=WxH: size, not blank
 // Chromium: /usr/bin/chromium, or SNH_TEST_CHROMIUM.
 import assert from 'node:assert/strict';
@@ -20,11 +22,12 @@ const RUN = env.SNH_TEST_RUN_DIR;
 const LAB = env.SNH_TEST_LAB_DIR;
 const FLESH = env.SNH_TEST_FLESH_DIR;
 const RENDER = env.SNH_TEST_RENDER_PNG;
+const MUSCLE = env.SNH_TEST_MUSCLE_DIR;
 const TIMEOUT = 30000;
 let browser;
 
 before(async () => {
-  if (!RUN && !LAB && !FLESH) return;
+  if (!RUN && !LAB && !FLESH && !MUSCLE) return;
   browser = await chromium.launch({
     executablePath: env.SNH_TEST_CHROMIUM || '/usr/bin/chromium',
     headless: true,
@@ -178,7 +181,7 @@ test('flesh run report', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', time
   // The flesh first, with its bones; the volume's colours (legend, field) are not in use.
   assert.deepEqual(await page.$$eval('.snh-seg', (bs) => bs.map((b) => b.textContent)), ['flesh', 'skinning (LBS)', 'volume']);
   assert.deepEqual(await pressed(), ['flesh']);
-  assert.deepEqual(await visible(), { flesh: true, lbs: false, volume: false, bones: true });
+  assert.deepEqual(await visible(), { flesh: true, lbs: false, volume: false, bones: true, fibres: false });
   assert.ok(await page.$eval('#snh-legend', (e) => e.hidden), 'no legend over the flesh');
   assert.ok(await page.$eval('#snh-field', (e) => e.disabled), 'the field select is off over the flesh');
   const bg = await page.evaluate(() => window.snhReport.background);
@@ -189,18 +192,18 @@ test('flesh run report', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', time
   // The switch: each choice shows its mesh alone, and the picture changes.
   await page.click('#snh-show-lbs');
   assert.deepEqual(await pressed(), ['lbs']);
-  assert.deepEqual(await visible(), { flesh: false, lbs: true, volume: false, bones: true });
+  assert.deepEqual(await visible(), { flesh: false, lbs: true, volume: false, bones: true, fibres: false });
   const lbs = await canvasShot();
   assert.ok(changedBetween(flesh, lbs) > 0.01, `skinning changes ${(100 * changedBetween(flesh, lbs)).toFixed(2)}% of the pixels`);
   await page.click('#snh-show-volume');
-  assert.deepEqual(await visible(), { flesh: false, lbs: false, volume: true, bones: true });
+  assert.deepEqual(await visible(), { flesh: false, lbs: false, volume: true, bones: true, fibres: false });
   assert.equal(await page.evaluate(() => window.snhReport.show), 'volume');
   assert.ok(!(await page.$eval('#snh-legend', (e) => e.hidden)), 'the legend is back with the volume');
   assert.ok(!(await page.$eval('#snh-field', (e) => e.disabled)), 'the field select is on with the volume');
   const vol = await canvasShot();
   assert.ok(changedBetween(lbs, vol) > 0.01, `the volume changes ${(100 * changedBetween(lbs, vol)).toFixed(2)}% of the pixels`);
   await page.click('#snh-show-flesh');
-  assert.deepEqual(await visible(), { flesh: true, lbs: false, volume: false, bones: true });
+  assert.deepEqual(await visible(), { flesh: true, lbs: false, volume: false, bones: true, fibres: false });
 
   // The bones follow the frames: at each frame shown, the segments of bones.json.
   const segmentsAt = (k) => bones.frames[k].segments.flat();
@@ -244,7 +247,7 @@ test('flesh run report', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', time
 
   // The hash picks what is shown first and hides the bones.
   const again = await open(FLESH, '#show=lbs&bones=0');
-  assert.deepEqual(await again.page.evaluate(() => window.snhReport.visible()), { flesh: false, lbs: true, volume: false, bones: false });
+  assert.deepEqual(await again.page.evaluate(() => window.snhReport.visible()), { flesh: false, lbs: true, volume: false, bones: false, fibres: false });
   assert.equal(await again.page.$eval('#snh-bones', (e) => e.checked), false);
   await assertNoErrors(again.page, again.problems);
   await again.page.close();
@@ -278,4 +281,54 @@ test('render-mode PNG', { skip: !RENDER && 'SNH_TEST_RENDER_PNG is not set' }, (
   const middle = [Math.floor(png.width / 3), Math.floor(png.height / 3), Math.floor((2 * png.width) / 3), Math.floor((2 * png.height) / 3)];
   const other = fraction(png, (p) => differs(p, common), middle);
   assert.ok(other > 0.05, `${(100 * other).toFixed(1)}% of the middle third differs from the most common colour ${common}`);
+});
+
+test('muscle fibres', { skip: !MUSCLE && 'SNH_TEST_MUSCLE_DIR is not set', timeout: 90000 }, async () => {
+  const report = readReport(MUSCLE);
+  const muscles = JSON.parse(readFileSync(join(MUSCLE, 'muscles.json'), 'utf8')).regions.filter((r) => r.kind === 'muscle');
+  const cells = muscles.reduce((n, m) => n + m.cells.length, 0);
+  assert.ok(report.mesh.fibres, 'data.js has the fibres');
+  assert.equal(report.mesh.fibres.count, cells, 'one fibre per muscle cell');
+  const { page, problems } = await open(MUSCLE);
+  const canvasShot = async () => PNG.sync.read(await page.locator('.snh-view canvas').screenshot());
+  const changedBetween = (a, b) => fraction(b, (p, x, y) => differs(p, pixel(a, x, y)));
+  const visible = () => page.evaluate(() => window.snhReport.visible());
+  const hook = (name) => page.evaluate((n) => window.snhReport[n](), name);
+  const lengths = (seg) => Array.from({ length: seg.length / 6 }, (_, k) => Math.hypot(seg[6 * k + 3] - seg[6 * k], seg[6 * k + 4] - seg[6 * k + 1], seg[6 * k + 5] - seg[6 * k + 2]));
+  assert.equal((await visible()).fibres, true);
+  assert.match(await page.$eval('label:has(#snh-fibres)', (e) => e.textContent), new RegExp(`muscle fibres \\(${cells}\\)`));
+
+  // Frame 0: the activation of muscles.json, and the segments at rest.
+  const count = report.mesh.frames.length;
+  assert.deepEqual(await hook('activation'), muscles.map((m) => m.activation[0]));
+  const first = { seg: await hook('fibres'), colors: await hook('fibreColors'), shot: await canvasShot() };
+  assert.equal(first.seg.length, 6 * cells);
+  await page.$eval('#snh-frame-slider', (el, v) => {
+    el.value = String(v);
+    el.dispatchEvent(new Event('input', { bubbles: true }));
+  }, count - 1);
+  await page.waitForFunction((n) => window.snhReport.frame === n, count - 1, { timeout: TIMEOUT });
+  const last = { seg: await hook('fibres'), colors: await hook('fibreColors'), shot: await canvasShot() };
+  assert.deepEqual(await hook('activation'), muscles.map((m) => m.activation[count - 1]));
+  // The muscle contracted along its fibres: each segment (F a through the cell) is shorter.
+  const ratio = lengths(last.seg).reduce((a, b) => a + b) / lengths(first.seg).reduce((a, b) => a + b);
+  assert.ok(ratio < 0.95, `the fibres' mean length went from 1 to ${ratio.toFixed(3)} of its rest`);
+  assert.ok(first.colors.some((c, i) => Math.abs(c - last.colors[i]) > 0.05), 'the colours follow the activation');
+  assert.ok(changedBetween(first.shot, last.shot) > 0.002, 'the last frame changes the picture');
+
+  // The switch hides them, and the picture shows it.
+  await page.uncheck('#snh-fibres');
+  assert.equal((await visible()).fibres, false);
+  const hidden = await canvasShot();
+  assert.ok(changedBetween(last.shot, hidden) > 0.0005, `hiding the fibres changes ${(100 * changedBetween(last.shot, hidden)).toFixed(3)}% of the pixels`);
+  await page.check('#snh-fibres');
+  assert.equal((await visible()).fibres, true);
+  await assertNoErrors(page, problems);
+  await page.close();
+  // The hash turns them off from the start.
+  const off = await open(MUSCLE, '#fibres=0');
+  assert.equal((await off.page.evaluate(() => window.snhReport.visible())).fibres, false);
+  assert.equal(await off.page.$eval('#snh-fibres', (e) => e.checked), false);
+  await assertNoErrors(off.page, off.problems);
+  await off.page.close();
 });

@@ -17,6 +17,7 @@
 #include "snh/io/mesh_read.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/io/vtu.hpp"
+#include "snh/report/fibres.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/run/stats.hpp"
 
@@ -348,6 +349,8 @@ json write_frames(const fs::path& dir, const std::string& frame_word, const std:
     rest.vertices -= Eigen::Map<const Eigen::Matrix3Xd>(it->second.data(), 3, nv);
   const ReportSurface surface = report_surface(rest, first);
   std::vector<Field> fields = report_fields(first);
+  std::optional<ReportFibres> fibres;  // a run with muscles
+  if (const fs::path m = dir / "muscles.json"; fs::exists(m)) fibres.emplace(read_json(m), m.string(), rest, pvd.size());
 
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   json frames = json::array();
@@ -355,6 +358,7 @@ json write_frames(const fs::path& dir, const std::string& frame_word, const std:
     const VtuData data = i == 0 ? std::move(first) : read_frame(i);
     json frame_json = frame_values(data, dir / pvd[i].second, rest, surface, fields, lo, hi);
     if (render_surface) frame_json["render"] = render_surface->frame(i, pvd[i].second);
+    if (fibres && fibres->count() > 0) frame_json["fibres"] = fibres->frame(i, data.mesh.mesh.vertices, lo, hi);
     const std::string src = fmt::format("report/frames/{:03d}.js", i);
     write_atomically(dir / src, [&](std::ostream& o) { o << "snhReportFrame(" << i << ", " << frame_json.dump() << ");\n"; });
     const bool failed = std::find(unconverged.begin(), unconverged.end(), static_cast<int>(i)) != unconverged.end();
@@ -389,6 +393,7 @@ json write_frames(const fs::path& dir, const std::string& frame_word, const std:
             {"pinned", encode(surface.pinned)}}},
           {"bounds", {{"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}}},
           {"fields", field_list},
+          {"fibres", fibres && fibres->count() > 0 ? fibres->summary() : json(nullptr)},
           {"default_field", fields.front().name},
           {"frames", frames}};
 }
