@@ -121,6 +121,36 @@ TEST_F(MeshRead, AllFormatsAgreeOnATwoHexMesh) {
   }
 }
 
+TEST_F(MeshRead, CellTagsAreEachFormatsRegions) {
+  // Two unit cubes along x (12 vertices, i + 3 j + 6 k), each hex in VTK order, 1-based.
+  std::string coords0, coords1;
+  for (int v = 0; v < 12; ++v) {
+    coords0 += fmt::format("{} {} {} {}\n", v + 1, v % 3, (v / 3) % 2, v / 6);
+    coords1 += fmt::format("{} {} {} 0\n", v % 3, (v / 3) % 2, v / 6);
+  }
+  const auto hex = [](int c) {
+    std::string s;
+    for (int a : {0, 1, 3, 2, 4, 5, 7, 6}) s += " " + std::to_string(c + (a & 1) + 3 * ((a >> 1) & 1) + 6 * (a >> 2) + 1);
+    return s;
+  };
+  const std::string medit = "MeshVersionFormatted 2\nDimension 3\nVertices 12\n" + coords1 + "Hexahedra 2\n" + hex(0) + " 7\n" + hex(1) +
+                            " 9\nEnd\n";
+  const std::string gmsh2 = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n12\n" + coords0 + "$EndNodes\n$Elements\n2\n1 5 2 3 11" + hex(0) +
+                            "\n2 5 2 4 12" + hex(1) + "\n$EndElements\n";
+  std::string gmsh4 = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 12 1 12\n3 1 0 12\n";
+  for (int v = 1; v <= 12; ++v) gmsh4 += std::to_string(v) + "\n";
+  for (int v = 0; v < 12; ++v) gmsh4 += fmt::format("{} {} {}\n", v % 3, (v / 3) % 2, v / 6);
+  gmsh4 += "$EndNodes\n$Elements\n2 2 1 2\n3 5 5 1\n1" + hex(0) + "\n3 6 5 1\n2" + hex(1) + "\n$EndElements\n";
+  const std::vector<std::pair<fs::path, std::vector<long long>>> cases = {
+      {write("t.mesh", medit), {7, 9}}, {write("t2.msh", gmsh2), {3, 4}}, {write("t4.msh", gmsh4), {5, 6}}};
+  for (const auto& [p, tags] : cases) EXPECT_EQ(read_mesh(p).cell_tags, tags) << p;
+  // TetGen's region attributes (a whole number each; another is no tag); without the flag, all 0.
+  write("r.node", kNode);
+  EXPECT_EQ(read_mesh(write("r.ele", "2 4 1\n1 1 2 3 4 10\n2 2 4 3 5 2.5\n")).cell_tags, (std::vector<long long>{10, 0}));
+  write("n.node", kNode);
+  EXPECT_EQ(read_mesh(write("n.ele", kEle)).cell_tags, (std::vector<long long>{0, 0}));
+}
+
 /// Appends the bytes of a value.
 template <class T>
 void put(std::string& s, T v) {

@@ -11,6 +11,7 @@
 #include <numbers>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "limb_model.hpp"
@@ -114,6 +115,71 @@ TEST(MuscleScene, ARegionsMaterialIsUsedOnlyInItsCells) {
     EXPECT_EQ(sim.elastic().fibre(c), nullptr);
   }
   EXPECT_EQ(stiff, 256) << "half of the 8³ cells";
+}
+
+TEST(MuscleScene, ARegionOfAMeshFilesCellTags) {
+  // Two hexes along x, MEDIT references 1 and 2; the tissue takes the cells tagged 2.
+  const fs::path dir = fs::temp_directory_path() / ("snh-test-tags-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::string medit = "MeshVersionFormatted 2\nDimension 3\nVertices 12\n";
+  for (int v = 0; v < 12; ++v) medit += fmt::format("{} {} {} 0\n", v % 3, (v / 3) % 2, v / 6);
+  medit += "Hexahedra 2\n";
+  for (int c = 0; c < 2; ++c) {
+    for (int a : {0, 1, 3, 2, 4, 5, 7, 6}) medit += fmt::format("{} ", c + (a & 1) + 3 * ((a >> 1) & 1) + 6 * (a >> 2) + 1);
+    medit += fmt::format("{}\n", c + 1);
+  }
+  std::ofstream(dir / "two.mesh") << medit << "End\n";
+  json j = {{"mesh", {{"file", (dir / "two.mesh").string()}}}, {"material", {{"mu", 1}, {"lambda", 10}}},
+            {"tissues", {{{"name", "second"}, {"region", {{"tags", {2}}}}, {"material", {{"mu", 50}, {"lambda", 500}}}}}}};
+  const BuiltScene b = build_scene(parse_scene(j, "s.json"));
+  EXPECT_EQ(b.muscles->region_of_cell, (std::vector<int>{-1, 0}));
+  EXPECT_EQ(b.muscles->material_of_cell, (std::vector<int>{0, 1}));
+  j["tissues"][0]["region"]["tags"] = {5, 6};
+  EXPECT_NE(error_of(j).find("tissues[0] \"second\".region.tags: no cell has these tags (the mesh's cells have: 1, 2)"), std::string::npos)
+      << error_of(j);
+  j["tissues"][0]["region"]["tags"] = {1.5};
+  EXPECT_NE(error_of(j).find("tissues[0].region.tags: expected integer tags, got 1.5"), std::string::npos) << error_of(j);
+  json box = bar();
+  box["tissues"] = {{{"name", "t"}, {"region", {{"tags", {1}}}}}};
+  EXPECT_NE(error_of(box).find("region.tags: the mesh has no cell tags"), std::string::npos) << error_of(box);
+  fs::remove_all(dir);
+}
+
+TEST(MuscleScene, FibresFromAFileOfOnePerCell) {
+  const fs::path dir = fs::temp_directory_path() / ("snh-test-fibre-file-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream out(dir / "f.txt");
+  out << "# one direction per cell\n";
+  for (int c = 0; c < 512; ++c) out << (c % 2 ? "0 0 2" : "1 1 0") << (c == 7 ? "  # a comment\n\n" : "\n");
+  out.close();
+  json j = bar();
+  j["muscles"] = json::array({belly()});
+  j["muscles"][0]["fibre"] = {{"file", (dir / "f.txt").string()}};
+  j["muscles"][0]["region"] = {{"min", {2, -1, -1}}, {"max", {5, 2, 2}}};
+  const BuiltScene b = build_scene(parse_scene(j, "s.json"));
+  const Simulation sim(simulation_setup(b));
+  int muscle = 0;
+  for (Eigen::Index c = 0; c < sim.mesh().cell_count(); ++c)
+    if (const CellFibre* f = sim.elastic().fibre(c)) {
+      ++muscle;
+      const Vec3 want = c % 2 ? Vec3::UnitZ() : Vec3(1, 1, 0).normalized();
+      EXPECT_LT((f->direction - want).norm(), 1e-15) << "cell " << c;
+    }
+  EXPECT_EQ(muscle, 256);
+  std::ofstream(dir / "short.txt") << "1 0 0\n";
+  j["muscles"][0]["fibre"]["file"] = (dir / "short.txt").string();
+  EXPECT_NE(error_of(j).find("short.txt: 1 directions for the volume's 512 cells"), std::string::npos) << error_of(j);
+  std::ofstream(dir / "bad.txt") << "1 0 0\n1 0 x\n";
+  j["muscles"][0]["fibre"]["file"] = (dir / "bad.txt").string();
+  EXPECT_NE(error_of(j).find("bad.txt:2: expected three finite numbers (a fibre direction), got \"1 0 x\""), std::string::npos) << error_of(j);
+  std::ofstream(dir / "zero.txt") << "0 0 0\n";
+  j["muscles"][0]["fibre"]["file"] = (dir / "zero.txt").string();
+  EXPECT_NE(error_of(j).find("zero.txt:1: a fibre direction must not be zero"), std::string::npos) << error_of(j);
+  j["muscles"][0]["fibre"]["file"] = dir.string();
+  EXPECT_NE(error_of(j).find("fibre.file: " + dir.string() + ": is a directory"), std::string::npos) << error_of(j);
+  j["muscles"][0]["fibre"] = {{"file", "f.txt"}, {"origin", {0, 0, 0}}};
+  EXPECT_NE(error_of(j).find("give a file, or an origin and an insertion: not both"), std::string::npos) << error_of(j);
+  fs::remove_all(dir);
 }
 
 /// The x-component of the elastic force (−∂E/∂x) on the vertices of the face x = 0 (what the pins there hold).

@@ -36,11 +36,11 @@ int gmsh_nodes(long long type) {
   }
 }
 
-/// Adds an element of Gmsh type `type` with file node tags `ids`: a tet or hex cell, an error for a
-/// prism or pyramid, nothing for a lower-dimensional element.
-void gmsh_cell(Lexer& lx, MeshBuilder& b, long long type, const std::vector<long long>& ids, int line) {
-  if (type == 4) b.cell(lx, CellType::tet4, ids, line);
-  else if (type == 5) b.cell(lx, CellType::hex8, detail::hex_to_lattice(ids), line);
+/// Adds an element of Gmsh type `type` with file node tags `ids` and region tag `tag`: a tet or hex cell, an
+/// error for a prism or pyramid, nothing for a lower-dimensional element.
+void gmsh_cell(Lexer& lx, MeshBuilder& b, long long type, const std::vector<long long>& ids, int line, long long tag) {
+  if (type == 4) b.cell(lx, CellType::tet4, ids, line, tag);
+  else if (type == 5) b.cell(lx, CellType::hex8, detail::hex_to_lattice(ids), line, tag);
   else if (type == 6 || type == 7)
     lx.fail(fmt::format("{} cells are not supported (tets or hexes only)", type == 6 ? "prism" : "pyramid"), line);
 }
@@ -88,7 +88,7 @@ void read_gmsh41_binary_section(Lexer& lx, MeshBuilder& b, std::string_view sect
   (void)lx.raw<std::uint64_t>("the largest element tag");
   for (std::uint64_t k = 0; k < blocks; ++k) {
     (void)lx.raw<std::int32_t>("the entity dimension");
-    (void)lx.raw<std::int32_t>("the entity tag");
+    const auto entity = lx.raw<std::int32_t>("the entity tag");
     const auto type = lx.raw<std::int32_t>("the element type");
     const int nodes = gmsh_nodes(type);
     if (nodes < 0) lx.fail(fmt::format("unsupported element type {} (tets or hexes only)", type), line);
@@ -98,7 +98,7 @@ void read_gmsh41_binary_section(Lexer& lx, MeshBuilder& b, std::string_view sect
       (void)lx.raw<std::uint64_t>("an element tag");
       std::vector<long long> ids(nodes);
       for (auto& id : ids) id = static_cast<long long>(lx.raw<std::uint64_t>("a node tag"));
-      gmsh_cell(lx, b, type, ids, line);
+      gmsh_cell(lx, b, type, ids, line, entity);
     }
   }
 }
@@ -126,10 +126,14 @@ void read_gmsh22_binary_section(Lexer& lx, MeshBuilder& b, std::string_view sect
     if (count <= 0 || count > n - read || tags < 0 || tags > 100) lx.fail("corrupt binary element header", line);
     for (int i = 0; i < count; ++i) {
       (void)lx.raw<std::int32_t>("an element tag");
-      for (int t = 0; t < tags; ++t) (void)lx.raw<std::int32_t>("a tag");
+      long long physical = 0;  // the first tag
+      for (int t = 0; t < tags; ++t) {
+        const auto v = lx.raw<std::int32_t>("a tag");
+        if (t == 0) physical = v;
+      }
       std::vector<long long> ids(nodes);
       for (auto& id : ids) id = lx.raw<std::int32_t>("a node tag");
-      gmsh_cell(lx, b, type, ids, line);
+      gmsh_cell(lx, b, type, ids, line, physical);
     }
     read += count;
   }
@@ -177,10 +181,14 @@ void read_ascii_elements(Lexer& lx, MeshBuilder& b, bool v2) {
       const int nodes = gmsh_nodes(type);
       if (nodes < 0) lx.fail(fmt::format("unsupported element type {} (tets or hexes only)", type));
       const long long tags = lx.count("the number of tags", 100);
-      for (long long t = 0; t < tags; ++t) (void)lx.integer("a tag");
+      long long physical = 0;  // the first tag
+      for (long long t = 0; t < tags; ++t) {
+        const long long v = lx.integer("a tag");
+        if (t == 0) physical = v;
+      }
       std::vector<long long> ids(nodes);
       for (auto& id : ids) id = lx.integer("a node tag");
-      gmsh_cell(lx, b, type, ids, line);
+      gmsh_cell(lx, b, type, ids, line, physical);
     }
     return;
   }
@@ -190,7 +198,7 @@ void read_ascii_elements(Lexer& lx, MeshBuilder& b, bool v2) {
   (void)lx.integer("the largest element tag");
   for (long long k = 0; k < blocks; ++k) {
     (void)lx.integer("the entity dimension");
-    (void)lx.integer("the entity tag");
+    const long long entity = lx.integer("the entity tag");
     const long long type = lx.integer("the element type");
     const int nodes = gmsh_nodes(type);
     if (nodes < 0) lx.fail(fmt::format("unsupported element type {} (tets or hexes only)", type));
@@ -200,7 +208,7 @@ void read_ascii_elements(Lexer& lx, MeshBuilder& b, bool v2) {
       const int line = lx.line();
       std::vector<long long> ids(nodes);
       for (auto& id : ids) id = lx.integer("a node tag");
-      gmsh_cell(lx, b, type, ids, line);
+      gmsh_cell(lx, b, type, ids, line, entity);
     }
   }
 }

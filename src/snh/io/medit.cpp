@@ -53,8 +53,8 @@ MeshFile read_medit(const std::filesystem::path& path) {
         std::vector<long long> ids(tet ? 4 : 8);
         for (auto& id : ids) id = lx.integer("a vertex index");
         const int line = lx.line();
-        (void)lx.integer("a cell reference");
-        b.cell(lx, tet ? CellType::tet4 : CellType::hex8, tet ? ids : detail::hex_to_lattice(ids), line);
+        const long long reference = lx.integer("a cell reference");
+        b.cell(lx, tet ? CellType::tet4 : CellType::hex8, tet ? ids : detail::hex_to_lattice(ids), line, reference);
       }
     } else if (const auto it = skipped.find(key); it != skipped.end()) {
       const long long n = lx.count("the number of items");

@@ -19,14 +19,16 @@ struct MeshBuilder {
   std::optional<CellType> type;
   std::vector<int> cells;
   std::vector<int> lines;
+  std::vector<long long> tags;  ///< per cell, its region tag (0 where the file gives none)
 
   /// Adds the vertex with file id `id`; an id given twice is an error on lx's current line.
   void vertex(Lexer& lx, long long id, double x, double y, double z) {
     if (!index_of.emplace(id, static_cast<int>(xyz.size() / 3)).second) lx.fail(fmt::format("vertex {} is defined twice", id));
     xyz.insert(xyz.end(), {x, y, z});
   }
-  /// Adds a cell of type `t` from file ids (already in VolumeMesh corner order), read from `line`.
-  void cell(Lexer& lx, CellType t, const std::vector<long long>& ids, int line) {
+  /// Adds a cell of type `t` from file ids (already in VolumeMesh corner order), read from `line`, with its
+  /// region tag.
+  void cell(Lexer& lx, CellType t, const std::vector<long long>& ids, int line, long long tag = 0) {
     if (type && *type != t)
       lx.fail(fmt::format("a mesh of both tets and hexes is not supported (this {} follows {})", t == CellType::tet4 ? "tet" : "hex",
                           *type == CellType::tet4 ? "tets" : "hexes"),
@@ -38,6 +40,7 @@ struct MeshBuilder {
       cells.push_back(it->second);
     }
     lines.push_back(line);
+    tags.push_back(tag);
   }
   /// The mesh read; no cell at all is an error on lx's current line.
   MeshFile finish(const Lexer& lx) {
@@ -48,6 +51,7 @@ struct MeshBuilder {
     const int n = nodes_per_cell(*type);
     m.mesh.cells = Eigen::Map<const Eigen::MatrixXi>(cells.data(), n, static_cast<Eigen::Index>(cells.size() / n));
     m.cell_lines = lines;
+    m.cell_tags = tags;
     return m;
   }
 };

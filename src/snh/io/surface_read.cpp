@@ -323,6 +323,7 @@ MeshFile tetrahedralize(const SurfaceMesh& surface, const fs::path& source, doub
   MeshFile m = read_mesh_file(node);
   // The cells' lines are lines of tetgen's temporary .ele file, not of `source`: the messages name cells only.
   m.cell_lines.clear();
+  m.cell_tags.clear();  // tetgen's regions, not the surface's
   check_mesh(m, source.string() + " (tetrahedralized by tetgen)");
   return m;
 }

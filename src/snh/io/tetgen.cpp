@@ -1,5 +1,6 @@
 #include "snh/io/tetgen.hpp"
 
+#include <cmath>
 #include <vector>
 
 #include <fmt/format.h>
@@ -35,8 +36,11 @@ MeshFile read_tetgen(const std::filesystem::path& node_path, const std::filesyst
     const int line = ele.line();
     std::vector<long long> ids(4);
     for (auto& id : ids) id = ele.integer("a vertex index");
-    if (region) (void)ele.number("a region attribute");
-    b.cell(ele, CellType::tet4, ids, line);
+    // TetGen writes region attributes as numbers; a whole one is the region's tag, any other none (0).
+    double attribute = 0.0;
+    if (region) attribute = ele.number("a region attribute");
+    const bool whole = attribute == std::round(attribute) && std::abs(attribute) < 9e15;
+    b.cell(ele, CellType::tet4, ids, line, whole ? static_cast<long long>(attribute) : 0);
   }
   if (!ele.at_end()) ele.fail(fmt::format("more data than the {} tetrahedra the header announces", m), ele.line() + 1);
   return b.finish(ele);

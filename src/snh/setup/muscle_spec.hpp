@@ -23,13 +23,14 @@ struct MaterialChoice {
 };
 
 /// Where a region is: the cells whose rest centre lies in an axis-aligned box, inside a closed surface file,
-/// or inside one of the flesh model's meshes (by name).
+/// or inside one of the flesh model's meshes (by name); or the cells a mesh file tags so.
 struct RegionSpec {
-  enum class Kind { box, mesh, model_mesh };
+  enum class Kind { box, mesh, model_mesh, tags };
   Kind kind = Kind::box;
   Eigen::AlignedBox3d box;
   std::filesystem::path file;  ///< mesh: .obj, .off, .ply or .stl (relative paths resolved against the scene file)
   std::string model_mesh;      ///< model_mesh: a mesh node's name in the flesh's model
+  std::vector<long long> tags;  ///< tags: the mesh file's region tags (MeshFile::cell_tags) of its cells
 };
 
 /// A point of the rest pose: coordinates, a joint's rest position, or coordinates carried by a joint.
@@ -58,13 +59,16 @@ struct MuscleSpec {
   std::optional<MaterialChoice> material;   ///< unset: the scene's material
   std::string bone;                         ///< a tissue bound whole to this joint (kinematic); empty: none
   // Fibres (muscles):
-  enum class Field { constant, harmonic };
+  enum class Field { constant, harmonic, file };
   Field field = Field::constant;
   Eigen::Vector3d direction = Eigen::Vector3d::UnitX();  ///< constant: the fibres' direction (unit)
   MusclePoint origin, insertion;            ///< harmonic: the field runs from 0 at the origin to 1 at the insertion
   /// harmonic: the ends are the region's vertices within this of the nearest one to each point (unset: a
   /// tenth of the distance from origin to insertion)
   std::optional<double> reach;
+  /// file: a text file of one direction "ax ay az" per cell of the volume, in cell order (relative paths
+  /// resolved against the scene file); the region's cells take theirs
+  std::filesystem::path fibre_file;
   FibreModel fibre_model = FibreModel::signed_arap;
   std::optional<double> fibre_stiffness;    ///< unset: the region's shear modulus mu
   double contraction = 0.25;                ///< γ in [0, 1): the fibres shorten to 1 − γ a

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -88,10 +90,29 @@ std::vector<int> cells_inside(const Eigen::Matrix3Xd& centres, const Eigen::Matr
   return out;
 }
 
-/// The cells of region `r` (entry `where`).
-std::vector<int> region_cells(const RegionSpec& r, const Eigen::Matrix3Xd& centres, const Flesh* flesh, const std::string& where) {
+/// The cells of region `r` (entry `where`); `tags`: the mesh file's cell tags (empty: none).
+std::vector<int> region_cells(const RegionSpec& r, const Eigen::Matrix3Xd& centres, const Flesh* flesh, const std::vector<long long>& tags,
+                              const std::string& where) {
   std::vector<int> out;
   switch (r.kind) {
+    case RegionSpec::Kind::tags: {
+      if (tags.empty())
+        throw SceneError(fmt::format("{}.region.tags: the mesh has no cell tags (MEDIT references, Gmsh physical or entity tags, "
+                                     "TetGen region attributes)",
+                                     where));
+      for (std::size_t c = 0; c < tags.size(); ++c)
+        if (std::find(r.tags.begin(), r.tags.end(), tags[c]) != r.tags.end()) out.push_back(static_cast<int>(c));
+      if (out.empty()) {
+        std::vector<long long> have(tags.begin(), tags.end());
+        std::sort(have.begin(), have.end());
+        have.erase(std::unique(have.begin(), have.end()), have.end());
+        std::string list;
+        for (std::size_t i = 0; i < have.size() && i < 12; ++i) list += fmt::format("{}{}", i ? ", " : "", have[i]);
+        if (have.size() > 12) list += ", …";
+        throw SceneError(fmt::format("{}.region.tags: no cell has these tags (the mesh's cells have: {})", where, list));
+      }
+      return out;
+    }
     case RegionSpec::Kind::box:
       for (Eigen::Index c = 0; c < centres.cols(); ++c)
         if (r.box.contains(centres.col(c))) out.push_back(static_cast<int>(c));
@@ -123,6 +144,35 @@ std::vector<int> region_cells(const RegionSpec& r, const Eigen::Matrix3Xd& centr
       return cells_inside(centres, m.vertices, m.triangles(Eigen::all, tris));
     }
   }
+  return out;
+}
+
+/// The fibres of a file: one line "ax ay az" per cell of `mesh` ('#' starts a comment; blank lines are
+/// skipped). Throws SceneError naming the file and line: a line that is not three finite numbers, a zero
+/// direction, another count of lines than of cells.
+std::vector<Eigen::Vector3d> fibres_of_file(const std::filesystem::path& file, const VolumeMesh& mesh, const std::string& where) {
+  if (const std::string problem = input_file_problem(file, "fibre file"); !problem.empty())
+    throw SceneError(fmt::format("{}: fibre.file: {}", where, problem));
+  std::ifstream in(file);
+  if (!in) throw SceneError(fmt::format("{}: fibre.file: {}: cannot be opened", where, file.string()));
+  std::vector<Eigen::Vector3d> out;
+  std::string text;
+  for (int line = 1; std::getline(in, text); ++line) {
+    if (const auto hash = text.find('#'); hash != std::string::npos) text.resize(hash);
+    std::istringstream s(text);
+    Eigen::Vector3d a;
+    std::string rest;
+    if (!(s >> std::ws) || s.eof()) continue;  // blank
+    if (!(s >> a[0] >> a[1] >> a[2]) || (s >> rest) || !a.allFinite())
+      throw SceneError(fmt::format("{}:{}: expected three finite numbers (a fibre direction), got \"{}\"", file.string(), line, text));
+    if (!(a.norm() > 0.0)) throw SceneError(fmt::format("{}:{}: a fibre direction must not be zero", file.string(), line));
+    if (static_cast<Eigen::Index>(out.size()) == mesh.cell_count())
+      throw SceneError(fmt::format("{}:{}: more directions than the volume's {} cells", file.string(), line, mesh.cell_count()));
+    out.push_back(a.normalized());
+  }
+  if (static_cast<Eigen::Index>(out.size()) != mesh.cell_count())
+    throw SceneError(fmt::format("{}: {} directions for the volume's {} cells (one line per cell, in cell order)", file.string(), out.size(),
+                                 mesh.cell_count()));
   return out;
 }
 
@@ -329,7 +379,7 @@ std::shared_ptr<const BuiltMuscles> build_muscles(const Scene& s, const SceneBod
       material_of_entry[i] = static_cast<int>(out->materials.size());
       out->materials.push_back(make_material(m.material->name, m.material->params, m.material->reparametrize));
     }
-    for (int c : region_cells(m.region, centres, flesh, where[i])) out->region_of_cell[static_cast<std::size_t>(c)] = static_cast<int>(i);
+    for (int c : region_cells(m.region, centres, flesh, body.cell_tags, where[i])) out->region_of_cell[static_cast<std::size_t>(c)] = static_cast<int>(i);
   }
   std::vector<std::vector<int>> cells_of(s.muscles.size());
   for (Eigen::Index c = 0; c < mesh.cell_count(); ++c)
@@ -389,6 +439,13 @@ std::shared_ptr<const BuiltMuscles> build_muscles(const Scene& s, const SceneBod
       out->fibres.push_back({m.direction, energy, {}});
       for (int c : cells) out->fibre_of_cell[static_cast<std::size_t>(c)] = muscle.first_fibre;
       line += fmt::format(", fibres along ({:.3g}, {:.3g}, {:.3g}) (", m.direction[0], m.direction[1], m.direction[2]);
+    } else if (m.field == MuscleSpec::Field::file) {
+      const std::vector<Eigen::Vector3d> all = fibres_of_file(m.fibre_file, mesh, where[i]);
+      for (int c : cells) {
+        out->fibre_of_cell[static_cast<std::size_t>(c)] = static_cast<int>(out->fibres.size());
+        out->fibres.push_back({all[static_cast<std::size_t>(c)], energy, {}});
+      }
+      line += fmt::format(", fibres of {} (", m.fibre_file.string());
     } else {
       const Eigen::Vector3d o = rest_point(m.origin, flesh, where[i] + ": fibre.origin");
       const Eigen::Vector3d n = rest_point(m.insertion, flesh, where[i] + ": fibre.insertion");

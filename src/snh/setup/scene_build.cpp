@@ -151,6 +151,7 @@ std::shared_ptr<const SceneBody> scene_body(const Scene& s) {
     MeshFile f = read_mesh(m.file);
     out->mesh = std::move(f.mesh);
     out->reoriented = f.reoriented;
+    out->cell_tags = std::move(f.cell_tags);
     out->digest = file_digest(m.file);
     return out;
   }

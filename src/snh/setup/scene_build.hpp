@@ -26,6 +26,7 @@ struct SceneBody {
   int reoriented = 0;                  ///< inverted cells of the file turned round
   std::string digest;                  ///< the file's contents (checksum.hpp): the mesh's or the model's; empty for a box
   std::shared_ptr<const Flesh> flesh;  ///< a flesh scene's model, volume, embedding and bones
+  std::vector<long long> cell_tags;    ///< a mesh file's region tag per cell (MeshFile::cell_tags); empty: none
 };
 /// The scene's body: its mesh file read, its box made and scaled to its bounds, or its flesh built. Throws
 /// MeshError (a bad mesh file), RigError (a bad model) or std::invalid_argument, one line each.

@@ -35,12 +35,21 @@ MusclePoint parse_point(Keys& k, const std::string& key, bool flesh) {
 
 RegionSpec parse_region(Keys& k, const std::filesystem::path& source, bool flesh) {
   const json* j = k.get("region");
-  if (!j) k.fail("needs region: {\"min\": [x, y, z], \"max\": [x, y, z]}, {\"mesh\": FILE} or {\"model_mesh\": NAME}");
+  if (!j) k.fail("needs region: {\"min\": [x, y, z], \"max\": [x, y, z]}, {\"mesh\": FILE}, {\"model_mesh\": NAME} or {\"tags\": [N, ...]}");
   Keys r(*j, k.path("region"), k.file());
   RegionSpec s;
-  const bool box = r.has("min") || r.has("max"), mesh = r.has("mesh"), model = r.has("model_mesh");
-  if (int(box) + int(mesh) + int(model) != 1) r.fail("give min and max, a mesh file, or a model_mesh: one of them");
-  if (box) {
+  const bool box = r.has("min") || r.has("max"), mesh = r.has("mesh"), model = r.has("model_mesh"), tags = r.has("tags");
+  if (int(box) + int(mesh) + int(model) + int(tags) != 1) r.fail("give min and max, a mesh file, a model_mesh or tags: one of them");
+  if (tags) {
+    const json* t = r.get("tags");
+    if (!t->is_array() || t->empty()) r.fail("expected an array of the mesh file's cell tags (integers), got " + t->dump(), "tags");
+    for (const json& v : *t) {
+      if (!v.is_number_integer()) r.fail("expected integer tags, got " + v.dump(), "tags");
+      s.tags.push_back(v.get<long long>());
+    }
+    if (flesh) r.fail("a flesh volume has no cell tags (they come from a mesh file)", "tags");
+    s.kind = RegionSpec::Kind::tags;
+  } else if (box) {
     const auto lo = r.vec3("min"), hi = r.vec3("max");
     if (!lo || !hi) r.fail("min and max go together");
     if (!((lo->array() < hi->array()).all())) r.fail("min must be below max on every axis");
@@ -120,17 +129,26 @@ MuscleSpec parse_entry(const json& j, const std::string& path, const std::string
     return m;
   }
   const json* fibre = k.get("fibre");
-  if (!fibre) k.fail("needs fibre: [x, y, z] or {\"origin\": POINT, \"insertion\": POINT}");
+  if (!fibre) k.fail("needs fibre: [x, y, z], {\"origin\": POINT, \"insertion\": POINT} or {\"file\": FILE}");
   if (fibre->is_array()) {
     const auto d = k.vec3("fibre");
     if (!(d->norm() > 0.0)) k.fail("a fibre direction must not be zero", "fibre");
     m.direction = d->normalized();
   } else {
     Keys f(*fibre, k.path("fibre"), file);
-    m.field = MuscleSpec::Field::harmonic;
-    m.origin = parse_point(f, "origin", flesh);
-    m.insertion = parse_point(f, "insertion", flesh);
-    if (f.has("reach")) m.reach = f.positive("reach", 1.0);
+    if (f.has("file")) {
+      const json* name = f.get("file");
+      if (!name->is_string() || name->get<std::string>().empty()) f.fail("expected a file name, got " + name->dump(), "file");
+      if (f.has("origin") || f.has("insertion") || f.has("reach")) f.fail("give a file, or an origin and an insertion: not both");
+      const std::filesystem::path p = name->get<std::string>();
+      m.fibre_file = p.is_absolute() ? p : source.parent_path() / p;
+      m.field = MuscleSpec::Field::file;
+    } else {
+      m.field = MuscleSpec::Field::harmonic;
+      m.origin = parse_point(f, "origin", flesh);
+      m.insertion = parse_point(f, "insertion", flesh);
+      if (f.has("reach")) m.reach = f.positive("reach", 1.0);
+    }
     f.finish();
   }
   m.fibre_model = k.choice("fibre_model", "signed_arap", {"signed_arap", "quadratic"}) == "quadratic" ? FibreModel::quadratic
