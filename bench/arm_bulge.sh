@@ -70,7 +70,7 @@ def profile(rest, now):
             rings[key] = max(rings.get(key, -1.0), p[1])
     xs = sorted(rings)
     return xs, [1000 * rings[x] for x in xs]
-fig, ax = plt.subplots(figsize=(7, 3.2), dpi=110)
+fig, (ax, cut) = plt.subplots(1, 2, figsize=(10, 3.4), dpi=110, gridspec_kw={"width_ratios": [1.7, 1]})
 active_frames = sorted(glob.glob(sys.argv[1] + "/surface/[0-9][0-9][0-9].obj"))
 passive_frames = sorted(glob.glob(sys.argv[2] + "/surface/[0-9][0-9][0-9].obj"))
 rest = read(active_frames[0])
@@ -83,6 +83,19 @@ ax.set_xlabel("distance from the shoulder along the upper arm (cm)")
 ax.set_ylabel("front of the skin, y (mm)")
 ax.legend(fontsize=8, loc="lower center")
 ax.set_title("scenes/arm_flex.json: the upper arm's front at the last frame", fontsize=9)
+# The cross-section at the biceps' middle: the skin's ring nearest x = 0.15 at rest, in the plane across the arm.
+ring_x = min({round(r[0], 6) for r in rest}, key=lambda x: abs(x - 0.15))
+for label, path, style in (("rest", active_frames[0], ":"), ("passive", passive_frames[-1], "--"), ("active", active_frames[-1], "-")):
+    now = read(path)
+    pts = [(p[2], p[1]) for r, p in zip(rest, now) if round(r[0], 6) == ring_x]
+    pts.sort(key=lambda q: math.atan2(q[1], q[0]))
+    pts.append(pts[0])
+    cut.plot([1000 * q[0] for q in pts], [1000 * q[1] for q in pts], style, label=label)
+cut.set_aspect("equal")
+cut.set_xlabel("z (mm)")
+cut.set_ylabel("y (mm), the front up")
+cut.set_title("the skin's ring at x = %.1f cm" % (100 * ring_x), fontsize=9)
+cut.legend(fontsize=8, loc="lower center")
 fig.tight_layout()
 fig.savefig(sys.argv[3])
 print("plot: " + sys.argv[3])
