@@ -16,6 +16,8 @@
 
 #include "limb_model.hpp"
 #include "scene_error.hpp"
+#include "snh/embed/winding_number.hpp"
+#include "snh/mesh/box.hpp"
 #include "snh/setup/muscles.hpp"
 #include "snh/setup/scene_build.hpp"
 #include "snh/setup/scene_run.hpp"
@@ -295,6 +297,57 @@ TEST(HarmonicFibres, RunAroundABentRegionAsItsExactField) {
   for (const Eigen::Vector3d& a : harmonic_fibres(box, all, lo, hi, Eigen::Vector3d::UnitX())) EXPECT_LT((a - Eigen::Vector3d::UnitZ()).norm(), 1e-9);
   EXPECT_THROW((void)harmonic_fibres(box, all, lo, lo, Eigen::Vector3d::UnitX()), std::invalid_argument);
   EXPECT_THROW((void)harmonic_fibres(box, all, {}, hi, Eigen::Vector3d::UnitX()), std::invalid_argument);
+}
+
+/// A closed UV sphere of radius r about c (n rings, m segments), outward.
+void uv_sphere(double r, const Eigen::Vector3d& c, int n, int m, Eigen::Matrix3Xd& V, Eigen::Matrix3Xi& F) {
+  V.resize(3, 2 + (n - 1) * m);
+  V.col(0) = c + Eigen::Vector3d(0, 0, r);
+  for (int i = 1; i < n; ++i)
+    for (int k = 0; k < m; ++k) {
+      const double t = M_PI * i / n, a = 2 * M_PI * k / m;
+      V.col(1 + (i - 1) * m + k) = c + r * Eigen::Vector3d(std::sin(t) * std::cos(a), std::sin(t) * std::sin(a), std::cos(t));
+    }
+  V.col(V.cols() - 1) = c - Eigen::Vector3d(0, 0, r);
+  const auto at = [&](int i, int k) { return 1 + (i - 1) * m + (k % m); };
+  std::vector<Eigen::Vector3i> tris;
+  for (int k = 0; k < m; ++k) {
+    tris.emplace_back(0, at(1, k), at(1, k + 1));
+    tris.emplace_back(int(V.cols()) - 1, at(n - 1, k + 1), at(n - 1, k));
+  }
+  for (int i = 1; i < n - 1; ++i)
+    for (int k = 0; k < m; ++k) {
+      tris.emplace_back(at(i, k), at(i + 1, k), at(i + 1, k + 1));
+      tris.emplace_back(at(i, k), at(i + 1, k + 1), at(i, k + 1));
+    }
+  F.resize(3, static_cast<Eigen::Index>(tris.size()));
+  for (std::size_t t = 0; t < tris.size(); ++t) F.col(static_cast<Eigen::Index>(t)) = tris[t];
+}
+
+TEST(CellsInside, TheGroupedWindingNumbersAreEachCellsOwn) {
+  // Two closed spheres (one inside out) against hexes and tets, and an open one (a cap removed): the cells
+  // found are those whose own winding number has magnitude ½ or more.
+  Eigen::Matrix3Xd A, B;
+  Eigen::Matrix3Xi FA, FB;
+  uv_sphere(0.55, Eigen::Vector3d(0.1, -0.05, 0.02), 16, 24, A, FA);
+  uv_sphere(0.3, Eigen::Vector3d(-0.5, 0.4, 0.3), 10, 12, B, FB);
+  for (Eigen::Index t = 0; t < FB.cols(); ++t) std::swap(FB(1, t), FB(2, t));  // inward
+  Eigen::Matrix3Xd V(3, A.cols() + B.cols());
+  V << A, B;
+  Eigen::Matrix3Xi F(3, FA.cols() + FB.cols());
+  F << FA, (FB.array() + int(A.cols())).matrix();
+  const Eigen::Matrix3Xi open = F.rightCols(F.cols() - 24);  // the first sphere's top cap gone
+  for (const VolumeMesh& mesh : {box_hexes(14), box_tets(9)})
+    for (const Eigen::Matrix3Xi* tris : {static_cast<const Eigen::Matrix3Xi*>(&F), &open}) {
+      std::vector<int> brute;
+      for (Eigen::Index c = 0; c < mesh.cell_count(); ++c) {
+        Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+        for (Eigen::Index k = 0; k < mesh.cells.rows(); ++k) centre += mesh.vertices.col(mesh.cells(k, c)) / double(mesh.cells.rows());
+        if (std::abs(winding_number(V, *tris, centre)) >= 0.5) brute.push_back(static_cast<int>(c));
+      }
+      EXPECT_GT(brute.size(), 20u);
+      EXPECT_EQ(cells_inside(mesh, V, *tris), brute) << (tris == &F ? "closed" : "open") << ", " << mesh.cell_count() << " cells";
+    }
 }
 
 class MuscleLimb : public ::testing::Test {

@@ -11,10 +11,12 @@
 #include <Eigen/SparseCholesky>
 #include <fmt/format.h>
 
+#include "snh/contact/box_tree.hpp"
 #include "snh/embed/winding_number.hpp"
 #include "snh/fem/rest_state.hpp"
 #include "snh/io/input_file.hpp"
 #include "snh/io/surface_read.hpp"
+#include "snh/mesh/surface.hpp"
 #include "snh/setup/flesh.hpp"
 #include "snh/setup/scene_build.hpp"
 
@@ -77,21 +79,99 @@ Eigen::Matrix3Xd cell_centres(const VolumeMesh& mesh) {
   return c;
 }
 
-/// The cells whose centre a closed surface holds (winding number of magnitude ≥ ½: either orientation).
-std::vector<int> cells_inside(const Eigen::Matrix3Xd& centres, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F) {
+/// Every edge in exactly two triangles.
+bool closed_surface(const Eigen::Matrix3Xi& F) {
+  const EdgeCounts e = edge_counts(F);
+  return e.open == 0 && e.non_manifold == 0;
+}
+
+/// The root of v's set (union-find with path halving).
+int root_of(std::vector<int>& parent, int v) {
+  while (parent[static_cast<std::size_t>(v)] != v) v = parent[static_cast<std::size_t>(v)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(v)])];
+  return v;
+}
+
+/// The cells of `mesh` whose centre the surface (V, F) holds: winding number of magnitude ≥ ½ (either
+/// orientation; holes tolerated). On a closed surface (`closed`: every edge in two triangles) the winding
+/// number is constant off the surface, so it is asked once per group of cells that no triangle's box
+/// touches and that share vertices (convex cells: the path between two centres through a shared vertex
+/// stays in the two cells), and at each cell a triangle's box touches; on an open one at every cell.
+std::vector<int> cells_inside_at(const VolumeMesh& mesh, const Eigen::Matrix3Xd& centres, const Eigen::Matrix3Xd& V,
+                                 const Eigen::Matrix3Xi& F, bool closed) {
   std::vector<int> out;
   if (F.cols() == 0) return out;
+  check_triangles(V, F);  // below, winding_number cannot throw
   const Eigen::Vector3d lo = V.rowwise().minCoeff(), hi = V.rowwise().maxCoeff();
-  for (Eigen::Index c = 0; c < centres.cols(); ++c) {
-    const Eigen::Vector3d p = centres.col(c);
-    if ((p.array() < lo.array()).any() || (p.array() > hi.array()).any()) continue;
-    if (std::abs(winding_number(V, F, p)) >= 0.5) out.push_back(static_cast<int>(c));
+  const auto C = static_cast<std::size_t>(mesh.cell_count());
+  const auto in_box = [&](const Eigen::Vector3d& p) { return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all(); };
+  std::vector<double> winding(C, 0.0);
+  std::vector<int> asked;  // the cells whose winding number is computed
+  std::vector<int> parent(C);
+  std::vector<char> touched(C, 0), group_outside(C, 0);
+  if (!closed) {
+    for (std::size_t c = 0; c < C; ++c)
+      if (in_box(centres.col(static_cast<Eigen::Index>(c)))) asked.push_back(static_cast<int>(c));
+  } else {
+    Eigen::Matrix3Xd tlo(3, F.cols()), thi(3, F.cols());
+    for (Eigen::Index t = 0; t < F.cols(); ++t) {
+      tlo.col(t) = V(Eigen::all, F.col(t)).rowwise().minCoeff();
+      thi.col(t) = V(Eigen::all, F.col(t)).rowwise().maxCoeff();
+    }
+    const contact::BoxTree tree(tlo, thi);
+    std::vector<int> at_vertex(static_cast<std::size_t>(mesh.vertex_count()), -1);
+    std::vector<char> outside(C, 0);
+    for (std::size_t c = 0; c < C; ++c) {
+      parent[c] = static_cast<int>(c);
+      const auto nodes = mesh.vertices(Eigen::all, mesh.cells.col(static_cast<Eigen::Index>(c)));
+      const Eigen::Vector3d clo = nodes.rowwise().minCoeff(), chi = nodes.rowwise().maxCoeff();
+      outside[c] = (chi.array() < lo.array()).any() || (clo.array() > hi.array()).any();
+      if (outside[c]) continue;
+      for (int t : tree.near(clo, chi))  // the tree's answer is a superset: each triangle's own box decides
+        if ((tlo.col(t).array() <= chi.array()).all() && (thi.col(t).array() >= clo.array()).all()) {
+          touched[c] = 1;
+          break;
+        }
+    }
+    for (std::size_t c = 0; c < C; ++c) {
+      if (touched[c]) {
+        asked.push_back(static_cast<int>(c));
+        continue;
+      }
+      for (Eigen::Index k = 0; k < mesh.cells.rows(); ++k) {
+        int& first = at_vertex[static_cast<std::size_t>(mesh.cells(k, static_cast<Eigen::Index>(c)))];
+        if (first < 0) first = static_cast<int>(c);
+        else parent[static_cast<std::size_t>(root_of(parent, static_cast<int>(c)))] = root_of(parent, first);
+      }
+    }
+    // Per group: outside the surface's box if any of its cells is, else the winding number at one of them.
+    std::vector<char> group_asked(C, 0);
+    for (std::size_t c = 0; c < C; ++c)
+      if (!touched[c] && outside[c]) group_outside[static_cast<std::size_t>(root_of(parent, static_cast<int>(c)))] = 1;
+    for (std::size_t c = 0; c < C; ++c) {
+      const auto r = static_cast<std::size_t>(root_of(parent, static_cast<int>(c)));
+      if (!touched[c] && !group_outside[r] && !group_asked[r]) group_asked[r] = 1, asked.push_back(static_cast<int>(r));
+    }
+  }
+  const auto n = static_cast<long>(asked.size());
+#pragma omp parallel for schedule(dynamic, 16)
+  for (long i = 0; i < n; ++i) {
+    const auto c = static_cast<std::size_t>(asked[static_cast<std::size_t>(i)]);
+    const Eigen::Vector3d p = centres.col(static_cast<Eigen::Index>(c));
+    if (in_box(p)) winding[c] = winding_number(V, F, p);
+  }
+  for (std::size_t c = 0; c < C; ++c) {
+    double w = winding[c];
+    if (closed && !touched[c]) {
+      const auto r = static_cast<std::size_t>(root_of(parent, static_cast<int>(c)));
+      w = group_outside[r] ? 0.0 : winding[r];
+    }
+    if (std::abs(w) >= 0.5) out.push_back(static_cast<int>(c));
   }
   return out;
 }
 
 /// The cells of region `r` (entry `where`); `tags`: the mesh file's cell tags (empty: none).
-std::vector<int> region_cells(const RegionSpec& r, const Eigen::Matrix3Xd& centres, const Flesh* flesh, const std::vector<long long>& tags,
+std::vector<int> region_cells(const RegionSpec& r, const VolumeMesh& mesh, const Eigen::Matrix3Xd& centres, const Flesh* flesh, const std::vector<long long>& tags,
                               const std::string& where) {
   std::vector<int> out;
   switch (r.kind) {
@@ -128,7 +208,7 @@ std::vector<int> region_cells(const RegionSpec& r, const Eigen::Matrix3Xd& centr
         throw SceneError(fmt::format("{}.region.mesh: {}", where, e.what()));
       }
       if (s.triangles.cols() == 0) throw SceneError(fmt::format("{}.region.mesh: {} has no triangles", where, r.file.string()));
-      return cells_inside(centres, s.vertices, s.triangles);
+      return cells_inside_at(mesh, centres, s.vertices, s.triangles, closed_surface(s.triangles));
     }
     case RegionSpec::Kind::model_mesh: {
       const RiggedModel& m = flesh->model;
@@ -141,7 +221,11 @@ std::vector<int> region_cells(const RegionSpec& r, const Eigen::Matrix3Xd& centr
       std::vector<Eigen::Index> tris;
       for (Eigen::Index t = 0; t < m.triangles.cols(); ++t)
         if (m.triangles(0, t) >= part->first_vertex && m.triangles(0, t) < part->first_vertex + part->vertices) tris.push_back(t);
-      return cells_inside(centres, m.vertices, m.triangles(Eigen::all, tris));
+      // Closed as welded (texture seams split the model's own vertices).
+      Eigen::Matrix3Xi welded(3, static_cast<Eigen::Index>(tris.size()));
+      for (std::size_t t = 0; t < tris.size(); ++t)
+        for (int k = 0; k < 3; ++k) welded(k, static_cast<Eigen::Index>(t)) = m.weld[static_cast<std::size_t>(m.triangles(k, tris[t]))];
+      return cells_inside_at(mesh, centres, m.surface_vertices, welded, closed_surface(welded));
     }
   }
   return out;
@@ -197,6 +281,10 @@ std::function<double(double)> line_activation(const LineOfAction& l, const std::
 }
 
 }  // namespace
+
+std::vector<int> cells_inside(const VolumeMesh& mesh, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F) {
+  return cells_inside_at(mesh, cell_centres(mesh), V, F, closed_surface(F));
+}
 
 std::vector<int> attachment_vertices(const VolumeMesh& mesh, const std::vector<int>& cells, const Eigen::Vector3d& point,
                                      double reach) {
@@ -379,7 +467,7 @@ std::shared_ptr<const BuiltMuscles> build_muscles(const Scene& s, const SceneBod
       material_of_entry[i] = static_cast<int>(out->materials.size());
       out->materials.push_back(make_material(m.material->name, m.material->params, m.material->reparametrize));
     }
-    for (int c : region_cells(m.region, centres, flesh, body.cell_tags, where[i])) out->region_of_cell[static_cast<std::size_t>(c)] = static_cast<int>(i);
+    for (int c : region_cells(m.region, mesh, centres, flesh, body.cell_tags, where[i])) out->region_of_cell[static_cast<std::size_t>(c)] = static_cast<int>(i);
   }
   std::vector<std::vector<int>> cells_of(s.muscles.size());
   for (Eigen::Index c = 0; c < mesh.cell_count(); ++c)

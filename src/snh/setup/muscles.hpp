@@ -55,6 +55,13 @@ struct BuiltMuscles {
 /// holds no cell, a joint or model mesh the model lacks, a harmonic field whose ends cannot be told apart.
 [[nodiscard]] std::shared_ptr<const BuiltMuscles> build_muscles(const Scene& scene, const SceneBody& body);
 
+/// The cells whose rest centre (the mean of their vertices) the surface (V, F) holds: a generalised winding
+/// number of magnitude ½ or more. On a closed surface it is asked once per group of vertex-sharing cells
+/// that no triangle's box touches (it is constant off the surface) and at each cell one touches; on an open
+/// one at every cell in the surface's box. Throws std::invalid_argument for a non-finite vertex or an index
+/// out of range.
+[[nodiscard]] std::vector<int> cells_inside(const VolumeMesh& mesh, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& F);
+
 /// The vertices of `cells` where a muscle attaches at `point`: those within `reach` of the distance from the
 /// point to the nearest of them (docs/muscles.md).
 [[nodiscard]] std::vector<int> attachment_vertices(const VolumeMesh& mesh, const std::vector<int>& cells, const Eigen::Vector3d& point,
