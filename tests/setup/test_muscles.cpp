@@ -399,6 +399,15 @@ TEST_F(MuscleLimb, ALineOfActionFollowsTheJoints) {
   ASSERT_EQ(m["regions"].size(), 1u);
   EXPECT_EQ(m["regions"][0]["activation"].size(), 3u);
   EXPECT_EQ(m["regions"][0]["fibre_directions"].size(), m["regions"][0]["cells"].size());
+  // A run that stops at its first frame (one Newton iteration cannot reach the bent elbow) keeps muscles.json,
+  // every frame's activation in it.
+  json stop = j;
+  stop["solver"] = {{"max_iterations", 1}};
+  stop["output"]["dir"] = (dir_ / "stop").string();
+  std::ostringstream stopped;
+  EXPECT_FALSE(run_scene(parse_scene(stop, dir_ / "s.json"), stopped).all_converged) << stopped.str();
+  std::ifstream kept(dir_ / "stop" / "muscles.json");
+  EXPECT_EQ(json::parse(kept)["regions"][0]["activation"].size(), 3u);
   // A run without muscles into the same directory leaves no muscles.json of the last one.
   std::ostringstream again;
   EXPECT_TRUE(run_scene(parse_scene(scene(), dir_ / "s.json"), again).all_converged) << again.str();

@@ -137,8 +137,8 @@ std::string inverted_note(const StepRecord& f) {
                      f.converged ? " (warning: converged with flesh turned inside out)" : "");
 }
 
-/// A scene with muscles: each frame's line gives their activation; muscles.json (muscles_json) is written at
-/// the end, for the frames the run recorded, and stats.json names it.
+/// A scene with muscles: each frame's line gives their activation; muscles.json (muscles_json, every frame's
+/// time) is written with the initial state, and stats.json names it.
 void add_muscle_output(const BuiltScene& b, RunPlan& plan) {
   const std::shared_ptr<const BuiltMuscles> m = b.muscles;
   if (!m->muscles.empty()) {
@@ -150,13 +150,20 @@ void add_muscle_output(const BuiltScene& b, RunPlan& plan) {
       return s;
     };
   }
-  const auto base_finish = plan.finish;
-  plan.finish = [&b, m, out = plan.out, base_finish](const RunResult& result, nlohmann::json& stats) {
-    if (base_finish) base_finish(result, stats);
-    std::vector<double> times;
-    for (const StepRecord& r : result.records) times.push_back(r.time);
+  // Written with the initial state (activation depends on the time alone: every frame's is known), so that a
+  // run killed on the way keeps it; a resumed run finds it there.
+  std::vector<double> times;
+  for (int i = 0; i <= plan.frames; ++i) times.push_back(i * plan.frame_duration);
+  const auto base_fill = plan.fill;
+  plan.fill = [&b, m, times, out = plan.out, base_fill](StepRecord& r, const StepReport* rep) {
+    if (base_fill) base_fill(r, rep);
+    if (rep) return;
     const nlohmann::json j = muscles_json(*m, b.scene, b.body->mesh, times);
     write_atomically(out / "muscles.json", [&](std::ostream& o) { o << j.dump() << '\n'; });
+  };
+  const auto base_finish = plan.finish;
+  plan.finish = [base_finish](const RunResult& result, nlohmann::json& stats) {
+    if (base_finish) base_finish(result, stats);
     stats["muscles_file"] = "muscles.json";
   };
 }
