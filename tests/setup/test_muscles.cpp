@@ -386,7 +386,10 @@ TEST_F(MuscleLimb, ALineOfActionFollowsTheJoints) {
   EXPECT_NEAR(build_scene(parse_scene(j, dir_ / "s.json")).muscles->activation(1.0)[0], 0.8, 0.0);
   // A joint the model lacks is named with the joints it has.
   j["muscles"][0]["activation"]["line_of_action"]["to"] = "knee";
-  EXPECT_NE(error_of(j).find("no joint named \"knee\" in the model (its joints: shoulder, elbow, tip)"), std::string::npos) << error_of(j);
+  EXPECT_NE(error_of(j).find("muscles[0] \"flexor\": activation.line_of_action.to: the model " + (dir_ / "limb.gltf").string() +
+                            " has no joint \"knee\" (its joints: shoulder, elbow, tip)"),
+            std::string::npos)
+      << error_of(j);
   // The run: the muscle's line says its activation, muscles.json holds its fibres and activation per frame.
   j["muscles"][0]["activation"]["line_of_action"]["to"] = json{{"joint", "elbow"}, {"point", {1.5, 0.2, 0}}};
   std::ostringstream log;

@@ -24,9 +24,7 @@
 #include "snh/solve/memory_estimate.hpp"
 
 namespace snh {
-namespace {
 
-/// The joint of this name, or RigError naming the model and a few of its joints.
 int joint_named(const RiggedModel& model, const std::string& name, const std::string& where) {
   const int j = model.skeleton.find(name);
   if (j >= 0) return j;
@@ -35,6 +33,8 @@ int joint_named(const RiggedModel& model, const std::string& name, const std::st
   if (model.skeleton.size() > 6) known += ", ...";
   throw RigError(fmt::format("{}: the model {} has no joint \"{}\" (its joints: {})", where, model.source.string(), name, known));
 }
+
+namespace {
 
 /// A lattice per solid on one grid, their cells one after another in the volume.
 struct SolidLattices {

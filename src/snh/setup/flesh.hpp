@@ -191,6 +191,9 @@ struct EmbeddedSurface {
 
 /// The joints' world transforms at time t of the clip.
 [[nodiscard]] std::vector<Eigen::Affine3d> joint_world(const Flesh& flesh, double t);
+/// The index of the joint `name` in the model's skeleton. Throws RigError (one line: `where`, the model and
+/// a few of its joints) when it has none of that name.
+[[nodiscard]] int joint_named(const RiggedModel& model, const std::string& name, const std::string& where);
 /// The render surface (model order, 3 by #v) embedded in the volume at positions x (3 #V).
 [[nodiscard]] Eigen::Matrix3Xd flesh_surface(const Flesh& flesh, const Eigen::VectorXd& x);
 /// The render surface's unit vertex normals at these positions (model order, 3 by #v): rig/normals.hpp.

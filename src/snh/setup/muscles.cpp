@@ -15,6 +15,7 @@
 #include "snh/embed/winding_number.hpp"
 #include "snh/fem/rest_state.hpp"
 #include "snh/io/input_file.hpp"
+#include "snh/math/union_find.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/mesh/surface.hpp"
 #include "snh/setup/flesh.hpp"
@@ -40,21 +41,11 @@ class JointCarried final : public KinematicProvider {
   Eigen::Matrix3Xd rest_;
 };
 
-/// The joint's index in the flesh's skeleton; throws SceneError naming `where` and listing a few joints.
-int find_joint(const Flesh& flesh, const std::string& name, const std::string& where) {
-  const Skeleton& s = flesh.model.skeleton;
-  const int j = s.find(name);
-  if (j >= 0) return j;
-  std::string list;
-  for (int i = 0; i < s.size() && i < 8; ++i) list += fmt::format("{}{}", i ? ", " : "", s.joints[static_cast<std::size_t>(i)].name);
-  if (s.size() > 8) list += ", …";
-  throw SceneError(fmt::format("{}: no joint named \"{}\" in the model (its joints: {})", where, name, list));
-}
-
-/// A point's rest position: given, or its joint's position at the bind pose.
+/// A point's rest position: given, or its joint's position at the bind pose. Throws RigError for a joint the
+/// model lacks (build_scene makes it a SceneError).
 Eigen::Vector3d rest_point(const MusclePoint& p, const Flesh* flesh, const std::string& where) {
   if (p.point) return *p.point;
-  const int j = find_joint(*flesh, p.joint, where);
+  const int j = joint_named(flesh->model, p.joint, where);
   return flesh->bind_world[static_cast<std::size_t>(j)].translation();
 }
 
@@ -85,12 +76,6 @@ bool closed_surface(const Eigen::Matrix3Xi& F) {
   return e.open == 0 && e.non_manifold == 0;
 }
 
-/// The root of v's set (union-find with path halving).
-int root_of(std::vector<int>& parent, int v) {
-  while (parent[static_cast<std::size_t>(v)] != v) v = parent[static_cast<std::size_t>(v)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(v)])];
-  return v;
-}
-
 /// The cells of `mesh` whose centre the surface (V, F) holds: winding number of magnitude ≥ ½ (either
 /// orientation; holes tolerated). On a closed surface (`closed`: every edge in two triangles) the winding
 /// number is constant off the surface, so it is asked once per group of cells that no triangle's box
@@ -106,7 +91,7 @@ std::vector<int> cells_inside_at(const VolumeMesh& mesh, const Eigen::Matrix3Xd&
   const auto in_box = [&](const Eigen::Vector3d& p) { return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all(); };
   std::vector<double> winding(C, 0.0);
   std::vector<int> asked;  // the cells whose winding number is computed
-  std::vector<int> parent(C);
+  UnionFind groups(C);  // cells no triangle touches, joined where they share a vertex
   std::vector<char> touched(C, 0), group_outside(C, 0);
   if (!closed) {
     for (std::size_t c = 0; c < C; ++c)
@@ -121,7 +106,6 @@ std::vector<int> cells_inside_at(const VolumeMesh& mesh, const Eigen::Matrix3Xd&
     std::vector<int> at_vertex(static_cast<std::size_t>(mesh.vertex_count()), -1);
     std::vector<char> outside(C, 0);
     for (std::size_t c = 0; c < C; ++c) {
-      parent[c] = static_cast<int>(c);
       const auto nodes = mesh.vertices(Eigen::all, mesh.cells.col(static_cast<Eigen::Index>(c)));
       const Eigen::Vector3d clo = nodes.rowwise().minCoeff(), chi = nodes.rowwise().maxCoeff();
       outside[c] = (chi.array() < lo.array()).any() || (clo.array() > hi.array()).any();
@@ -140,15 +124,15 @@ std::vector<int> cells_inside_at(const VolumeMesh& mesh, const Eigen::Matrix3Xd&
       for (Eigen::Index k = 0; k < mesh.cells.rows(); ++k) {
         int& first = at_vertex[static_cast<std::size_t>(mesh.cells(k, static_cast<Eigen::Index>(c)))];
         if (first < 0) first = static_cast<int>(c);
-        else parent[static_cast<std::size_t>(root_of(parent, static_cast<int>(c)))] = root_of(parent, first);
+        else groups.join(static_cast<int>(c), first);
       }
     }
     // Per group: outside the surface's box if any of its cells is, else the winding number at one of them.
     std::vector<char> group_asked(C, 0);
     for (std::size_t c = 0; c < C; ++c)
-      if (!touched[c] && outside[c]) group_outside[static_cast<std::size_t>(root_of(parent, static_cast<int>(c)))] = 1;
+      if (!touched[c] && outside[c]) group_outside[static_cast<std::size_t>(groups.root(static_cast<int>(c)))] = 1;
     for (std::size_t c = 0; c < C; ++c) {
-      const auto r = static_cast<std::size_t>(root_of(parent, static_cast<int>(c)));
+      const auto r = static_cast<std::size_t>(groups.root(static_cast<int>(c)));
       if (!touched[c] && !group_outside[r] && !group_asked[r]) group_asked[r] = 1, asked.push_back(static_cast<int>(r));
     }
   }
@@ -162,7 +146,7 @@ std::vector<int> cells_inside_at(const VolumeMesh& mesh, const Eigen::Matrix3Xd&
   for (std::size_t c = 0; c < C; ++c) {
     double w = winding[c];
     if (closed && !touched[c]) {
-      const auto r = static_cast<std::size_t>(root_of(parent, static_cast<int>(c)));
+      const auto r = static_cast<std::size_t>(groups.root(static_cast<int>(c)));
       w = group_outside[r] ? 0.0 : winding[r];
     }
     if (std::abs(w) >= 0.5) out.push_back(static_cast<int>(c));
@@ -263,8 +247,8 @@ std::vector<Eigen::Vector3d> fibres_of_file(const std::filesystem::path& file, c
 /// The activation of a line of action (LineOfAction) on the flesh's joints; `line` gets its header clause.
 std::function<double(double)> line_activation(const LineOfAction& l, const std::shared_ptr<const Flesh>& flesh, const std::string& where,
                                               std::string& line) {
-  const int jf = find_joint(*flesh, l.from.joint, where + ": activation.line_of_action.from");
-  const int jt = find_joint(*flesh, l.to.joint, where + ": activation.line_of_action.to");
+  const int jf = joint_named(flesh->model, l.from.joint, where + ": activation.line_of_action.from");
+  const int jt = joint_named(flesh->model, l.to.joint, where + ": activation.line_of_action.to");
   const Eigen::Vector3d pf = rest_point(l.from, flesh.get(), where), pt = rest_point(l.to, flesh.get(), where);
   const double rest_length = (pt - pf).norm();
   if (!(rest_length > 0.0)) throw SceneError(fmt::format("{}: activation.line_of_action: from and to are the same point at rest", where));
@@ -498,7 +482,7 @@ std::shared_ptr<const BuiltMuscles> build_muscles(const Scene& s, const SceneBod
                                    material.params.mu, material.params.lambda);
     if (!m.muscle) {
       if (!m.bone.empty()) {
-        const int joint = find_joint(*flesh, m.bone, where[i] + ": bone");
+        const int joint = joint_named(flesh->model, m.bone, where[i] + ": bone");
         KinematicSet set;
         set.name = where[i];
         for (int c : cells)

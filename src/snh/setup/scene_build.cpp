@@ -198,7 +198,7 @@ BuiltScene build_scene(const Scene& s) {
   // The pins must select something on the body and hold each coordinate once; contact needs a separated start.
   b.x0 = initial_positions(s, mesh);
   check_coordinates(s, mesh, b.x0);
-  b.muscles = build_muscles(s, *b.body);
+  b.muscles = scene::as_scene_error([&] { return build_muscles(s, *b.body); });  // a joint the model lacks: RigError
   std::vector<KinematicSet> sets = scene::as_scene_error([&] { return scene_kinematics(s, *b.body, b.x0); });
   if (b.muscles) sets.insert(sets.end(), b.muscles->bones.begin(), b.muscles->bones.end());
   (void)scene::as_scene_error([&] { return kinematic_dof_flags(sets, mesh.vertex_count()); });
