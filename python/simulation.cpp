@@ -74,7 +74,8 @@ class PySimulation {
  public:
   PySimulation(const pyb::handle& vertices, const pyb::handle& cells, const pyb::handle& material, const pyb::handle& pinned,
                const std::string& integrator, double dt, double density, const pyb::handle& gravity, double mass_damping,
-               double stiffness_damping, const pyb::handle& initial, const std::string& solver, bool reuse_factor,
+               double stiffness_damping, const pyb::handle& initial, const pyb::handle& initial_velocity,
+               const std::string& solver, bool reuse_factor,
                double tolerance, double step_tolerance, double relative_step_tolerance, int max_iterations,
                const std::string& projection_name, const pyb::object& first_guess) {
     MeshFile file;
@@ -84,9 +85,9 @@ class PySimulation {
     const Eigen::Index n = file.mesh.vertex_count();
 
     SimulationSetup setup;
-    require(integrator == "quasi_static" || integrator == "backward_euler",
-            fmt::format("integrator must be quasi_static or backward_euler, got '{}'", integrator));
-    setup.integrator = integrator == "quasi_static" ? Integrator::quasi_static : Integrator::backward_euler;
+    const std::optional<Integrator> chosen = integrator_named(integrator);
+    require(chosen.has_value(), fmt::format("integrator must be quasi_static, backward_euler or bdf2, got '{}'", integrator));
+    setup.integrator = *chosen;
     setup.dt = checked(dt, "dt", 0.0, true);
     setup.density = checked(density, "density", 0.0, true);
     const Doubles g = real_array(gravity, "gravity", {3});
@@ -94,6 +95,10 @@ class PySimulation {
     setup.mass_damping = checked(mass_damping, "mass_damping", 0.0, false);
     setup.stiffness_damping = checked(stiffness_damping, "stiffness_damping", 0.0, false);
     if (!initial.is_none()) setup.initial = positions_vector(initial, "initial", n);
+    if (!initial_velocity.is_none()) {
+      require(is_dynamic(setup.integrator), "initial_velocity needs a dynamic integrator (backward_euler or bdf2)");
+      setup.initial_velocity = positions_vector(initial_velocity, "initial_velocity", n);
+    }
     setup.linear.name = solver;
     setup.linear.reuse_factor = reuse_factor;
     setup.newton.tolerance = checked(tolerance, "tolerance", 0.0, false);
@@ -147,10 +152,11 @@ class PySimulation {
   pyb::dict step(std::optional<double> t_opt, bool check) {
     const double t = t_opt ? *t_opt : sim_->time() + (sim_->dynamic() ? sim_->setup().dt : 1.0);
     require(std::isfinite(t), fmt::format("t must be a finite number, got {}", t));
-    // Backward Euler steps forward by t − time: a time at or before the current one would advance the physics
+    // A dynamic step goes forward by t − time: a time at or before the current one would advance the physics
     // by dt while setting the clock back. (Quasi-statically t only sets the pins' targets: any t goes.)
     require(!sim_->dynamic() || t > sim_->time(),
-            fmt::format("t must be after the current time {:g} for backward Euler, got {:g}", sim_->time(), t));
+            fmt::format("t must be after the current time {:g} for {}, got {:g}", sim_->time(),
+                        integrator_name(sim_->setup().integrator), t));
     // Ctrl-C: Python's handler only records the signal; Newton asks between iterations.
     NewtonOptions options = sim_->setup().newton;
     options.should_stop = [] { return PyErr_CheckSignals() != 0; };
@@ -375,19 +381,20 @@ pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesyst
 void add_simulation(pyb::module_& m) {
   using namespace pyb::literals;
   pyb::class_<PySimulation>(m, "Simulation",
-                            "A mesh of one material stepped quasi-statically or by backward Euler (projected Newton); the "
+                            "A mesh of one material stepped quasi-statically, by backward Euler or by BDF2 (projected Newton); the "
                             "pinned vertices follow targets set from Python before each step.")
       .def(pyb::init<const pyb::handle&, const pyb::handle&, const pyb::handle&, const pyb::handle&, const std::string&,
-                     double, double, const pyb::handle&, double, double, const pyb::handle&, const std::string&, bool, double,
+                     double, double, const pyb::handle&, double, double, const pyb::handle&, const pyb::handle&, const std::string&, bool, double,
                      double, double, int, const std::string&, const pyb::object&>(),
            "vertices"_a, "cells"_a, "material"_a, "pinned"_a = pyb::none(), pyb::kw_only(), "integrator"_a = "quasi_static",
            "dt"_a = 0.01, "density"_a = 1.0, "gravity"_a = std::vector<double>{0.0, 0.0, 0.0}, "mass_damping"_a = 0.0,
-           "stiffness_damping"_a = 0.0, "initial"_a = pyb::none(), "solver"_a = "auto", "reuse_factor"_a = true,
+           "stiffness_damping"_a = 0.0, "initial"_a = pyb::none(), "initial_velocity"_a = pyb::none(), "solver"_a = "auto", "reuse_factor"_a = true,
            "tolerance"_a = 1e-3, "step_tolerance"_a = 0.0, "relative_step_tolerance"_a = 0.0, "max_iterations"_a = 50,
            "projection"_a = "clamp", "first_guess"_a = pyb::none(),
            "vertices (n, 3), cells (m, 4) tets or (m, 8) hexes (checked as a mesh file is), an snh.Material, pinned "
-           "vertex indices (k,). integrator quasi_static or backward_euler (time step dt); density, gravity (3,), "
-           "Rayleigh mass/stiffness damping; initial positions (n, 3); the linear solver (auto: by size, as scenes; cholmod, "
+           "vertex indices (k,). integrator quasi_static, backward_euler or bdf2 (time step dt; BDF2 keeps the motion "
+           "backward Euler damps, its first step is backward Euler); density, gravity (3,), "
+           "Rayleigh mass/stiffness damping; initial positions (n, 3) and velocities (n, 3; dynamic only); the linear solver (auto: by size, as scenes; cholmod, "
            "ldlt, pcg, mg for hex lattices, amg); Newton's "
            "stopping rule: ||g|| < tolerance (the paper programs' 1e-3), or the Newton step below step_tolerance (a "
            "length) or below relative_step_tolerance of the solve's own motion; first_guess(x, t) -> (n, 3): the first "

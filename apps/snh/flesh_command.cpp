@@ -62,6 +62,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     double fps = FleshSpec{}.fps;
     double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness;
     std::string joint_cells = to_string(FleshSpec{}.joint_cells);
+    std::string integrator = "backward_euler";
     int threads = 0;
     bool self_contact = false, list = false, no_split_cells = false, join_meshes = false;
     double ground = 0.0, dhat = 0.0, contact_stiffness = 0.0, friction = 0.0;
@@ -127,10 +128,15 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--material", o->material, "Energy (default stable_neo_hookean): " + material_name_list());
   add_parameter_options(cmd, o->params, "--youngs 1e5 --poisson 0.488, the paper's flesh");
   auto* qs = cmd->add_flag("--quasi-static", o->quasi_static, "Quasi-static frames (the default, as the paper)");
-  cmd->add_flag("--dynamic", o->dynamic,
-                "Backward Euler with gravity 9.81 m/s^2 down the model's up axis instead (density 1000 kg/m^3; gravity, density and "
+  auto* dyn = cmd->add_flag("--dynamic", o->dynamic,
+                "Dynamic frames (backward Euler unless --integrator says) with gravity 9.81 m/s^2 down the model's up axis instead (density 1000 kg/m^3; gravity, density and "
                 "the material's Pa taken to the model's units where it states them, as an FBX in centimetres does)")
       ->excludes(qs);
+  cmd->add_option("--integrator", o->integrator,
+                  "With --dynamic: backward_euler (the default; damps the motion strongly) or bdf2 (second order: "
+                  "flesh that keeps jiggling)")
+      ->check(CLI::IsMember({"backward_euler", "bdf2"}))
+      ->needs(dyn);
   cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(finite_number(Sign::positive));
   cmd->add_option("--out", o->out, "Output directory (default output/<model name>)")->check(non_empty_path());
   cmd->add_option("--solver", o->solver, "Linear solver (default auto: by size; see snh stretch --help)");
@@ -188,7 +194,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     material["reparametrize"] = o->params.reparametrize;
     j["material"] = material;
     if (o->dynamic) {
-      j["integrator"] = "backward_euler";
+      j["integrator"] = o->integrator;
       const Eigen::Vector3d g = up.unaryExpr([unit](double u) { return u == 0.0 ? 0.0 : -9.81 / unit * u; });  // no −0
       j["gravity"] = {g.x(), g.y(), g.z()};
       j["density"] = FleshSpec::density * unit * unit * unit;

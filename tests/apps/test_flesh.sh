@@ -162,6 +162,13 @@ flesh_error lame "go together" "$limb" --mu 1
 flesh_error soft_stiffness "flesh.soft_binding.stiffness: must be > 0, got 0" "$limb" --soft-stiffness 0
 flesh_error joint_cells "joint-cells: loose not in" "$limb" --joint-cells loose
 flesh_error soft_shell "flesh.soft_binding.shell: must be > 0, got -1" "$limb" --soft-shell -1
+flesh_error integrator_alone "--integrator requires --dynamic" "$limb" --integrator bdf2
+flesh_error integrator_unknown "--integrator: rk4 not in" "$limb" --dynamic --integrator rk4
+# --dynamic --integrator bdf2 runs the limb by BDF2, as its settings say.
+"$SNH" flesh "$limb" --resolution 10 --dynamic --integrator bdf2 --no-report --out "$work/bdf2" > "$work/bdf2.log" 2>&1 \
+  && grep -q '^BDF2, 24 frames' "$work/bdf2.log" \
+  && python3 -c "import json, sys; s = json.load(open(sys.argv[1])); sys.exit(0 if s['integrator'] == 'bdf2' and s['all_converged'] else 1)" "$work/bdf2/stats.json" \
+  && ok || bad "limb by BDF2: $(tail -2 "$work/bdf2.log")"
 # A lattice whose run cannot fit is refused before it is built (it took 6 GB and more at resolution 1000), so
 # with little memory (under 800 MB of address space, where building it failed), also under a ulimit -v that
 # the run's own check would find too small.

@@ -139,7 +139,10 @@ Checkpoint checkpoint_for_resume(const std::filesystem::path& dir, const std::st
   if (c->fingerprint != fingerprint)
     throw std::invalid_argument(fmt::format("cannot resume: the run in {} used other settings ({}; now {})", dir.string(),
                                             printable(c->fingerprint), printable(fingerprint)));
-  if (c->x.size() != dofs || (c->aux.size() != dofs && c->aux.size() != 2 * dofs))
+  // aux: a velocity or a previous solution (dofs), two previous solutions (2 dofs), or BDF2's velocity and
+  // history (3 dofs + 1); Simulation::restore checks which its integrator takes.
+  const Eigen::Index aux = c->aux.size();
+  if (c->x.size() != dofs || (aux != dofs && aux != 2 * dofs && aux != 3 * dofs + 1))
     throw std::invalid_argument(fmt::format("cannot resume: the checkpoint in {} is for another mesh", dir.string()));
   return *c;
 }

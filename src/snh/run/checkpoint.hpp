@@ -1,7 +1,8 @@
 #pragma once
 // Checkpoints for --resume (docs/design.md): after every completed step a run writes checkpoint.bin
 // (atomically) with the exact state needed to continue: the step, the positions and one auxiliary vector
-// (the previous solution, or the last two, for extrapolation; or the velocity), and a fingerprint of the settings that
+// (the previous solution, or the last two, for extrapolation; or the velocity, and for BDF2 the previous positions,
+// velocity and step length), and a fingerprint of the settings that
 // determine the result, so that a resume with other settings is refused.
 #include <filesystem>
 #include <optional>

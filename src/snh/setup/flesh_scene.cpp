@@ -256,7 +256,7 @@ ContactParameters flesh_contact(const ContactSpec& contact, const Flesh& flesh, 
 void add_flesh_terms(const BuiltScene& b, SimulationSetup& setup, std::vector<std::shared_ptr<Term>>& bones) {
   const Scene& s = b.scene;
   const std::shared_ptr<const Flesh>& flesh = b.body->flesh;
-  if (s.time.integrator != Integrator::backward_euler) setup.carrier = flesh_carrier(flesh);  // guesses that follow the bones
+  if (!is_dynamic(s.time.integrator)) setup.carrier = flesh_carrier(flesh);  // guesses that follow the bones
   if (std::shared_ptr<Term> soft = soft_binding_term(flesh, s.flesh->soft_stiffness, youngs_modulus(s.material.params)))
     setup.terms.push_back(std::move(soft));
   if (s.contact.enabled && s.contact.bones) bones = bone_collider_terms(flesh, b.contact.dhat, b.contact.stiffness);

@@ -57,7 +57,7 @@ struct MaterialSpec : MaterialChoice {
 /// "integrator", "dt", "end_time", "frames".
 struct TimeSpec {
   Integrator integrator = Integrator::backward_euler;
-  double dt = 0.01;                ///< backward Euler: the largest substep (each frame is split into equal substeps)
+  double dt = 0.01;                ///< dynamic: the largest substep (each frame is split into equal substeps)
   std::optional<double> end_time;  ///< unset: 1 s, or a flesh scene's clip length
   std::optional<int> frames;       ///< unset: 25, or a flesh scene's end time at flesh.fps frames per second
   static constexpr double default_end_time = 1.0;
@@ -107,7 +107,12 @@ struct MoveOp {
   Selection select;
   Eigen::Vector3d by = Eigen::Vector3d::Zero();
 };
-using InitialOp = std::variant<ScaleOp, ReflectOp, CollapseOp, PerturbOp, MoveOp>;
+/// Adds a velocity to some vertices (all where no selection is given) at t = 0; dynamic scenes only.
+struct VelocityOp {
+  std::optional<Selection> select;
+  Eigen::Vector3d value = Eigen::Vector3d::Zero();
+};
+using InitialOp = std::variant<ScaleOp, ReflectOp, CollapseOp, PerturbOp, MoveOp, VelocityOp>;
 
 /// "solver".
 struct SolverSpec {

@@ -21,7 +21,7 @@ Eigen::Vector3d centre_of(const Eigen::Matrix3Xd& X) { return 0.5 * (X.rowwise()
 
 constexpr double max_substeps_in_run = 1e8;  ///< substeps a run may take in all (issue 13)
 
-/// Substeps per frame (backward Euler splits a frame into equal substeps no longer than dt; quasi-static: one),
+/// Substeps per frame (dynamic integrators split a frame into equal substeps no longer than dt; quasi-static: one),
 /// computed in double so that no count overflows; a run that cannot be done (over 1e8 substeps in all, over
 /// 100000 frames) is a SceneError naming the file and the value at fault.
 int checked_substeps(const TimeSpec& t, double end_time, int frames, const std::string& file) {
@@ -29,7 +29,7 @@ int checked_substeps(const TimeSpec& t, double end_time, int frames, const std::
     throw SceneError(fmt::format("{}: frames: must be from 1 to {}, got {}", file, TimeSpec::max_frames, frames));
   if (!(end_time > 0.0) || !std::isfinite(end_time))
     throw SceneError(fmt::format("{}: end_time: must be a finite number > 0, got {:g}", file, end_time));
-  if (t.integrator != Integrator::backward_euler) return 1;
+  if (!is_dynamic(t.integrator)) return 1;
   if (!(t.dt > 0.0) || !std::isfinite(t.dt)) throw SceneError(fmt::format("{}: dt: must be a finite number > 0, got {:g}", file, t.dt));
   const double per_frame = std::max(1.0, std::ceil(end_time / frames / t.dt - 1e-9));
   const double total = per_frame * frames;
@@ -101,7 +101,7 @@ double mean_cell_size(const VolumeMesh& mesh) {
   return std::cbrt(std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.cell_count()));
 }
 
-/// Contact's parameters for a volume scene: d̂ as given, κ as given, else chosen: with backward Euler IPC's
+/// Contact's parameters for a volume scene: d̂ as given, κ as given, else chosen: when dynamic, IPC's
 /// automatic choice on the mesh's size, its average vertex mass and the substep; quasi-statically (no masses,
 /// no time step) the elastic rule the flesh uses, κ = E ℓ / d̂² (ℓ the cube root of the mean cell volume: a
 /// barrier about as stiff as a cell of the material where surfaces come within d̂). `how` says which.
@@ -111,7 +111,7 @@ ContactParameters volume_contact(const Scene& s, const VolumeMesh& mesh, double 
   if (s.contact.stiffness) {
     p.stiffness = *s.contact.stiffness;
     how = "given";
-  } else if (s.time.integrator == Integrator::backward_euler) {
+  } else if (is_dynamic(s.time.integrator)) {
     const Eigen::Matrix3Xd& X = mesh.vertices;
     const double diagonal = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
     const double mass = s.material.density * std::abs(mesh_volume(mesh)) / static_cast<double>(mesh.vertex_count());
@@ -197,6 +197,7 @@ BuiltScene build_scene(const Scene& s) {
   }
   // The pins must select something on the body and hold each coordinate once; contact needs a separated start.
   b.x0 = initial_positions(s, mesh);
+  b.v0 = initial_velocities(s, mesh);
   check_coordinates(s, mesh, b.x0);
   b.muscles = scene::as_scene_error([&] { return build_muscles(s, *b.body); });  // a joint the model lacks: RigError
   std::vector<KinematicSet> sets = scene::as_scene_error([&] { return scene_kinematics(s, *b.body, b.x0); });
@@ -240,6 +241,7 @@ SimulationSetup simulation_setup(const BuiltScene& b) {
     for (std::shared_ptr<Term>& t : contact_terms(s.contact, contact_surface_of(*b.body), mesh.vertices, b.contact, std::move(bones)))
       setup.terms.push_back(std::move(t));
   setup.initial = b.x0;
+  if (!b.v0.isZero(0.0)) setup.initial_velocity = b.v0;
   setup.linear.name = s.solver.linear;
   setup.linear.reuse_factor = !s.solver.refactorize;
   setup.newton = b.newton;
@@ -288,12 +290,28 @@ Eigen::VectorXd initial_positions(const Scene& s, const VolumeMesh& mesh) {
             std::uniform_real_distribution<double> u(-op.amplitude, op.amplitude);
             for (Eigen::Index v = 0; v < X.cols(); ++v)
               for (int a = 0; a < 3; ++a) X(a, v) += u(rng);
-          } else {
+          } else if constexpr (std::is_same_v<Op, MoveOp>) {
             for (int v : select_vertices(op.select, X, fmt::format("{}: initial[{}]", s.source.string(), i))) X.col(v) += op.by;
-          }
+          }  // VelocityOp: initial_velocities
         },
         s.initial[i]);
   return Eigen::Map<const Eigen::VectorXd>(X.data(), X.size());
+}
+
+Eigen::VectorXd initial_velocities(const Scene& s, const VolumeMesh& mesh) {
+  Eigen::Matrix3Xd V = Eigen::Matrix3Xd::Zero(3, mesh.vertex_count());
+  for (std::size_t i = 0; i < s.initial.size(); ++i) {
+    const auto* op = std::get_if<VelocityOp>(&s.initial[i]);
+    if (!op) continue;
+    const std::string where = fmt::format("{}: initial[{}]", s.source.string(), i);
+    if (!is_dynamic(s.time.integrator))
+      throw SceneError(fmt::format("{}: a velocity needs a dynamic integrator (backward_euler or bdf2), not {}", where,
+                                   integrator_name(s.time.integrator)));
+    if (!op->select) V.colwise() += op->value;
+    else
+      for (int v : select_vertices(*op->select, mesh.vertices, where)) V.col(v) += op->value;
+  }
+  return Eigen::Map<const Eigen::VectorXd>(V.data(), V.size());
 }
 
 std::vector<KinematicSet> scene_kinematics(const Scene& s, const SceneBody& body, const Eigen::VectorXd& x0) {

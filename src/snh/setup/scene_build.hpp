@@ -38,12 +38,13 @@ struct BuiltScene {
   std::shared_ptr<const SceneBody> body;
   double end_time = 0.0;                   ///< given, or the flesh's clip length, or 1 s
   int frames = 0;                          ///< given, or end_time × fps (rounded up) for flesh, or 25
-  int substeps = 1;                        ///< solves per frame (backward Euler: no longer than dt each)
+  int substeps = 1;                        ///< solves per frame (dynamic: no longer than dt each)
   double substep = 0.0;                    ///< their length
   NewtonOptions newton;                    ///< the solver section's, its tolerances at the body's scale
   ContactParameters contact;               ///< d̂, κ, friction, ε_v (where contact is enabled)
   std::string contact_stiffness_rule;      ///< how κ came about ("given", or the rule that chose it), for the header
   Eigen::VectorXd x0;                      ///< the rest positions with the initial operations applied
+  Eigen::VectorXd v0;                      ///< the velocities at t = 0 (the initial velocity operations; 3 #V)
   std::shared_ptr<const BuiltMuscles> muscles;  ///< the tissues and muscles (null: none)
 };
 
@@ -67,6 +68,8 @@ struct BuiltScene {
 [[nodiscard]] std::vector<int> select_vertices(const Selection& s, const Eigen::Matrix3Xd& X, const std::string& where);
 /// The initial positions: the rest positions with scene.initial applied (3 #V).
 [[nodiscard]] Eigen::VectorXd initial_positions(const Scene& scene, const VolumeMesh& mesh);
+/// The velocities (3 #V) the initial "velocity" operations give; a SceneError for one in a quasi-static scene.
+[[nodiscard]] Eigen::VectorXd initial_velocities(const Scene& scene, const VolumeMesh& mesh);
 /// The pins as kinematic sets on the body, their motions starting from `x0` (3 #V), and a flesh's bones.
 [[nodiscard]] std::vector<KinematicSet> scene_kinematics(const Scene& scene, const SceneBody& body, const Eigen::VectorXd& x0);
 

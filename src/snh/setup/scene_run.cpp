@@ -46,7 +46,7 @@ json scene_settings(const BuiltScene& b, const Simulation& sim) {
   j["lambda"] = s.material.params.lambda;
   j["reparametrize"] = s.material.reparametrize;
   j["density"] = s.material.density;
-  j["integrator"] = s.time.integrator == Integrator::backward_euler ? "backward_euler" : "quasi_static";
+  j["integrator"] = integrator_name(s.time.integrator);
   j["dt"] = s.time.dt;
   j["end_time"] = b.end_time;
   j["gravity"] = {s.forces.gravity[0], s.forces.gravity[1], s.forces.gravity[2]};
@@ -80,7 +80,7 @@ json scene_settings(const BuiltScene& b, const Simulation& sim) {
 void write_header(const BuiltScene& b, const Simulation& sim, std::ostream& o) {
   const Scene& s = b.scene;
   const VolumeMesh& mesh = b.body->mesh;
-  const bool dynamic = s.time.integrator == Integrator::backward_euler;
+  const bool dynamic = is_dynamic(s.time.integrator);
   if (!s.mesh.file.empty())
     o << fmt::format("mesh {}: {} vertices, {} {}{}\n", s.mesh.file.string(), mesh.vertex_count(), mesh.cell_count(), cells_name(mesh),
                      b.body->reoriented ? fmt::format("; warning: {} inverted cell(s) re-oriented", b.body->reoriented) : "");
@@ -88,7 +88,7 @@ void write_header(const BuiltScene& b, const Simulation& sim, std::ostream& o) {
                    s.source.string(), mesh.cell_count(), cells_name(mesh), mesh.vertex_count(), s.material.name, s.material.params.mu,
                    s.material.params.lambda, s.material.reparametrize ? " (linear, reparametrized)" : "", s.material.density);
   o << fmt::format("{}, {} frames to t = {:g}{}, gravity ({:g}, {:g}, {:g}), solver {} ({}), output {}\n",
-                   dynamic ? "backward Euler" : "quasi-static", b.frames, b.end_time,
+                   s.time.integrator == Integrator::bdf2 ? "BDF2" : dynamic ? "backward Euler" : "quasi-static", b.frames, b.end_time,
                    dynamic ? fmt::format(" ({} substeps of {:g} per frame)", b.substeps, b.substep) : "", s.forces.gravity[0],
                    s.forces.gravity[1], s.forces.gravity[2],
                    s.solver.linear == "auto" ? fmt::format("{} (auto)", sim.solver().name()) : s.solver.linear,

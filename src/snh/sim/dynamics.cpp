@@ -52,8 +52,13 @@ void TimeStepTerm::bind(const HessianLayout& layout) {
 }
 
 void TimeStepTerm::begin_step(const Eigen::VectorXd& x_n, const Eigen::VectorXd& v_n) {
-  x_n_ = x_n;
-  predicted_ = x_n + terms_.dt * v_n;
+  begin_step(x_n, x_n, x_n + terms_.dt * v_n);
+}
+
+void TimeStepTerm::begin_step(const Eigen::VectorXd& x_n, const Eigen::VectorXd& anchor, const Eigen::VectorXd& predicted) {
+  if (anchor.size() != x_n.size() || predicted.size() != x_n.size()) throw std::invalid_argument("time-step term: sizes differ");
+  anchor_ = anchor;
+  predicted_ = predicted;
   if (damps_stiffness()) {
     K_n_ = damping_layout_.pattern();
     elastic_.add_hessian(x_n, damping_scatter_, K_n_.valuePtr(), PsdProjection::clamp);
@@ -64,7 +69,7 @@ double TimeStepTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradien
                               PsdProjection) const {
   const std::vector<int>& free = dofs_.free_index();
   const double h = terms_.dt;
-  if (x_n_.size() != x.size()) throw std::logic_error("time-step term: evaluated before begin_step()");
+  if (anchor_.size() != x.size()) throw std::logic_error("time-step term: evaluated before begin_step()");
   double value = 0.0;
   for (std::size_t d = 0; d < free.size(); ++d) {
     if (free[d] < 0) continue;
@@ -73,7 +78,7 @@ double TimeStepTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradien
     double g = -m * gravity_[i];
     value -= m * gravity_[i] * x[i];
     if (h > 0.0) {
-      const double inertial = x[i] - predicted_[i], moved = x[i] - x_n_[i];
+      const double inertial = x[i] - predicted_[i], moved = x[i] - anchor_[i];
       value += m / (2 * h * h) * inertial * inertial + terms_.mass_damping * m / (2 * h) * moved * moved;
       g += m / (h * h) * inertial + terms_.mass_damping * m / h * moved;
     }
@@ -85,7 +90,7 @@ double TimeStepTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradien
     const std::vector<int>& num = damping_layout_.numbering();
     Eigen::VectorXd delta(x.size());
     for (std::size_t d = 0; d < num.size(); ++d)
-      delta[num[d]] = x[static_cast<Eigen::Index>(d)] - x_n_[static_cast<Eigen::Index>(d)];
+      delta[num[d]] = x[static_cast<Eigen::Index>(d)] - anchor_[static_cast<Eigen::Index>(d)];
     const Eigen::VectorXd Kd = K_n_.selfadjointView<Eigen::Lower>() * delta;
     const Eigen::Index nf = dofs_.free_count(), nk = x.size() - nf;
     const double beta_h = terms_.stiffness_damping / h;

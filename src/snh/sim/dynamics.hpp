@@ -9,7 +9,12 @@
 // the free DOFs is −β/h (K_n Δ)_f, which vanishes for a rigid translation, so a body carried by moving
 // pins or bones is not damped towards standing still in the world. Its stationarity condition is exactly
 // backward Euler: M(x − x̃)/h² = f_elastic + f_gravity − D v_{n+1}. Quasi-static steps (h = 0) minimise
-// Ψ − Σ m g·x. The inertia, mass-damping and gravity sums run over the free DOFs (on kinematic DOFs they
+// Ψ − Σ m g·x.
+//
+// BDF2 is the same minimisation with x_n replaced by an anchor x̂ and h by h/a₀: with the coefficients
+// a₀ x_{n+1} + a₁ x_n + a₂ x_{n−1} = h v_{n+1} (a₀ = 3/2, a₁ = −2, a₂ = ½ for equal steps), x̂ = −(a₁ x_n +
+// a₂ x_{n−1})/a₀, v̂ = −(a₁ v_n + a₂ v_{n−1})/a₀ and ĥ = h/a₀, the step is x̃ = x̂ + ĥ v̂, Δ = x − x̂,
+// v_{n+1} = (x_{n+1} − x̂)/ĥ, and K_n is still taken at x_n (docs/math.md §7.5). The inertia, mass-damping and gravity sums run over the free DOFs (on kinematic DOFs they
 // are constants of the step); kinematic DOFs are set before each step.
 #include <Eigen/Core>
 
@@ -40,8 +45,11 @@ class TimeStepTerm final : public Term {
   /// mass     lumped_mass(elastic, density)
   TimeStepTerm(const ElasticTerm& elastic, const DofMap& dofs, Eigen::VectorXd mass, StepTerms terms);
 
-  /// The state at the start of the step (full DOF vectors); assembles K_n when β > 0 and h > 0.
+  /// The state at the start of a backward Euler step (full DOF vectors); assembles K_n when β > 0 and h > 0.
   void begin_step(const Eigen::VectorXd& x_n, const Eigen::VectorXd& v_n);
+  /// The general form (BDF2): K_n at x_n, inertia towards `predicted`, damping of the motion from `anchor`
+  /// over the current dt (set_dt: ĥ). begin_step(x_n, v_n) is begin_step(x_n, x_n, x_n + dt v_n).
+  void begin_step(const Eigen::VectorXd& x_n, const Eigen::VectorXd& anchor, const Eigen::VectorXd& predicted);
 
   [[nodiscard]] std::string_view name() const override { return "inertia"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
@@ -66,7 +74,7 @@ class TimeStepTerm final : public Term {
   Eigen::VectorXd mass_;        ///< per DOF
   Eigen::VectorXd gravity_;     ///< per DOF: g component of each DOF's axis
   StepTerms terms_;
-  Eigen::VectorXd x_n_, predicted_;
+  Eigen::VectorXd anchor_, predicted_;  ///< x_n (BDF2: x̂) and x̃
   // Stiffness damping (β > 0): K_n over every DOF, numbered free DOFs first (as the problem numbers them)
   // and kinematic DOFs after, with the elastic term's scatter map into it.
   HessianLayout damping_layout_;

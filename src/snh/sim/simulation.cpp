@@ -22,6 +22,21 @@ std::string worst_element(const Eigen::VectorXd& min_J) {
 
 }  // namespace
 
+const char* integrator_name(Integrator i) {
+  switch (i) {
+    case Integrator::backward_euler: return "backward_euler";
+    case Integrator::bdf2: return "bdf2";
+    case Integrator::quasi_static: return "quasi_static";
+  }
+  return "?";
+}
+
+std::optional<Integrator> integrator_named(std::string_view name) {
+  for (Integrator i : {Integrator::backward_euler, Integrator::bdf2, Integrator::quasi_static})
+    if (name == integrator_name(i)) return i;
+  return std::nullopt;
+}
+
 std::vector<std::uint8_t> kinematic_dof_flags(const std::vector<KinematicSet>& sets, Eigen::Index vertices) {
   std::vector<std::uint8_t> flags(3 * vertices, 0);
   std::vector<int> owner(3 * vertices, -1);
@@ -57,13 +72,13 @@ Simulation::Simulation(SimulationSetup setup)
       elastic_(std::move(setup_.mesh), setup_.materials, setup_.material_of_cell, setup_.weight_scale),
       dofs_(kinematic_dof_flags(setup_.kinematic, elastic_.mesh().vertex_count())),
       inertia_(elastic_, dofs_, lumped_mass(elastic_, setup_.density),
-               {.dt = setup_.integrator == Integrator::backward_euler ? setup_.dt : 0.0,
+               {.dt = is_dynamic(setup_.integrator) ? setup_.dt : 0.0,
                 .gravity = setup_.gravity,
                 .mass_damping = setup_.mass_damping,
                 .stiffness_damping = setup_.stiffness_damping}),
       problem_(dofs_) {
   if (dynamic() && !(setup_.dt > 0.0 && std::isfinite(setup_.dt)))
-    throw std::invalid_argument(fmt::format("backward Euler needs a time step > 0, got {}", setup_.dt));
+    throw std::invalid_argument(fmt::format("{} needs a time step > 0, got {}", integrator_name(setup_.integrator), setup_.dt));
   problem_.add(elastic_);
   // Inertia, damping and gravity: only where there is something to add (a quasi-static run without
   // gravity minimises the elastic energy alone).
@@ -79,7 +94,15 @@ Simulation::Simulation(SimulationSetup setup)
     throw std::invalid_argument(fmt::format("initial positions: expected {} numbers (3 per vertex), got {}", n, setup_.initial.size()));
   else x_ = std::move(setup_.initial);
   v_ = Eigen::VectorXd::Zero(n);
+  if (setup_.initial_velocity.size() != 0) {
+    if (setup_.initial_velocity.size() != n)
+      throw std::invalid_argument(fmt::format("initial velocities: expected {} numbers (3 per vertex), got {}", n, setup_.initial_velocity.size()));
+    if (!dynamic()) throw std::invalid_argument("initial velocities: a quasi-static simulation has none");
+    if (!setup_.initial_velocity.allFinite()) throw std::invalid_argument("initial velocities: not finite");
+    v_ = setup_.initial_velocity;
+  }
   previous_ = x_;
+  v_previous_ = v_;
   rest_volume_ = elastic_.rest_volumes().sum();
   if (!setup_.fibre_of_cell.empty() || !setup_.fibres.empty()) elastic_.set_fibres(setup_.fibre_of_cell, setup_.fibres);
   activate(time_);
@@ -175,11 +198,10 @@ Eigen::VectorXd Simulation::carry(const Eigen::VectorXd& x, double from, double 
 
 double Simulation::clearance(double from, double to, double h) {
   if (setup_.terms.empty()) return 1.0;
-  // The pins' jump to their targets at `to` (and, for backward Euler, the free DOFs' inertial prediction:
-  // the guess the solve starts from; with carried_check(), the free DOFs carried along: the guess's base).
+  // The pins' jump to their targets at `to` (and, when dynamic, the free DOFs' inertial prediction: the
+  // guess the solve starts from; with carried_check(), the free DOFs carried along: the guess's base).
   const bool carried = carried_check();
-  Eigen::VectorXd moved = carried ? carry(x_, from, to) : x_;
-  if (dynamic()) moved += h * v_;
+  Eigen::VectorXd moved = dynamic() ? stepper(h).predicted : carried ? carry(x_, from, to) : x_;
   place_kinematic(moved, to);
   const Eigen::VectorXd dx = moved - x_;
   double alpha = 1.0;
@@ -229,10 +251,7 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
         return total;
       }
     }
-    const double part = part_of(to);
-    inertia_.set_dt(part);
-    const StepReport r = solve(to, part, newton);
-    inertia_.set_dt(h);
+    const StepReport r = solve(to, part_of(to), newton);
     accumulate(total.newton, r.newton);
     if (r.interrupted || !r.converged) {
       if (r.interrupted) restore(start);
@@ -251,21 +270,56 @@ StepReport Simulation::step(double t, const NewtonOptions* newton) {
   return total;
 }
 
+Simulation::Stepper Simulation::stepper(double h) const {
+  Stepper s;
+  // Variable-step BDF2 with ω = h / h_{n−1}: a₀ = (1 + 2ω)/(1 + ω), a₁ = −(1 + ω), a₂ = ω²/(1 + ω). It is
+  // zero-stable for ω < 1 + √2; a step more than twice the last (after a step split for contact) is made
+  // by backward Euler instead.
+  const double omega = h_previous_ > 0.0 ? h / h_previous_ : 0.0;
+  if (setup_.integrator == Integrator::bdf2 && h_previous_ > 0.0 && omega <= 2.0) {
+    const double a0 = (1.0 + 2.0 * omega) / (1.0 + omega), a1 = -(1.0 + omega), a2 = omega * omega / (1.0 + omega);
+    s.anchor = -(a1 * x_ + a2 * previous_) / a0;
+    s.h_eff = h / a0;
+    s.predicted = s.anchor - s.h_eff * (a1 * v_ + a2 * v_previous_) / a0;
+    s.second_order = true;
+  } else {
+    s.anchor = x_;
+    s.h_eff = h;
+    s.predicted = x_ + h * v_;
+  }
+  return s;
+}
+
 StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
   StepReport report;
   report.substeps = 1;
-  const Eigen::VectorXd x_n = x_, previous_n = previous_, previous2_n = previous2_;
-  // The guess: the inertial prediction (backward Euler), a linear extrapolation from the last two
-  // solutions, or for the first quasi-static step the setup's (the current state by default).
+  const Eigen::VectorXd x_n = x_, v_n = v_, previous_n = previous_, previous2_n = previous2_;
+  // The guess: the inertial prediction (dynamic), a linear extrapolation from the last two solutions, or
+  // for the first quasi-static step the setup's (the current state by default).
+  Stepper stepping;
   Eigen::VectorXd guess;
-  if (dynamic()) guess = x_ + h * v_;
+  if (dynamic()) {
+    stepping = stepper(h);
+    guess = stepping.predicted;
+  }
   else if (steps_ >= 1) guess = 2.0 * x_ - previous_;
   else guess = setup_.first_guess ? setup_.first_guess(x_, t) : x_;
   place_kinematic(guess, t);
   activate(t);
   problem_.at_time(t);
   for (const std::shared_ptr<Term>& term : setup_.terms) term->begin_step(x_n, time_, t);  // lagged data (friction)
-  inertia_.begin_step(x_n, v_);
+  // The inertia term's step is ĥ for this solve only (a part of a split step, or BDF2's h/a₀).
+  struct RestoreDt {
+    TimeStepTerm& term;
+    double dt;
+    ~RestoreDt() { term.set_dt(dt); }
+  } restore_dt{inertia_, inertia_.terms().dt};
+  if (dynamic()) {
+    inertia_.set_dt(stepping.h_eff);
+    inertia_.begin_step(x_n, stepping.anchor, stepping.predicted);
+  } else {
+    inertia_.begin_step(x_n, v_);
+  }
   double E = problem_.energy(guess);
   if (!dynamic() && setup_.extrapolation >= 2 && steps_ >= 2 && previous2_.size() == x_.size()) {
     // The quadratic extrapolation is closer along a smooth motion; at a kink of a keyframed one (a joint
@@ -350,7 +404,11 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
     report.failure = r.failure;
     return report;
   }
-  if (dynamic()) v_ = (x_ - x_n) / h;
+  if (dynamic()) {
+    v_ = (x_ - stepping.anchor) / stepping.h_eff;
+    v_previous_ = v_n;
+    h_previous_ = h;
+  }
   time_ = t;
   if (!r.converged) {
     report.converged = false;
@@ -394,6 +452,12 @@ StepReport Simulation::advance(double t_start, double h, int substeps, const New
 }
 
 SimulationState Simulation::state() const {
+  if (setup_.integrator == Integrator::bdf2 && h_previous_ > 0.0) {
+    const Eigen::Index n = x_.size();
+    Eigen::VectorXd aux(3 * n + 1);
+    aux << v_, previous_, v_previous_, h_previous_;
+    return {.x = x_, .aux = std::move(aux), .time = time_, .steps = steps_};
+  }
   if (dynamic()) return {.x = x_, .aux = v_, .time = time_, .steps = steps_};
   if (setup_.extrapolation < 2 || previous2_.size() != x_.size()) return {.x = x_, .aux = previous_, .time = time_, .steps = steps_};
   Eigen::VectorXd both(2 * x_.size());
@@ -404,11 +468,18 @@ SimulationState Simulation::state() const {
 void Simulation::restore(const SimulationState& s) {
   const Eigen::Index n = x_.size();
   const bool two = !dynamic() && setup_.extrapolation >= 2 && s.aux.size() == 2 * n;
-  if (s.x.size() != n || (s.aux.size() != n && !two))
+  const bool history = setup_.integrator == Integrator::bdf2 && s.aux.size() == 3 * n + 1;
+  if (s.x.size() != n || (s.aux.size() != n && !two && !history) || (history && !(s.aux[3 * n] > 0.0)))
     throw std::invalid_argument(fmt::format("a saved state of {} and {} numbers for a mesh of {} DOFs", s.x.size(), s.aux.size(), n));
   x_ = s.x;
-  if (dynamic()) v_ = s.aux;
-  else previous_ = s.aux.head(n);
+  if (dynamic()) {
+    v_ = s.aux.head(n);
+    previous_ = history ? Eigen::VectorXd(s.aux.segment(n, n)) : x_;
+    v_previous_ = history ? Eigen::VectorXd(s.aux.segment(2 * n, n)) : v_;
+    h_previous_ = history ? s.aux[3 * n] : 0.0;
+  } else {
+    previous_ = s.aux.head(n);
+  }
   if (two) previous2_ = s.aux.tail(n);
   else previous2_.resize(0);
   time_ = s.time;

@@ -6,7 +6,9 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -23,7 +25,16 @@
 
 namespace snh {
 
-enum class Integrator { backward_euler, quasi_static };
+/// backward_euler and bdf2 are dynamic (inertia over a time step dt); quasi_static solves for equilibrium.
+/// BDF2 (docs/math.md §7.5) is second order: it keeps the motion that backward Euler damps. Its first step, and
+/// any step more than twice the one before (after a step split for contact), is a backward Euler step.
+enum class Integrator { backward_euler, bdf2, quasi_static };
+
+/// The integrator's name in scenes, the command line and Python ("backward_euler", "bdf2", "quasi_static").
+[[nodiscard]] const char* integrator_name(Integrator i);
+/// The integrator of that name; std::nullopt for another word.
+[[nodiscard]] std::optional<Integrator> integrator_named(std::string_view name);
+[[nodiscard]] inline bool is_dynamic(Integrator i) { return i != Integrator::quasi_static; }
 
 struct SimulationSetup {
   VolumeMesh mesh;
@@ -32,7 +43,7 @@ struct SimulationSetup {
   Eigen::VectorXd weight_scale;           ///< per cell (empty: 1)
   double density = 1.0;
   Integrator integrator = Integrator::quasi_static;
-  double dt = 0.0;                        ///< backward Euler: the length of every step(t)
+  double dt = 0.0;                        ///< dynamic: the length of every step(t)
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
   double mass_damping = 0.0, stiffness_damping = 0.0;
   std::vector<KinematicSet> kinematic;
@@ -40,6 +51,7 @@ struct SimulationSetup {
   /// order; each is told the time of every solve (Term::at_time) before it starts.
   std::vector<std::shared_ptr<Term>> terms;
   Eigen::VectorXd initial;                ///< 3 #V starting positions (empty: the rest positions)
+  Eigen::VectorXd initial_velocity;       ///< dynamic: 3 #V starting velocities (empty: at rest)
   LinearSolverOptions linear;
   NewtonOptions newton;
   /// Quasi-static: the guess of the first step (default: the current state), given the state and t;
@@ -91,8 +103,10 @@ struct StepReport {
 /// The state a checkpoint holds.
 struct SimulationState {
   Eigen::VectorXd x;    ///< positions (3 #V)
-  /// Backward Euler: the velocity; quasi-static: the previous solution (extrapolation), followed by the one
-  /// before it where the setup's extrapolation is 2 and there is one (3 #V or 6 #V numbers).
+  /// Backward Euler: the velocity (3 #V numbers). BDF2: the velocity, then once a step is made the previous
+  /// positions, the previous velocity and the last step's length (9 #V + 1). Quasi-static: the previous
+  /// solution (extrapolation), followed by the one before it where the setup's extrapolation is 2 and there
+  /// is one (3 #V or 6 #V numbers).
   Eigen::VectorXd aux;
   double time = 0.0;
   int steps = 0;        ///< solves completed
@@ -106,16 +120,16 @@ class Simulation {
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 
-  /// One solve to time t: backward Euler over dt from the current state, or a quasi-static solve with the
+  /// One solve to time t: backward Euler or BDF2 over dt from the current state, or a quasi-static solve with the
   /// kinematic targets at t. Newton's on_iteration/should_stop come from `newton` (else the setup's).
   /// With contact terms, the step from time() to t is first checked: each term's sweep (a moving collider
   /// from its pose at time() to its pose at t) and the scripted pins' jump to their targets at t (the
   /// terms' max_step, colliders at their pose at t) against the current state. A step not clear is cut
-  /// (time and, for backward Euler, dt) to the fraction found clear, checked again, solved, and the rest
+  /// (time and, when dynamic, dt) to the fraction found clear, checked again, solved, and the rest
   /// of the step done likewise from there (report.splits counts the cuts); a part below a millionth of the
   /// step fails with one line (a script driving the surface into a collider).
   StepReport step(double t, const NewtonOptions* newton = nullptr);
-  /// `substeps` solves at t_start + k·h, k = 1 … substeps (h = the setup's dt for backward Euler); stops at
+  /// `substeps` solves at t_start + k·h, k = 1 … substeps (h = the setup's dt when dynamic); stops at
   /// the first that fails. An interrupted frame returns to the state it started from.
   ///   on_substep  called before each substep with its number (progress lines)
   StepReport advance(double t_start, double h, int substeps, const NewtonOptions* newton = nullptr,
@@ -125,7 +139,7 @@ class Simulation {
   [[nodiscard]] const Eigen::VectorXd& v() const { return v_; }
   [[nodiscard]] double time() const { return time_; }
   [[nodiscard]] int steps() const { return steps_; }
-  [[nodiscard]] bool dynamic() const { return setup_.integrator == Integrator::backward_euler; }
+  [[nodiscard]] bool dynamic() const { return is_dynamic(setup_.integrator); }
   [[nodiscard]] SimulationState state() const;
   /// Continues from a saved state (sizes checked).
   void restore(const SimulationState& s);
@@ -146,9 +160,17 @@ class Simulation {
   [[nodiscard]] double rest_volume() const { return rest_volume_; }
 
  private:
-  /// One solve to time t over a time step h (backward Euler; ignored quasi-statically).
+  /// One solve to time t over a time step h (dynamic; ignored quasi-statically).
   StepReport solve(double t, double h, const NewtonOptions* newton);
-  /// The smallest fraction of the step from `from` to `to` (over h, backward Euler) that the moving terms'
+  /// A dynamic step of length h from the current state as an incremental potential (dynamics.hpp): the
+  /// velocity after it is (x − anchor)/h_eff, and predicted = anchor + h_eff v̂ is its inertial target.
+  struct Stepper {
+    Eigen::VectorXd anchor, predicted;
+    double h_eff = 0.0;
+    bool second_order = false;  ///< BDF2 (false: backward Euler)
+  };
+  [[nodiscard]] Stepper stepper(double h) const;
+  /// The smallest fraction of the step from `from` to `to` (over h, dynamic) that the moving terms'
   /// sweeps (against the pins' jump and the inertial prediction) and the other terms' bounds on the pins'
   /// jump keep clear.
   double clearance(double from, double to, double h);
@@ -166,6 +188,9 @@ class Simulation {
   Problem problem_;
   std::unique_ptr<LinearSolver> solver_;
   Eigen::VectorXd x_, v_, previous_, previous2_;  // previous2_: empty until known
+  // BDF2's history: previous_ is x_{n−1}; v_previous_ is v_{n−1}; h_previous_ the last step's length (0: none).
+  Eigen::VectorXd v_previous_;
+  double h_previous_ = 0.0;
   double time_ = 0.0;
   int steps_ = 0;
   double rest_volume_ = 0.0;

@@ -16,7 +16,7 @@ ContactSpec parse_contact(Keys& top, const std::filesystem::path& source, double
     s.bones = k.boolean("bones", s.bones);
     if (!k.has("dhat") && !flesh) k.fail("required: the distance below which surfaces repel (> 0)", "dhat");
     if (k.has("dhat")) s.dhat = k.positive("dhat", 0.0);
-    // kappa left out or "auto": unset, chosen by the build (volume_contact: IPC's rule with backward Euler,
+    // kappa left out or "auto": unset, chosen by the build (volume_contact: IPC's rule when dynamic,
     // the elastic rule quasi-statically; a flesh's own rule).
     if (const json* st = k.get("stiffness"); st && st->is_string()) {
       if (st->get<std::string>() != "auto") k.fail("expected a number > 0 or \"auto\", got " + st->dump(), "stiffness");

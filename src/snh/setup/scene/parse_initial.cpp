@@ -7,8 +7,8 @@ namespace {
 
 InitialOp parse_op(const json& j, const std::string& path, const std::string& file) {
   Keys k(j, path, file);
-  const std::string type = k.choice("type", "", {"scale", "reflect", "collapse", "perturb", "move"});
-  if (type.empty()) k.fail("needs a type (scale, reflect, collapse, perturb or move)");
+  const std::string type = k.choice("type", "", {"scale", "reflect", "collapse", "perturb", "move", "velocity"});
+  if (type.empty()) k.fail("needs a type (scale, reflect, collapse, perturb, move or velocity)");
   InitialOp op;
   if (type == "scale") {
     ScaleOp s;
@@ -34,6 +34,13 @@ InitialOp parse_op(const json& j, const std::string& path, const std::string& fi
     p.amplitude = k.non_negative("amplitude", p.amplitude);
     p.seed = static_cast<std::uint64_t>(k.integer("seed", 1, 0, std::numeric_limits<long long>::max()));
     op = p;
+  } else if (type == "velocity") {
+    VelocityOp v;
+    if (k.has("region") || k.has("indices")) v.select = parse_selection(k);
+    const auto value = k.vec3("value");
+    if (!value) k.fail("velocity needs value: [vx, vy, vz]");
+    v.value = *value;
+    op = v;
   } else {
     MoveOp m;
     m.select = parse_selection(k);
