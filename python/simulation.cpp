@@ -77,7 +77,7 @@ class PySimulation {
                double stiffness_damping, const pyb::handle& initial, const pyb::handle& initial_velocity,
                const std::string& solver, bool reuse_factor,
                double tolerance, double step_tolerance, double relative_step_tolerance, int max_iterations,
-               const std::string& projection_name, const pyb::object& first_guess) {
+               int step_halvings, const std::string& projection_name, const pyb::object& first_guess) {
     MeshFile file;
     file.mesh = mesh_of(vertices, cells);
     check_mesh(file, "mesh");
@@ -107,6 +107,8 @@ class PySimulation {
     require(max_iterations >= 1 && max_iterations <= 100000,
             fmt::format("max_iterations must be from 1 to 100000, got {}", max_iterations));
     setup.newton.max_iterations = max_iterations;
+    require(step_halvings >= 0 && step_halvings <= 20, fmt::format("step_halvings must be from 0 to 20, got {}", step_halvings));
+    setup.step_halvings = step_halvings;
     setup.newton.projection = projection(projection_name);
     setup.materials = {any_material(material)};
 
@@ -168,6 +170,7 @@ class PySimulation {
     s["time"] = t;
     s["converged"] = r.converged;
     s["failure"] = r.failure;
+    s["halvings"] = r.halvings;
     s["iterations"] = r.newton.iterations;
     s["line_search_steps"] = r.newton.line_search_steps;
     s["linear_iterations"] = r.newton.linear_iterations;
@@ -385,19 +388,20 @@ void add_simulation(pyb::module_& m) {
                             "pinned vertices follow targets set from Python before each step.")
       .def(pyb::init<const pyb::handle&, const pyb::handle&, const pyb::handle&, const pyb::handle&, const std::string&,
                      double, double, const pyb::handle&, double, double, const pyb::handle&, const pyb::handle&, const std::string&, bool, double,
-                     double, double, int, const std::string&, const pyb::object&>(),
+                     double, double, int, int, const std::string&, const pyb::object&>(),
            "vertices"_a, "cells"_a, "material"_a, "pinned"_a = pyb::none(), pyb::kw_only(), "integrator"_a = "quasi_static",
            "dt"_a = 0.01, "density"_a = 1.0, "gravity"_a = std::vector<double>{0.0, 0.0, 0.0}, "mass_damping"_a = 0.0,
            "stiffness_damping"_a = 0.0, "initial"_a = pyb::none(), "initial_velocity"_a = pyb::none(), "solver"_a = "auto", "reuse_factor"_a = true,
            "tolerance"_a = 1e-3, "step_tolerance"_a = 0.0, "relative_step_tolerance"_a = 0.0, "max_iterations"_a = 50,
-           "projection"_a = "clamp", "first_guess"_a = pyb::none(),
+           "step_halvings"_a = 4, "projection"_a = "clamp", "first_guess"_a = pyb::none(),
            "vertices (n, 3), cells (m, 4) tets or (m, 8) hexes (checked as a mesh file is), an snh.Material, pinned "
            "vertex indices (k,). integrator quasi_static, backward_euler or bdf2 (time step dt; BDF2 keeps the motion "
            "backward Euler damps, its first step is backward Euler); density, gravity (3,), "
            "Rayleigh mass/stiffness damping; initial positions (n, 3) and velocities (n, 3; dynamic only); the linear solver (auto: by size, as scenes; cholmod, "
            "ldlt, pcg, mg for hex lattices, amg); Newton's "
            "stopping rule: ||g|| < tolerance (the paper programs' 1e-3), or the Newton step below step_tolerance (a "
-           "length) or below relative_step_tolerance of the solve's own motion; first_guess(x, t) -> (n, 3): the first "
+           "length) or below relative_step_tolerance of the solve's own motion; step_halvings: a dynamic step whose "
+           "solve fails is retried in halves this many times deep; first_guess(x, t) -> (n, 3): the first "
            "quasi-static step's starting positions (later ones extrapolate).")
       .def_property_readonly("positions", [](const PySimulation& s) { return positions_array(s.sim_->x()); },
                              "The current positions (n, 3), a copy.")

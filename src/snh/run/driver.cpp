@@ -261,7 +261,8 @@ class RunLoop {
     StepRecord r;
     r.index = frame;
     r.time = frame * plan_.frame_duration;
-    r.substeps = plan_.substeps;
+    r.substeps = plan_.substeps + rep.halvings;
+    r.halvings = rep.halvings;
     r.converged = rep.converged;
     r.newton_iterations = rep.newton.iterations;
     r.line_search_steps = rep.newton.line_search_steps;

@@ -16,7 +16,8 @@ namespace snh {
 struct StepRecord {
   int index = 0;                ///< step (stretch, from 1) or frame (scene, from 0)
   double time = 0.0;
-  int substeps = 0;
+  int substeps = 0;             ///< time steps made (more than planned where a failed one was retried in halves)
+  int halvings = 0;             ///< steps retried in halves after a failed solve (not in the tables: see substeps)
   bool converged = true;
   int newton_iterations = 0, line_search_steps = 0, linear_iterations = 0, factorizations = 0;
   int true_hessian_steps = 0;   ///< Newton iterations that used the unprojected Hessian

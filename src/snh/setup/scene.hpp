@@ -118,6 +118,8 @@ using InitialOp = std::variant<ScaleOp, ReflectOp, CollapseOp, PerturbOp, MoveOp
 struct SolverSpec {
   std::string linear = "auto";  ///< a linear_solvers() name ("auto": by size)
   bool refactorize = false;
+  /// Dynamic scenes: a time step whose solve fails is retried in halves, this many times deep (0 to 20).
+  int step_halvings = 4;
   /// Newton's stopping rule for scenes, scale-aware (the same for any units, density, stiffness or time
   /// step): converged when ‖g‖ < force_fraction · E ℓ² (E ℓ²: the force a unit strain puts on a cell of
   /// size ℓ, the cube root of the mean cell volume; a flesh scene: 1e-6 E h², h its cell size, or a step

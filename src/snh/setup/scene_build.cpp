@@ -244,6 +244,7 @@ SimulationSetup simulation_setup(const BuiltScene& b) {
   if (!b.v0.isZero(0.0)) setup.initial_velocity = b.v0;
   setup.linear.name = s.solver.linear;
   setup.linear.reuse_factor = !s.solver.refactorize;
+  setup.step_halvings = s.solver.step_halvings;
   setup.newton = b.newton;
   return setup;
 }

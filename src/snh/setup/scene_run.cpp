@@ -217,10 +217,12 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
     if (f.index == 0)
       return fmt::format("frame {:>3}/{}: t = {:.4g}, volume {:.4f}, min J {:.4f}{}", 0, frames, 0.0, f.volume_ratio, f.min_J,
                          f.failure.empty() ? "" : "  " + f.failure);
-    return fmt::format("frame {:>3}/{}: t = {:.4g}, {} Newton iterations, |g| = {:.2e}, energy {:.8g} (kinetic {:.4g}), "
+    return fmt::format("frame {:>3}/{}: t = {:.4g}, {} Newton iterations{}, |g| = {:.2e}, energy {:.8g} (kinetic {:.4g}), "
                        "volume {:.4f}, min J {:.4f}, {:.3f} s{}{}",
-                       f.index, frames, f.time, f.newton_iterations, f.residual, f.total_energy, f.kinetic_energy, f.volume_ratio,
-                       f.min_J, f.wall_seconds, inverted_note(f), f.converged ? "" : "  NOT CONVERGED: " + f.failure);
+                       f.index, frames, f.time, f.newton_iterations,
+                       f.halvings == 0 ? "" : fmt::format(" ({} substeps: a step retried in halves)", f.substeps), f.residual,
+                       f.total_energy, f.kinetic_energy, f.volume_ratio, f.min_J, f.wall_seconds, inverted_note(f),
+                       f.converged ? "" : "  NOT CONVERGED: " + f.failure);
   };
   plan.live = [frames, substeps](int frame, int sub, int it, double r) {
     return fmt::format("frame {:>3}/{}: substep {}/{}, Newton iteration {}, |g| = {:.2e} ...", frame, frames, sub, substeps, it, r);

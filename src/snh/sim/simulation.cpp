@@ -77,6 +77,8 @@ Simulation::Simulation(SimulationSetup setup)
                 .mass_damping = setup_.mass_damping,
                 .stiffness_damping = setup_.stiffness_damping}),
       problem_(dofs_) {
+  if (setup_.step_halvings < 0 || setup_.step_halvings > 20)
+    throw std::invalid_argument(fmt::format("step_halvings must be from 0 to 20, got {}", setup_.step_halvings));
   if (dynamic() && !(setup_.dt > 0.0 && std::isfinite(setup_.dt)))
     throw std::invalid_argument(fmt::format("{} needs a time step > 0, got {}", integrator_name(setup_.integrator), setup_.dt));
   problem_.add(elastic_);
@@ -226,7 +228,52 @@ double Simulation::clearance(double from, double to, double h) {
 constexpr int kMaxSplits = 200;
 
 StepReport Simulation::step(double t, const NewtonOptions* newton) {
-  const double t0 = time_, h = setup_.dt;
+  StepReport r = step_halving(t, setup_.dt, newton, 0);
+  if (!r.converged && !r.interrupted && r.halvings > 0)
+    r.failure += fmt::format(" (the step was retried in halves {} time{}, down to dt / {})", r.halvings, r.halvings == 1 ? "" : "s",
+                             1 << setup_.step_halvings);
+  return r;
+}
+
+StepReport Simulation::step_halving(double t, double h, const NewtonOptions* newton, int level) {
+  if (!dynamic() || level >= setup_.step_halvings || !(t > time_)) return step_split(t, h, newton);
+  const SimulationState start = state();
+  StepReport whole = step_split(t, h, newton);
+  if (whole.converged || whole.interrupted) return whole;
+  // Not converged: back to the start, and the step as two halves (each retried the same way).
+  restore(start);
+  StepReport total;
+  total.halvings = 1;
+  total.splits = whole.splits;
+  // The failed attempt's work counts; its residual, last step and energy are not the answer's.
+  NewtonReport attempt = std::move(whole.newton);
+  attempt.residual = attempt.last_step = 0.0;
+  attempt.residuals.clear();
+  accumulate(total.newton, attempt);
+  const double mid = time_ + 0.5 * (t - time_);
+  for (const double end : {mid, t}) {
+    StepReport part = step_halving(end, 0.5 * h, newton, level + 1);
+    accumulate(total.newton, part.newton);
+    total.halvings += part.halvings;
+    total.splits += part.splits;
+    if (part.interrupted) {
+      restore(start);
+      part.newton = std::move(total.newton);
+      return part;
+    }
+    if (!part.converged) {  // the failing part's report, with the sums of the whole step
+      part.newton = std::move(total.newton);
+      part.halvings = total.halvings;
+      part.splits = total.splits;
+      return part;
+    }
+  }
+  total.substeps = 1;
+  return total;
+}
+
+StepReport Simulation::step_split(double t, double h, const NewtonOptions* newton) {
+  const double t0 = time_;
   if (!(t > t0) || clearance(t0, t, h) >= 1.0) return solve(t, h, newton);
   // Not clear: shorten the part to the fraction found clear (checked again: the poses between are not
   // linear) until it is, solve it, and go on from there.
@@ -439,6 +486,7 @@ StepReport Simulation::advance(double t_start, double h, int substeps, const New
     }
     frame.substeps = sub;
     frame.splits += r.splits;
+    frame.halvings += r.halvings;
     accumulate(frame.newton, r.newton);
     if (!r.converged) {
       frame.converged = false;

@@ -54,6 +54,10 @@ struct SimulationSetup {
   Eigen::VectorXd initial_velocity;       ///< dynamic: 3 #V starting velocities (empty: at rest)
   LinearSolverOptions linear;
   NewtonOptions newton;
+  /// Dynamic: a time step whose solve does not converge is retried from its start as two halves, each
+  /// retried the same way, down to dt / 2^step_halvings (0: a failed solve fails the step). An impact that a
+  /// whole step cannot take (a body moving its own size in one step) is then taken in smaller ones.
+  int step_halvings = 4;
   /// Quasi-static: the guess of the first step (default: the current state), given the state and t;
   /// kinematic targets are placed on it afterwards.
   std::function<Eigen::VectorXd(const Eigen::VectorXd& x, double t)> first_guess;
@@ -91,6 +95,9 @@ struct StepReport {
   /// Times a step was cut short because a moving collider's sweep or a scripted pin's jump to the step's
   /// time was not clear of the surface (each half solved on its own; summed over the substeps).
   int splits = 0;
+  /// Times a step was retried as two halves after its solve failed (SimulationSetup::step_halvings): each
+  /// adds one time step to the frame (summed over the substeps). The failed attempts' Newton work is counted.
+  int halvings = 0;
   /// Newton's counts and times summed over the substeps, with the largest final residual, the last
   /// solve's energy and every residual, substep after substep.
   NewtonReport newton;
@@ -160,6 +167,10 @@ class Simulation {
   [[nodiscard]] double rest_volume() const { return rest_volume_; }
 
  private:
+  /// step(t) over a time step h, retried in halves where it fails (`level` halvings deep so far).
+  StepReport step_halving(double t, double h, const NewtonOptions* newton, int level);
+  /// step(t) over a time step h, split where a collider's sweep is not clear.
+  StepReport step_split(double t, double h, const NewtonOptions* newton);
   /// One solve to time t over a time step h (dynamic; ignored quasi-statically).
   StepReport solve(double t, double h, const NewtonOptions* newton);
   /// A dynamic step of length h from the current state as an incremental potential (dynamics.hpp): the

@@ -16,6 +16,7 @@ SolverSpec parse_solver(Keys& top) {
     s.newton.max_iterations = static_cast<int>(k.integer("max_iterations", s.newton.max_iterations, 1, 100000));
     if (k.has("max_iterations")) s.max_iterations = s.newton.max_iterations;
     s.newton.try_true_hessian = !k.boolean("projected_only", !s.newton.try_true_hessian);
+    s.step_halvings = static_cast<int>(k.integer("step_halvings", s.step_halvings, 0, 20));
     k.finish();
   }
   return s;
