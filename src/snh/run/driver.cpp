@@ -58,7 +58,7 @@ void record_deformation(const ElasticTerm::Deformation& d, double rest_volume, S
 /// Whether every number of a record that the log line and the stats show is finite.
 bool finite_record(const StepRecord& r) {
   for (double v : {r.residual, r.energy, r.volume_ratio, r.min_J, r.elastic_energy, r.kinetic_energy, r.gravity_energy,
-                   r.total_energy, r.surface_volume_ratio, r.lbs_volume_ratio})
+                   r.total_energy, r.surface_volume_ratio, r.lbs_volume_ratio, r.lbs_distance, r.tip_distance})
     if (!std::isfinite(v)) return false;
   return true;
 }

@@ -99,8 +99,12 @@ const RecordTable& flesh_table() {
     RecordTable t = scene_table();
     t.fields.insert(t.fields.end() - 1, {{"surface_volume_ratio", &R::surface_volume_ratio, "{:.9g}", "flesh", "render_volume"},
                                          {"lbs_volume_ratio", &R::lbs_volume_ratio, "{:.9g}", "linear blend skinning",
-                                          "render_volume"}});
+                                          "render_volume"},
+                                         {"lbs_distance", &R::lbs_distance, "{:.9g}", "largest", "lbs_distance"},
+                                         {"tip_distance", &R::tip_distance, "{:.9g}", "at the skeleton's ends (fingertips, toes)",
+                                          "lbs_distance"}});
     t.plots.push_back({"render_volume", "Volume inside the render surface (posed / rest)", "ratio"});
+    t.plots.push_back({"lbs_distance", "Flesh against skinning: the render surface's largest offset", "model units"});
     return t;
   }();
   return table;

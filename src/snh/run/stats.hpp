@@ -34,6 +34,8 @@ struct StepRecord {
   double volume_ratio = 1.0;    ///< deformed / rest volume
   double surface_volume_ratio = 1.0;  ///< flesh: the volume inside the embedded render surface / at rest
   double lbs_volume_ratio = 1.0;      ///< flesh: the same for the surface posed by linear blend skinning
+  double lbs_distance = 0.0;          ///< flesh: the largest distance of a render-surface vertex from its skinned place
+  double tip_distance = 0.0;          ///< flesh: the same over the skin vertices nearest the skeleton's end joints
   // Contact (runs with contact terms; contact_table): at the frame's solution, and during its solve.
   int contact_pairs = 0;              ///< active pairs (self-contact pairs and points near a plane)
   double min_contact_distance = 0.0;  ///< smallest distance of an active pair; NaN (null) with none

@@ -262,6 +262,26 @@ void add_flesh_terms(const BuiltScene& b, SimulationSetup& setup, std::vector<st
   if (s.contact.enabled && s.contact.bones) bones = bone_collider_terms(flesh, b.contact.dhat, b.contact.stiffness);
 }
 
+namespace {
+
+/// The render-surface vertex nearest each end joint of the skeleton (a joint without children: a fingertip,
+/// a toe, the top of the head) at the bind pose, each vertex once.
+std::vector<int> tip_vertices(const RiggedModel& m) {
+  std::vector<int> out;
+  if (m.vertices.cols() == 0) return out;
+  const std::vector<std::vector<int>> children = m.skeleton.children();
+  for (int j = 0; j < m.skeleton.size(); ++j) {
+    if (!children[static_cast<std::size_t>(j)].empty() || static_cast<std::size_t>(j) >= m.inverse_bind.size()) continue;
+    const Eigen::Vector3d at = m.inverse_bind[static_cast<std::size_t>(j)].inverse().block<3, 1>(0, 3);
+    Eigen::Index nearest = 0;
+    (m.vertices.colwise() - at).colwise().squaredNorm().minCoeff(&nearest);
+    if (std::find(out.begin(), out.end(), static_cast<int>(nearest)) == out.end()) out.push_back(static_cast<int>(nearest));
+  }
+  return out;
+}
+
+}  // namespace
+
 void add_flesh_output(const BuiltScene& b, const Simulation& sim, RunPlan& plan) {
   const Flesh& flesh = *b.body->flesh;
   const FleshSpec& spec = *b.scene.flesh;
@@ -280,10 +300,15 @@ void add_flesh_output(const BuiltScene& b, const Simulation& sim, RunPlan& plan)
   };
   const double rest_surface = surface_volume(flesh, flesh.model.vertices);
   const auto base_fill = plan.fill;
-  plan.fill = [&flesh, &sim, rest_surface, base_fill](StepRecord& r, const StepReport* rep) {
+  std::vector<int> tips = tip_vertices(flesh.model);
+  plan.fill = [&flesh, &sim, rest_surface, base_fill, tips = std::move(tips)](StepRecord& r, const StepReport* rep) {
     if (base_fill) base_fill(r, rep);
-    r.surface_volume_ratio = surface_volume(flesh, flesh_surface(flesh, sim.x())) / rest_surface;
-    r.lbs_volume_ratio = surface_volume(flesh, skinned_surface(flesh, r.time)) / rest_surface;
+    const Eigen::Matrix3Xd skin = flesh_surface(flesh, sim.x()), lbs = skinned_surface(flesh, r.time);
+    r.surface_volume_ratio = surface_volume(flesh, skin) / rest_surface;
+    r.lbs_volume_ratio = surface_volume(flesh, lbs) / rest_surface;
+    r.lbs_distance = (skin - lbs).colwise().norm().maxCoeff();
+    r.tip_distance = 0.0;
+    for (int v : tips) r.tip_distance = std::max(r.tip_distance, (skin.col(v) - lbs.col(v)).norm());
   };
   const std::filesystem::path out = plan.out;
   plan.write_frame = [&flesh, out](int index, double time, const Eigen::VectorXd& x, const std::string& prefix) {
