@@ -337,6 +337,39 @@ Simulation::Stepper Simulation::stepper(double h) const {
   return s;
 }
 
+Eigen::VectorXd Simulation::carried_guesses(double t, const Eigen::VectorXd& x_n, Eigen::VectorXd& guess, double& E) {
+  // solve()'s extrapolations made in the carrier's frames (steps of equal length assumed, as there): the
+  // states at t_n, t_n − Δ, t_n − 2Δ (Δ = t − t_n) taken into the frames of their times, extrapolated
+  // there, and carried to t.
+  const double delta = t - time_;
+  std::vector<Frame> at_t, at_n;
+  setup_.carrier(t, at_t);
+  setup_.carrier(time_, at_n);
+  auto consider = [&](Eigen::VectorXd candidate) {
+    place_kinematic(candidate, t);
+    const double Ec = problem_.energy(candidate);
+    if (Ec < E || (!std::isfinite(E) && std::isfinite(Ec))) {
+      guess = std::move(candidate);
+      E = Ec;
+    }
+  };
+  const Eigen::VectorXd y0 = into_frames(at_n, x_n);
+  const Eigen::VectorXd x_n_carried = out_of_frames(at_t, y0);
+  consider(x_n_carried);
+  if (steps_ >= 1) {
+    std::vector<Frame> at_1;
+    setup_.carrier(time_ - delta, at_1);
+    const Eigen::VectorXd y1 = into_frames(at_1, previous_);
+    consider(out_of_frames(at_t, 2.0 * y0 - y1));
+    if (setup_.extrapolation >= 2 && steps_ >= 2 && previous2_.size() == x_.size()) {
+      std::vector<Frame> at_2;
+      setup_.carrier(time_ - 2.0 * delta, at_2);
+      consider(out_of_frames(at_t, 3.0 * (y0 - y1) + into_frames(at_2, previous2_)));
+    }
+  }
+  return x_n_carried;
+}
+
 StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
   StepReport report;
   report.substeps = 1;
@@ -379,38 +412,8 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
       E = Eq;
     }
   }
-  Eigen::VectorXd x_n_carried;  // x_n carried to t by the carrier's frames (quasi-static runs with a carrier)
-  if (!dynamic() && setup_.carrier) {
-    // The same extrapolations in the carrier's frames (steps of equal length assumed, as above): the
-    // states at t_n, t_n − Δ, t_n − 2Δ (Δ = t − t_n) taken into the frames of their times, extrapolated
-    // there, and carried to t.
-    const double delta = t - time_;
-    std::vector<Frame> at_t, at_n;
-    setup_.carrier(t, at_t);
-    setup_.carrier(time_, at_n);
-    auto consider = [&](Eigen::VectorXd candidate) {
-      place_kinematic(candidate, t);
-      const double Ec = problem_.energy(candidate);
-      if (Ec < E || (!std::isfinite(E) && std::isfinite(Ec))) {
-        guess = std::move(candidate);
-        E = Ec;
-      }
-    };
-    const Eigen::VectorXd y0 = into_frames(at_n, x_n);
-    x_n_carried = out_of_frames(at_t, y0);
-    consider(x_n_carried);
-    if (steps_ >= 1) {
-      std::vector<Frame> at_1;
-      setup_.carrier(time_ - delta, at_1);
-      const Eigen::VectorXd y1 = into_frames(at_1, previous_);
-      consider(out_of_frames(at_t, 2.0 * y0 - y1));
-      if (setup_.extrapolation >= 2 && steps_ >= 2 && previous2_.size() == x_.size()) {
-        std::vector<Frame> at_2;
-        setup_.carrier(time_ - 2.0 * delta, at_2);
-        consider(out_of_frames(at_t, 3.0 * (y0 - y1) + into_frames(at_2, previous2_)));
-      }
-    }
-  }
+  // x_n carried to t by the carrier's frames (quasi-static runs with a carrier), its extrapolations considered
+  const Eigen::VectorXd x_n_carried = !dynamic() && setup_.carrier ? carried_guesses(t, x_n, guess, E) : Eigen::VectorXd();
   {
     // Contact terms bound the move from x_n (its kinematic DOFs already at t) to the guess by continuous
     // collision detection, so that the guess never jumps through a contact (a term without a bound, as

@@ -188,6 +188,10 @@ class Simulation {
   /// Quasi-static with a carrier and a moving collider (a flesh's bones' capsules): the free vertices are
   /// taken along with the carrier (not held still) in the step's check and as the guess's base.
   [[nodiscard]] bool carried_check() const;
+  /// Quasi-static with a carrier: the extrapolations made in the carrier's frames (x_n carried to t, and
+  /// the linear and quadratic ones from the states before), each taken as the guess where its energy is
+  /// lower than E (guess and E updated); returns x_n carried to t.
+  Eigen::VectorXd carried_guesses(double t, const Eigen::VectorXd& x_n, Eigen::VectorXd& guess, double& E);
   /// The fibres' active strain at time t (setup.fibre_strain), set where it changed.
   void activate(double t);
   /// x carried by the carrier's frames from time `from` to `to` (every vertex: frame(to) · frame(from)⁻¹).
