@@ -26,7 +26,7 @@ SimulationSetup free_cube(Integrator integrator, double dt) {
   for (Eigen::Index v = 0; v < s.mesh.vertex_count(); ++v)
     s.initial.segment<3>(3 * v) = s.initial.segment<3>(3 * v).cwiseProduct(Eigen::Vector3d(1.3, 0.9, 1.1));
   s.linear.name = "ldlt";
-  s.linear.reuse_factor = false;
+  s.linear.reuse_factor = false;  // no factor kept from step to step: a restored run repeats the same arithmetic
   s.newton.tolerance = 1e-9;
   return s;
 }
