@@ -128,6 +128,32 @@ TEST(Bdf2, ResumesBitForBit) {
   EXPECT_EQ(resumed.state().aux.size(), saved.x.size());
 }
 
+TEST(Bdf2, AStepThatFailsInEveryHalfEndsAsTheWholeStepDid) {
+  // One Newton iteration cannot reach 1e-9 here, in a whole step or in any part. After halving, the state
+  // is the whole step's last iterate at its time (as with no halving: a run going on from it, with
+  // --keep-going, keeps its clock), and the failure says how the step was retried.
+  SimulationState after[2];
+  StepReport reports[2];
+  for (const int halvings : {0, 2}) {
+    SimulationSetup s = free_cube(Integrator::bdf2, 0.02);
+    s.newton.max_iterations = 1;
+    s.step_halvings = halvings;
+    Simulation sim(std::move(s));
+    const int i = halvings == 0 ? 0 : 1;
+    reports[i] = sim.step(0.02);
+    after[i] = sim.state();
+    EXPECT_EQ(sim.time(), 0.02);
+  }
+  ASSERT_FALSE(reports[0].converged);
+  ASSERT_FALSE(reports[1].converged);
+  EXPECT_EQ(reports[1].halvings, 2);  // the whole step, then its first half; the first quarter fails
+  EXPECT_NE(reports[1].failure.find("(the step was retried in halves 2 times, down to dt / 4)"), std::string::npos)
+      << reports[1].failure;
+  EXPECT_EQ(reports[1].newton.iterations, 3);
+  EXPECT_EQ((after[1].x - after[0].x).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((after[1].aux - after[0].aux).cwiseAbs().maxCoeff(), 0.0);
+}
+
 /// A bar [0, 2] × [−0.1, 0.1]² of 20 × 2 × 2 cubic hexes (the corner order of box_hexes).
 VolumeMesh bar() {
   const int nx = 20, n = 2;

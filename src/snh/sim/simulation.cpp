@@ -240,7 +240,9 @@ StepReport Simulation::step_halving(double t, double h, const NewtonOptions* new
   const SimulationState start = state();
   StepReport whole = step_split(t, h, newton);
   if (whole.converged || whole.interrupted) return whole;
-  // Not converged: back to the start, and the step as two halves (each retried the same way).
+  // Not converged: back to the start, and the step as two halves (each retried the same way). Should they
+  // fail too, the state is the whole step's last iterate at t again (as without halving), not a part's.
+  const SimulationState failed = state();
   restore(start);
   StepReport total;
   total.halvings = 1;
@@ -262,6 +264,7 @@ StepReport Simulation::step_halving(double t, double h, const NewtonOptions* new
       return part;
     }
     if (!part.converged) {  // the failing part's report, with the sums of the whole step
+      restore(failed);
       part.newton = std::move(total.newton);
       part.halvings = total.halvings;
       part.splits = total.splits;
@@ -328,7 +331,6 @@ Simulation::Stepper Simulation::stepper(double h) const {
     s.anchor = -(a1 * x_ + a2 * previous_) / a0;
     s.h_eff = h / a0;
     s.predicted = s.anchor - s.h_eff * (a1 * v_ + a2 * v_previous_) / a0;
-    s.second_order = true;
   } else {
     s.anchor = x_;
     s.h_eff = h;

@@ -178,7 +178,6 @@ class Simulation {
   struct Stepper {
     Eigen::VectorXd anchor, predicted;
     double h_eff = 0.0;
-    bool second_order = false;  ///< BDF2 (false: backward Euler)
   };
   [[nodiscard]] Stepper stepper(double h) const;
   /// The smallest fraction of the step from `from` to `to` (over h, dynamic) that the moving terms'
