@@ -8,14 +8,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numeric>
 #include <random>
 
 #include "snh/contact/barrier.hpp"
+#include "snh/contact/broad_phase.hpp"
 #include "snh/contact/edge_edge_distance.hpp"
 #include "snh/contact/point_triangle_distance.hpp"
 #include "snh/fem/attachment_term.hpp"
 #include "snh/fem/collider_term.hpp"
 #include "snh/fem/contact_term.hpp"
+#include "snh/fem/elastic_term.hpp"
 #include "snh/fem/problem.hpp"
 #include "snh/material/registry.hpp"
 #include "snh/mesh/box.hpp"
@@ -230,6 +233,131 @@ struct TwoCubes {
     F = boundary_triangles(mesh);
   }
 };
+
+TEST(ContactTerm, StencilAheadCouplesEveryPairWithinItsReachAndCoversTheStencil) {
+  // Two finer cubes (box_tets(3) scaled: 18 triangles a face), 0.6 d̂ apart and jittered by up to 0.2 d̂: every vertex–triangle
+  // and edge–edge pair within layout_reach() = 4 d̂ has its four vertices coupled in a layout built from
+  // stencil_ahead, as has every active pair; pairs far beyond the reach are not.
+  const double dhat = 0.05;
+  VolumeMesh one = box_tets(3);
+  const Eigen::Index n = one.vertex_count();
+  VolumeMesh mesh = one;
+  mesh.vertices.resize(3, 2 * n);
+  mesh.vertices.leftCols(n) = 0.5 * one.vertices;
+  mesh.vertices.rightCols(n) = (0.5 * one.vertices).colwise() + Vec3(1.0 + 0.6 * dhat, 0.1, 0.0);
+  mesh.cells.resize(one.cells.rows(), 2 * one.cells.cols());
+  mesh.cells.leftCols(one.cells.cols()) = one.cells;
+  mesh.cells.rightCols(one.cells.cols()) = one.cells.array() + static_cast<int>(n);
+  const Eigen::Matrix3Xi F = boundary_triangles(mesh);
+  const ContactTerm term(F, EmbeddedPoints::every(2 * n), mesh.vertices, dhat, 1.0);
+  ASSERT_DOUBLE_EQ(term.layout_reach(), 4.0 * dhat);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-0.2 * dhat, 0.2 * dhat);
+  Eigen::Matrix3Xd V = mesh.vertices;
+  for (Eigen::Index v = n; v < 2 * n; ++v) V.col(v) += Vec3(u(rng), u(rng), u(rng));
+  const Eigen::VectorXd x = flatten(V);
+  Stencil now, ahead;
+  term.stencil(x, now);
+  term.stencil_ahead(x, ahead);
+  ASSERT_GT(now.groups(), 0) << "pairs in range";
+  std::vector<int> numbering(x.size());
+  std::iota(numbering.begin(), numbering.end(), 0);
+  const HessianLayout L(numbering, static_cast<int>(x.size()), {&ahead});
+  EXPECT_TRUE(L.covers(now));
+  const double reach2 = std::pow(term.layout_reach(), 2);
+  const Eigen::Matrix2Xi E = contact::surface_edges(F);
+  const auto coupled = [&](const std::array<int, 4>& ids) {
+    return L.covers(Stencil{.arity = 4, .vertices = {ids[0], ids[1], ids[2], ids[3]}});
+  };
+  int within = 0;
+  for (Eigen::Index t = 0; t < F.cols(); ++t)
+    for (Eigen::Index v = 0; v < 2 * n; ++v) {
+      if ((v < n) == (F(0, t) < n)) continue;  // one cube against the other
+      const std::array<int, 4> ids{static_cast<int>(v), F(0, t), F(1, t), F(2, t)};
+      if (contact::point_triangle_distance(V.col(v), V.col(F(0, t)), V.col(F(1, t)), V.col(F(2, t))) < reach2) {
+        ++within;
+        EXPECT_TRUE(coupled(ids)) << "vertex " << v << ", triangle " << t;
+      }
+    }
+  for (Eigen::Index a = 0; a < E.cols(); ++a)
+    for (Eigen::Index b = a + 1; b < E.cols(); ++b) {
+      if ((E(0, a) < n) == (E(0, b) < n)) continue;
+      const std::array<int, 4> ids{E(0, a), E(1, a), E(0, b), E(1, b)};
+      if (contact::edge_edge_distance(V.col(ids[0]), V.col(ids[1]), V.col(ids[2]), V.col(ids[3])) < reach2) {
+        ++within;
+        EXPECT_TRUE(coupled(ids)) << "edges " << a << ", " << b;
+      }
+    }
+  EXPECT_GT(within, now.groups() / 6) << "more pairs within the reach than in range";
+  // Two vertices of a candidate within the reach are at most the reach plus two edges apart: farther ones are
+  // never coupled across the cubes.
+  double edge = 0.0;
+  for (Eigen::Index e = 0; e < E.cols(); ++e) edge = std::max(edge, (V.col(E(0, e)) - V.col(E(1, e))).norm());
+  int far = 0, far_coupled = 0;
+  for (Eigen::Index a = 0; a < n; ++a)
+    for (Eigen::Index b = n; b < 2 * n; ++b)
+      if ((V.col(a) - V.col(b)).norm() > term.layout_reach() + 2.0 * edge) {
+        ++far;
+        far_coupled += L.entry(static_cast<int>(3 * b), static_cast<int>(3 * a)) >= 0;
+      }
+  EXPECT_GT(far, 100);
+  EXPECT_EQ(far_coupled, 0);
+}
+
+TEST(ContactTerm, ALayoutRebuiltAheadServesTheNextIterates) {
+  // The second of two finer cubes slides along the first, 0.5 d̂ above it, in 100 steps of 0.18 d̂: the pairs in
+  // range change at many steps. A problem (elasticity and contact) asked for a Hessian at each step rebuilds
+  // its layout less than half as often as a layout built for the pairs in range alone would need (counted here
+  // by rebuilding one whenever the pairs leave it), and its matrices equal a fresh problem's.
+  const double dhat = 0.05;
+  VolumeMesh one = box_tets(3);
+  const Eigen::Index n = one.vertex_count();
+  VolumeMesh mesh = one;
+  mesh.vertices.resize(3, 2 * n);
+  mesh.vertices.leftCols(n) = 0.5 * one.vertices;
+  mesh.vertices.rightCols(n) = (0.5 * one.vertices).colwise() + Vec3(0.3, 0.2, 1.0 + 0.5 * dhat);
+  mesh.cells.resize(one.cells.rows(), 2 * one.cells.cols());
+  mesh.cells.leftCols(one.cells.cols()) = one.cells;
+  mesh.cells.rightCols(one.cells.cols()) = one.cells.array() + static_cast<int>(n);
+  const Eigen::Matrix3Xi F = boundary_triangles(mesh);
+  ElasticTerm elastic(mesh, make_material("stable_neo_hookean", {1.0, 10.0}));
+  ContactTerm contact(F, EmbeddedPoints::every(2 * n), mesh.vertices, dhat, 1.0);
+  Problem p{DofMap(std::vector<std::uint8_t>(3 * mesh.vertex_count(), 0))};
+  p.add(elastic);
+  p.add(contact);
+  Stencil cells, pairs;
+  elastic.stencil(flatten(mesh.vertices), cells);
+  std::vector<int> numbering(3 * mesh.vertex_count());
+  std::iota(numbering.begin(), numbering.end(), 0);
+  HessianLayout alone;
+  int alone_built = 0;
+  Eigen::Matrix3Xd V = mesh.vertices;
+  for (int step = 0; step < 100; ++step) {
+    V.rightCols(n).colwise() -= Vec3(0.15 * dhat, 0.1 * dhat, 0.0);
+    const Eigen::VectorXd x = flatten(V);
+    Eigen::VectorXd g;
+    HessianMatrix H;
+    p.evaluate(x, g, &H, PsdProjection::clamp);
+    contact.stencil(x, pairs);
+    if (alone_built == 0 || !alone.covers(pairs)) {
+      alone = HessianLayout(numbering, static_cast<int>(numbering.size()), {&cells, &pairs});
+      ++alone_built;
+    }
+    if (step % 10 != 9) continue;
+    ElasticTerm elastic2(mesh, make_material("stable_neo_hookean", {1.0, 10.0}));
+    ContactTerm contact2(F, EmbeddedPoints::every(2 * n), mesh.vertices, dhat, 1.0);
+    Problem q{DofMap(std::vector<std::uint8_t>(3 * mesh.vertex_count(), 0))};
+    q.add(elastic2);
+    q.add(contact2);
+    Eigen::VectorXd gq;
+    HessianMatrix Hq;
+    q.evaluate(x, gq, &Hq, PsdProjection::clamp);
+    ASSERT_EQ(Eigen::MatrixXd(H.matrix), Eigen::MatrixXd(Hq.matrix)) << "step " << step;
+  }
+  std::cout << "layouts: " << p.layouts_built() << " built ahead, " << alone_built << " for the pairs in range alone\n";
+  EXPECT_GT(alone_built, 6);
+  EXPECT_LE(p.layouts_built() - 1, (alone_built - 1) / 2) << "rebuilds after the first";
+}
 
 TEST(ContactTerm, MaxStepKeepsEveryPairApartOnRandomSteps) {
   std::mt19937_64 rng(11);
@@ -503,6 +631,8 @@ TEST(ContactTerm, TwoCubesThrownAtEachOtherBounceApartWithoutIntersecting) {
   }
   EXPECT_GT(contact_steps, 0);
   EXPECT_LT(closest, dhat);
+  // The layout was rebuilt for the pairs within 4 d̂ when the first came in range, and served every step after.
+  EXPECT_EQ(run.problem.layouts_built(), 2);
   // Bounced: the cubes' mean velocities now point away from each other.
   const double va = v(Eigen::seqN(0, n, 3)).mean(), vb = v(Eigen::seqN(3 * n, n, 3)).mean();
   EXPECT_LT(va, 0.0);

@@ -234,6 +234,63 @@ TEST(AlgebraicMultigrid, ColouredSmootherIsValidAndTheSameForOneAndTwoThreads) {
   check_threads(box_tets(12), Coarsening::aggregation);
 }
 
+TEST(Multigrid, AContactCouplingMovesOnlyItsOwnNodeOutOfTheParityColours) {
+  // A spring block between two free nodes of one parity, four cells apart (what a contact pair adds to the
+  // pattern), on a pinned box: on the finest level only the higher of the two leaves the 8 parity colours;
+  // every other node keeps its parity, every level's colouring stays valid, and CG converges in about the
+  // iterations of the box without the spring.
+  const int res = 16;
+  const VolumeMesh mesh = box_hexes(res);
+  System s(mesh, pins(mesh), 13);
+  const std::vector<int>& row = s.problem.dofs().free_index();
+  const int a = lattice_index(res, 4, 8, 4), b = lattice_index(res, 8, 8, 8);
+  std::vector<Eigen::Triplet<double>> entries;
+  const SparseLower& A = s.H.matrix;
+  for (Eigen::Index c = 0; c < A.outerSize(); ++c)
+    for (SparseLower::InnerIterator it(A, c); it; ++it) entries.emplace_back(it.row(), it.col(), it.value());
+  const double k = 0.5 * A.diagonal().mean();
+  for (int d = 0; d < 3; ++d) {
+    const int ra = row[3 * a + d], rb = row[3 * b + d];
+    ASSERT_GE(ra, 0);
+    ASSERT_GE(rb, 0);
+    entries.emplace_back(ra, ra, k);
+    entries.emplace_back(rb, rb, k);
+    entries.emplace_back(std::max(ra, rb), std::min(ra, rb), -k);
+  }
+  SparseLower coupled(A.rows(), A.cols());
+  coupled.setFromTriplets(entries.begin(), entries.end());
+  MultigridPreconditioner M(mesh, row);
+  ASSERT_TRUE(M.compute(coupled));
+  ASSERT_GE(M.levels(), 2);
+  const LatticeCoordinates lattice = lattice_coordinates(mesh);
+  const std::vector<int>& colour = M.colours(0);
+  ASSERT_EQ(colour.size(), static_cast<std::size_t>(mesh.vertex_count()));
+  int moved = 0;
+  for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) {
+    const Eigen::Vector3i at = lattice.coordinates.col(v);
+    const int parity = (at.x() & 1) | (at.y() & 1) << 1 | (at.z() & 1) << 2;
+    if (colour[v] == parity) continue;
+    ++moved;
+    EXPECT_EQ(v, std::max(a, b));
+    EXPECT_GE(colour[v], 8);
+  }
+  EXPECT_EQ(moved, 1);
+  for (int l = 0; l < M.levels(); ++l) {
+    int clashes = 0;
+    for (const auto& [i, j] : M.couplings(l)) clashes += M.colours(l)[i] == M.colours(l)[j];
+    EXPECT_EQ(clashes, 0) << "level " << l;
+  }
+  std::mt19937_64 rng(2);
+  std::normal_distribution<double> n;
+  Eigen::VectorXd rhs(A.rows()), x;
+  for (Eigen::Index i = 0; i < rhs.size(); ++i) rhs[i] = n(rng);
+  MultigridPreconditioner plain(mesh, row);
+  ASSERT_TRUE(plain.compute(A));
+  const int with = iterations_with(coupled, M, rhs, x), without = iterations_with(A, plain, rhs, x);
+  std::cout << "CG iterations: " << with << " with the spring, " << without << " without\n";
+  EXPECT_LE(with, without + 3);
+}
+
 // Every coarse level's matrix is Pᵀ A P of the level above it on the coarse level's free DOFs (and zero on
 // the others: those with a zero diagonal, as many as the level has DOFs that are not free), by the serial and
 // the parallel product alike.

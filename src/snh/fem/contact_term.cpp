@@ -304,6 +304,33 @@ void ContactTerm::stencil(const Eigen::VectorXd& x, Stencil& out) const {
   for (const ContactPair& p : pairs_at(x)) points_.couple(p.vertices, p.arity(), out.vertices);
 }
 
+void ContactTerm::stencil_ahead(const Eigen::VectorXd& x, Stencil& out) const {
+  const ScopeTimer timed(counters_.seconds);
+  out.arity = 2;
+  out.vertices.clear();
+  if (!x.allFinite()) return;
+  const Eigen::Matrix3Xd V = positions(x);
+  const double reach = layout_reach();
+  const contact::Candidates c = contact::broad_phase(V, V, local_F_, local_E_, reach);
+  const double r2 = reach * reach;
+  const auto couple = [&](const std::array<int, 4>& ids) {
+    if (embedded_) {
+      points_.couple(ids, 4, out.vertices);
+      return;
+    }
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) out.vertices.insert(out.vertices.end(), {vertex_of(ids[i]), vertex_of(ids[j])});
+  };
+  for (const auto& [v, t] : c.vertex_triangle) {
+    const std::array<int, 4> ids{v, local_F_(0, t), local_F_(1, t), local_F_(2, t)};
+    if (contact::point_triangle_distance(V.col(ids[0]), V.col(ids[1]), V.col(ids[2]), V.col(ids[3])) < r2) couple(ids);
+  }
+  for (const auto& [ea, eb] : c.edge_edge) {
+    const std::array<int, 4> ids{local_E_(0, ea), local_E_(1, ea), local_E_(0, eb), local_E_(1, eb)};
+    if (contact::edge_edge_distance(V.col(ids[0]), V.col(ids[1]), V.col(ids[2]), V.col(ids[3])) < r2) couple(ids);
+  }
+}
+
 Crowding ContactTerm::crowding(const Eigen::VectorXd& x, std::size_t max_candidates) const {
   const Eigen::Matrix3Xd V = positions(x);
   const contact::Candidates c = contact::broad_phase(V, V, local_F_, local_E_, dhat_, max_candidates);

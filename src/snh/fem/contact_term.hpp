@@ -34,7 +34,8 @@
 //      by vertex id into the DOF vector and the Hessian (per pair, PSD-projected when projection is asked)
 //      into the layout. No pair below ŝ: nothing is added at all (bit-identical to a problem without it).
 // stencil: each active pair's vertices coupled with each other (stencil_varies: the layout grows when new
-// pairs appear). max_step: the broad phase of the swept boxes (x to x + dx, each grown by d̂/2, so a pair left
+// pairs appear); stencil_ahead, what a rebuilt layout covers: every candidate within 4 d̂, its four points
+// coupled. max_step: the broad phase of the swept boxes (x to x + dx, each grown by d̂/2, so a pair left
 // out stays farther than d̂ apart over the whole step, while with boxes not grown a pair ending in touching
 // could be missed by the rounding of the boxes' bounds, the ball of tests/setup/test_contact_scenes.cpp) and
 // additive CCD (contact/ccd.hpp) of every vertex–triangle and edge–edge candidate: the smallest t, in
@@ -104,6 +105,11 @@ class ContactTerm final : public ContactTermBase {
                   PsdProjection projection) const override;
   void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
   [[nodiscard]] bool stencil_varies() const override { return true; }
+  /// The pairs within layout_reach() at x, each candidate's 4 points coupled whatever its closest features.
+  void stencil_ahead(const Eigen::VectorXd& x, Stencil& out) const override;
+  /// The distance within which stencil_ahead() couples pairs: kLayoutReach d̂.
+  [[nodiscard]] double layout_reach() const { return kLayoutReach * dhat_; }
+  static constexpr double kLayoutReach = 4.0;
   [[nodiscard]] double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 
   /// The active pairs at x (s < ŝ), merged and sorted as described above, their ids the points'.

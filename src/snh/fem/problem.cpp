@@ -37,6 +37,12 @@ void Problem::update_layout(const Eigen::VectorXd& x) {
       varying_[i] = std::move(s);
     }
   if (!rebuild) return;
+  // A layout that no longer covers: the varying stencils ahead of x (Term::stencil_ahead), so that the new one
+  // covers the next iterates too. The first layout is built for x alone: a scene that starts out of contact
+  // may never need more.
+  if (have_layout_)
+    for (std::size_t i = 0; i < terms_.size(); ++i)
+      if (terms_[i]->stencil_varies()) terms_[i]->stencil_ahead(x, varying_[i]);
   std::vector<const Stencil*> all;
   for (const auto* list : {&fixed_, &varying_})
     for (const Stencil& s : *list)

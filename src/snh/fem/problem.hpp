@@ -2,8 +2,9 @@
 // What Newton minimises (docs/design.md): a sum of energy terms over the free DOFs of a DofMap, the
 // kinematic DOFs held at their values in x. The problem owns the Hessian layout over the free DOFs: the
 // union of the terms' stencils, built by the first evaluation that asks for a Hessian and rebuilt (each
-// term's bind() called again) when a term whose stencil varies couples vertices the layout does not;
-// fixed stencils (elasticity) are asked once.
+// term's bind() called again) when a term whose stencil varies couples vertices the layout does not, for what
+// those terms may couple soon (Term::stencil_ahead), so that one rebuild serves many iterates; fixed
+// stencils (elasticity) are asked once.
 #include <cstdint>
 #include <vector>
 

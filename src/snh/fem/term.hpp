@@ -44,6 +44,12 @@ class Term {
   /// True if the stencil depends on x (contact pairs): it is then asked at every evaluation, and the
   /// layout grows when it is not covered. A fixed stencil is asked once.
   [[nodiscard]] virtual bool stencil_varies() const { return false; }
+  /// What a new layout should cover for a varying stencil: the stencil at x and what it may couple soon
+  /// (contact: the pairs within a wider distance than d̂), so that a layout, once rebuilt, serves the next
+  /// iterates and frames too. A rebuild costs what the whole elastic pattern costs (the layout, every
+  /// term's bind(), the linear solver's analysis), the few entries more cost almost nothing. The stencil
+  /// itself by default.
+  virtual void stencil_ahead(const Eigen::VectorXd& x, Stencil& out) const { stencil(x, out); }
   /// Called when the problem's layout is (re)built, before any evaluation with it: a term that scatters
   /// through precomputed value indices computes them here.
   virtual void bind(const HessianLayout& /*layout*/) {}

@@ -11,9 +11,10 @@
 namespace snh::multigrid {
 
 /// The smoother's colours and block rows of L (see Level), from its pattern. Lattice levels: the parity of the
-/// node's lattice coordinates (8 colours), used where it is valid — no block couples two nodes of one parity,
-/// as on 27-point stencils, which trilinear Galerkin products keep — else, and for aggregation levels, greedy
-/// colouring in node order (each node the smallest colour none of its lower neighbours has). A lexicographic
+/// node's lattice coordinates (8 colours), which 27-point stencils and their trilinear Galerkin products keep
+/// valid (no block couples two nodes of one parity); a node whose block row couples it to a lower node of its
+/// own parity (contact) is coloured greedily instead, from colour 8 on. Aggregation levels: greedy colouring in
+/// node order (each node the smallest colour none of its neighbours coloured before it has). A lexicographic
 /// level's rows are sorted by node instead.
 void sweep_rows(Level& L, bool lexicographic) {
   L.lexicographic = lexicographic;
@@ -33,26 +34,37 @@ void sweep_rows(Level& L, bool lexicographic) {
         L.row_node[next[k]] = i, L.row_slot[next[k]++] = s;
       }
   }
-  L.colour.assign(n, 0);
-  bool valid = !L.at.empty();
-  for (int i = 0; i < n && valid; ++i) {
-    const Eigen::Vector3i& a = L.at[i];
-    L.colour[i] = (a.x() & 1) | (a.y() & 1) << 1 | (a.z() & 1) << 2;
-  }
-  for (int i = 0; i < n && valid; ++i)
-    for (int s = L.A.start[i]; s + 1 < L.A.start[i + 1] && valid; ++s) valid = L.colour[L.A.col[s]] != L.colour[i];
-  if (!valid) {
-    std::vector<int> seen;  // seen[c] == i + 1: colour c is taken by a neighbour of i
+  // Parity where the level has lattice coordinates; a node coupled to a lower node of its own parity (a contact
+  // pair's coupling across the lattice) is moved out of the parity colours, so that one pair changes the
+  // colours of its own few nodes only, not the sweep order of the whole level.
+  L.colour.assign(n, -1);
+  if (!L.at.empty()) {
     for (int i = 0; i < n; ++i) {
-      for (int s = L.A.start[i]; s + 1 < L.A.start[i + 1]; ++s) {
-        const int c = L.colour[L.A.col[s]];
-        if (c >= static_cast<int>(seen.size())) seen.resize(c + 1, 0);
-        seen[c] = i + 1;
-      }
-      int c = 0;
-      while (c < static_cast<int>(seen.size()) && seen[c] == i + 1) ++c;
-      L.colour[i] = c;
+      const Eigen::Vector3i& a = L.at[i];
+      L.colour[i] = (a.x() & 1) | (a.y() & 1) << 1 | (a.z() & 1) << 2;
     }
+    for (int i = 0; i < n; ++i)
+      for (int s = L.A.start[i]; s + 1 < L.A.start[i + 1]; ++s)
+        if (L.colour[L.A.col[s]] == L.colour[i]) {
+          L.colour[i] = -1;
+          break;
+        }
+  }
+  // The rest (every node of an aggregation level), greedily in node order: the smallest colour, from the first
+  // after the parity ones, that no neighbour has.
+  const int first_free = L.at.empty() ? 0 : 8;
+  std::vector<int> seen;  // seen[c] == i + 1: colour c is taken by a neighbour of i
+  for (int i = 0; i < n; ++i) {
+    if (L.colour[i] >= 0) continue;
+    for (int e = L.row_start[i]; e < L.row_start[i + 1]; ++e) {
+      const int c = L.colour[L.row_node[e]];
+      if (c < 0) continue;
+      if (c >= static_cast<int>(seen.size())) seen.resize(c + 1, 0);
+      seen[c] = i + 1;
+    }
+    int c = first_free;
+    while (c < static_cast<int>(seen.size()) && seen[c] == i + 1) ++c;
+    L.colour[i] = c;
   }
   const int colours = n ? *std::max_element(L.colour.begin(), L.colour.end()) + 1 : 0;
   L.colour_start.assign(colours + 1, 0);
