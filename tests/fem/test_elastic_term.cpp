@@ -5,6 +5,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -154,6 +155,30 @@ TEST(Assembly, BitIdenticalForOneAndTwoThreads) {
     EXPECT_GT(sys.elastic.colour_count(), 1);
     expect_same_for_one_and_two_threads(sys, flatten(m.vertices) * 1.2);
   }
+}
+
+TEST(Assembly, ScatterMapIsTheSameForOneAndTwoThreadsAndRefusesALayoutWithoutTheCells) {
+  // 4 096 hexes: the scatter map's cells run in parallel. A layout of the diagonal alone lacks every cell's
+  // couplings: a logic_error (after the parallel loop), for both thread counts.
+  const VolumeMesh m = box_hexes(16);
+  ElasticTerm elastic(m, make_material("stable_neo_hookean", {1.0, 10.0}));
+  Stencil cells;
+  elastic.stencil(flatten(m.vertices), cells);
+  std::vector<int> numbering(3 * m.vertex_count());
+  for (std::size_t d = 0; d < numbering.size(); ++d) numbering[d] = static_cast<int>(d);
+  const HessianLayout layout(numbering, static_cast<int>(numbering.size()), {&cells});
+  const HessianLayout diagonal(numbering, static_cast<int>(numbering.size()), {});
+  const int threads = omp_get_max_threads();
+  std::vector<int> maps[2];
+  for (int t : {1, 2}) {
+    omp_set_num_threads(t);
+    maps[t - 1] = elastic.scatter_map(layout);
+    EXPECT_THROW((void)elastic.scatter_map(diagonal), std::logic_error) << t << " threads";
+  }
+  omp_set_num_threads(threads);
+  EXPECT_EQ(maps[0], maps[1]);
+  // Every entry mapped but the 3 · 8 · 7 / 2 upper halves of each cell's diagonal blocks (left at −1).
+  EXPECT_EQ(std::count(maps[0].begin(), maps[0].end(), -1), 84 * m.cell_count());
 }
 
 TEST(Assembly, ChunksOfCellsGiveTheSameResultsForOneAndTwoThreads) {
