@@ -216,12 +216,12 @@ TEST(ContactTerm, EnergyIsContinuousAcrossAClosestFeatureChange) {
   EXPECT_LT(largest_jump, 1e-3 * largest);  // a jump of one pair's barrier would be ~25% of it
 }
 
-/// Two cubes of side `side` (box_tets(1) scaled), the second shifted by `offset`, as one mesh.
+/// Two cubes of side `side` (box_tets(res) scaled), the second shifted by `offset`, as one mesh.
 struct TwoCubes {
   VolumeMesh mesh;
   Eigen::Matrix3Xi F;
-  TwoCubes(double side, const Vec3& offset) {
-    const VolumeMesh one = box_tets(1);
+  TwoCubes(double side, const Vec3& offset, int res = 1) {
+    const VolumeMesh one = box_tets(res);
     const Eigen::Index n = one.vertex_count();
     mesh = one;
     mesh.vertices.resize(3, 2 * n);
@@ -235,20 +235,14 @@ struct TwoCubes {
 };
 
 TEST(ContactTerm, StencilAheadCouplesEveryPairWithinItsReachAndCoversTheStencil) {
-  // Two finer cubes (box_tets(3) scaled: 18 triangles a face), 0.6 d̂ apart and jittered by up to 0.2 d̂: every vertex–triangle
-  // and edge–edge pair within layout_reach() = 4 d̂ has its four vertices coupled in a layout built from
-  // stencil_ahead, as has every active pair; pairs far beyond the reach are not.
+  // Two finer cubes (box_tets(3) scaled: 18 triangles a face), 0.6 d̂ apart and jittered by up to 0.2 d̂:
+  // every vertex–triangle and edge–edge pair within layout_reach() = 4 d̂ has its four vertices coupled in a
+  // layout built from stencil_ahead, as has every active pair; pairs far beyond the reach are not.
   const double dhat = 0.05;
-  VolumeMesh one = box_tets(3);
-  const Eigen::Index n = one.vertex_count();
-  VolumeMesh mesh = one;
-  mesh.vertices.resize(3, 2 * n);
-  mesh.vertices.leftCols(n) = 0.5 * one.vertices;
-  mesh.vertices.rightCols(n) = (0.5 * one.vertices).colwise() + Vec3(1.0 + 0.6 * dhat, 0.1, 0.0);
-  mesh.cells.resize(one.cells.rows(), 2 * one.cells.cols());
-  mesh.cells.leftCols(one.cells.cols()) = one.cells;
-  mesh.cells.rightCols(one.cells.cols()) = one.cells.array() + static_cast<int>(n);
-  const Eigen::Matrix3Xi F = boundary_triangles(mesh);
+  const TwoCubes cubes(1.0, Vec3(1.0 + 0.6 * dhat, 0.1, 0.0), 3);
+  const VolumeMesh& mesh = cubes.mesh;
+  const Eigen::Matrix3Xi& F = cubes.F;
+  const Eigen::Index n = mesh.vertex_count() / 2;
   const ContactTerm term(F, EmbeddedPoints::every(2 * n), mesh.vertices, dhat, 1.0);
   ASSERT_DOUBLE_EQ(term.layout_reach(), 4.0 * dhat);
   std::mt19937_64 rng(7);
@@ -310,16 +304,10 @@ TEST(ContactTerm, ALayoutRebuiltAheadServesTheNextIterates) {
   // its layout less than half as often as a layout built for the pairs in range alone would need (counted here
   // by rebuilding one whenever the pairs leave it), and its matrices equal a fresh problem's.
   const double dhat = 0.05;
-  VolumeMesh one = box_tets(3);
-  const Eigen::Index n = one.vertex_count();
-  VolumeMesh mesh = one;
-  mesh.vertices.resize(3, 2 * n);
-  mesh.vertices.leftCols(n) = 0.5 * one.vertices;
-  mesh.vertices.rightCols(n) = (0.5 * one.vertices).colwise() + Vec3(0.3, 0.2, 1.0 + 0.5 * dhat);
-  mesh.cells.resize(one.cells.rows(), 2 * one.cells.cols());
-  mesh.cells.leftCols(one.cells.cols()) = one.cells;
-  mesh.cells.rightCols(one.cells.cols()) = one.cells.array() + static_cast<int>(n);
-  const Eigen::Matrix3Xi F = boundary_triangles(mesh);
+  const TwoCubes cubes(1.0, Vec3(0.3, 0.2, 1.0 + 0.5 * dhat), 3);
+  const VolumeMesh& mesh = cubes.mesh;
+  const Eigen::Matrix3Xi& F = cubes.F;
+  const Eigen::Index n = mesh.vertex_count() / 2;
   ElasticTerm elastic(mesh, make_material("stable_neo_hookean", {1.0, 10.0}));
   ContactTerm contact(F, EmbeddedPoints::every(2 * n), mesh.vertices, dhat, 1.0);
   Problem p{DofMap(std::vector<std::uint8_t>(3 * mesh.vertex_count(), 0))};
