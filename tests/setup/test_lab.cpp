@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -69,8 +70,9 @@ TEST(Lab, ReflectionSnhDoesNotDependOnTheAxisCorotatedDoes) {
   };
   EXPECT_LT(spread("stable_neo_hookean"), 1e-4);
   EXPECT_TRUE(get(runs, "reflect_x", "stable_neo_hookean").recovered());
-  // Corotated (signed σ, docs/math.md) is not reflection consistent: the outcome depends on the axis.
-  EXPECT_GT(spread("corotated"), 1e-2);
+  // Corotated (signed σ, docs/math.md) is not reflection consistent: the outcome depends on the axis, by
+  // far more than SNH's solver tolerance (quick: 6.8e-4 against 2.3e-6; the full lab: 2.9e-2).
+  EXPECT_GT(spread("corotated"), std::max(1e-4, 100.0 * spread("stable_neo_hookean")));
   for (const char* c : {"reflect_x", "reflect_y", "reflect_z"}) {
     const LabRun& r = get(runs, c, "corotated");
     if (!r.converged) EXPECT_NE(r.failure.find("Newton"), std::string::npos) << "a failure is reported: " << r.failure;

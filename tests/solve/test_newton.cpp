@@ -1,6 +1,7 @@
 // Projected Newton on toy problems: trials outside an energy's domain (+∞) shorten the step and never
 // enter the state, a term's step bound starts the line search, accepted iterates reach the terms, and the
-// step-size stopping rule, the looser linear solves an inexact solver is allowed, and one Hessian per Newton step.
+// step-size stopping rule, the looser linear solves an inexact solver is allowed, one Hessian per Newton step,
+// and full steps doubled where the projected Hessian overestimates the curvature.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -187,6 +188,59 @@ TEST(Newton, AssemblesOneHessianPerNewtonStepAndNoneForAConvergedStart) {
   ASSERT_TRUE(again.converged);
   EXPECT_EQ(again.iterations, 0);
   EXPECT_EQ(toy.term.hessians, 0);
+}
+
+/// Per DOF, E = ½ x² + ¼ c x⁴ (a convex "element") − ½ (1 + δ) x² (a concave one, as an element turned
+/// inside out has negative curvature): minimised at x² = δ / c, with the curvature −δ + 3 c x², negative near
+/// 0. Projected per element, the concave part's Hessian is clamped to 0, so the matrix says 1 + 3 c x²,
+/// a hundred times the energy's curvature: each projected Newton step from x is only about δ x long.
+class Clamped final : public Term {
+ public:
+  Clamped(double delta, double c) : delta_(delta), c_(c) {}
+  std::string_view name() const override { return "clamped"; }
+  double energy(const Eigen::VectorXd& x) const override { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, const HessianValues* H, PsdProjection p) const override {
+    double E = 0.0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      const double v = x[i];
+      E += 0.5 * v * v + 0.25 * c_ * v * v * v * v - 0.5 * (1.0 + delta_) * v * v;
+      if (g) (*g)[i] += v + c_ * v * v * v - (1.0 + delta_) * v;
+      if (H) {
+        Mat3 block = Mat3::Zero();
+        block(i % 3, i % 3) = 1.0 + 3.0 * c_ * v * v + (p == PsdProjection::none ? -(1.0 + delta_) : 0.0);
+        H->add_block(static_cast<int>(i / 3), static_cast<int>(i / 3), block);
+      }
+    }
+    return E;
+  }
+
+ private:
+  double delta_, c_;
+};
+
+TEST(Newton, AFullStepWhoseSlopeStaysSteepIsDoubledWhereProjectionOverestimatesTheCurvature) {
+  // δ = 0.01, c = 1: the minimum at x = 0.1; from 0.001 a projected Newton step grows x by about 1 %, so
+  // full steps alone would take 444 iterations (the creep of the fist's contact frames, where the
+  // elements between the fingers are turned inside out). The energy's slope at each full step is nearly
+  // its slope at the start, and the line search doubles such a step.
+  Clamped term(0.01, 1.0);
+  Problem problem{DofMap(std::vector<std::uint8_t>(3, 0))};
+  problem.add(term);
+  Eigen::VectorXd x = Eigen::Vector3d(0.001, -0.002, 0.003);
+  auto solver = make_linear_solver({.name = "ldlt"});
+  const NewtonReport r = newton_solve(problem, x, *solver, options(40, 1e-12));
+  ASSERT_TRUE(r.converged) << r.failure;
+  EXPECT_LE(r.iterations, 20);
+  EXPECT_GT(r.line_search_expansions, 0);
+  EXPECT_GT(r.true_hessian_steps, 0) << "near the minimum the energy is convex: plain Newton finishes";
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(std::abs(x[i]), 0.1, 1e-9) << i;
+  // Where the matrix is the energy's curvature (the barrier, whose Hessian is exact and positive), the
+  // slope at a full step has fallen by at least half: no step is doubled, and the iterates are unchanged.
+  Toy toy(true);
+  Eigen::VectorXd y = kStart;
+  const NewtonReport q = newton_solve(toy.problem, y, *solver, options(200, 1e-10));
+  ASSERT_TRUE(q.converged);
+  EXPECT_EQ(q.line_search_expansions, 0);
 }
 
 /// A direct solver that says it may be inexact, and records the residual each solve was allowed.

@@ -149,6 +149,7 @@ namespace {
 void accumulate(NewtonReport& sum, const NewtonReport& r) {
   sum.iterations += r.iterations;
   sum.line_search_steps += r.line_search_steps;
+  sum.line_search_expansions += r.line_search_expansions;
   sum.linear_iterations += r.linear_iterations;
   sum.factorizations += r.factorizations;
   sum.true_hessian_steps += r.true_hessian_steps;

@@ -77,6 +77,16 @@ void newton_direction(Problem& problem, const Eigen::VectorXd& x, const Eigen::V
   report.solve_seconds += seconds_since(t);
 }
 
+/// A full step the line search accepted is doubled while the energy's slope along d at the accepted point is
+/// still more than this fraction of its slope at x (the curvature condition of Wolfe's rules, c₂ = ½). An
+/// exact Newton direction's slope vanishes at α = 1 wherever the Hessian is the energy's curvature; a slope
+/// left at nearly its start says the matrix overestimated the curvature along d a great deal, as the
+/// per-element PSD projection does where elements are turned inside out: their negative curvature is
+/// clamped away, and full steps of a hundredth of the way follow one another (docs/solvers.md, "Line search").
+constexpr double kExpandSlope = 0.5;
+/// At most this many doublings per line search (a step 2¹⁰ times the Newton step).
+constexpr int kMaxExpansions = 10;
+
 /// The iterate a backtracking line search accepted along d, with its energy and gradient.
 struct LineSearch {
   bool accepted = false;
@@ -84,9 +94,35 @@ struct LineSearch {
   Eigen::VectorXd x, gradient;
 };
 
+/// Doubles an accepted full step (ls at x + alpha d, alpha = 1) while kExpandSlope says so: each trial goes
+/// from the accepted point as far again, bounded by the terms' max_step, and replaces it only where the energy is
+/// finite and lower than there (and the Armijo rule from x holds); a trial that the terms cut short is the last.
+void expand(Problem& problem, const Eigen::VectorXd& d, double E, double slope,
+            const NewtonOptions& options, NewtonReport& report, double& alpha, LineSearch& ls) {
+  Eigen::VectorXd trial, trial_gradient;
+  for (int k = 0; k < kMaxExpansions && ls.gradient.dot(d) < kExpandSlope * slope; ++k) {
+    // From the accepted point onward by alpha d, as far as the terms allow.
+    const double bound = std::min(1.0, problem.max_step(ls.x, alpha * d));
+    if (!(bound > 0.0)) return;
+    trial = ls.x;
+    problem.dofs().scatter_add_free(d, bound * alpha, trial);
+    const double energy = problem.evaluate(trial, trial_gradient, nullptr, options.projection);
+    const double next = alpha * (1.0 + bound);
+    if (!std::isfinite(energy) || !(energy < ls.energy) || !(energy <= E + 1e-4 * next * slope)) return;
+    ++report.line_search_expansions;
+    alpha = next;
+    ls.x.swap(trial);
+    ls.gradient.swap(trial_gradient);
+    ls.energy = energy;
+    if (bound < 1.0) return;
+  }
+}
+
 /// Backtracking (Armijo) from the largest step every term allows: x + α d for α halved until the energy falls
-/// enough, or the full step where the energy is within rounding of E but the residual r falls. A failure
-/// (no step allowed, no decrease) is set in the report; its time and halvings are counted there.
+/// enough, or the full step where the energy is within rounding of E but the residual r falls. A full step
+/// accepted at once is then doubled while the slope says the energy falls on steeply (kExpandSlope) and the
+/// terms allow it. A failure (no step allowed, no decrease) is set in the report; its time, halvings and
+/// doublings are counted there.
 LineSearch line_search(Problem& problem, const Eigen::VectorXd& x, const Eigen::VectorXd& d, double E, double slope, double r,
                        const NewtonOptions& options, NewtonReport& report) {
   const auto t = Clock::now();
@@ -115,6 +151,7 @@ LineSearch line_search(Problem& problem, const Eigen::VectorXd& x, const Eigen::
     alpha *= 0.5;
     ++report.line_search_steps;
   }
+  if (ls.accepted && alpha == 1.0) expand(problem, d, E, slope, options, report, alpha, ls);
   report.assembly_seconds += seconds_since(t);
   ls.alpha = alpha;
   if (!ls.accepted)

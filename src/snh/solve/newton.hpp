@@ -11,7 +11,9 @@
 // trial, so the step gets shorter; no NaN enters x. The line search starts at α₀ = min(1, the problem's
 // step bound) (a term's max_step: continuous collision detection for contact), and every accepted
 // iterate is passed to the problem's on_accepted. Near convergence, where the energy decrease is below
-// its rounding error, a full step that reduces ‖g‖ is accepted. Iterative linear solves may stop once
+// its rounding error, a full step that reduces ‖g‖ is accepted. A full step accepted at once is doubled
+// while the slope gᵀd at the new point stays above half its start and the energy falls (the projected
+// Hessian overestimates the curvature where elements are inverted: full steps then come out short). Iterative linear solves may stop once
 // ‖Hd + g‖ is below a tenth of the tolerance, which cannot decide convergence. Optionally (step_tolerance
 // > 0) Newton also stops when the Newton step's largest entry is below step_tolerance (the criterion of
 // IPC and PolyFEM: scale-aware where an absolute ‖g‖ is not), or (relative_step_tolerance > 0) below
@@ -61,6 +63,7 @@ struct NewtonReport {
   bool converged_by_step = false; ///< converged by step_tolerance (before taking that last step)
   int iterations = 0;             ///< Newton steps taken
   int line_search_steps = 0;      ///< step halvings, in total
+  int line_search_expansions = 0; ///< doublings of a full step whose slope stayed steep, in total
   int linear_iterations = 0;      ///< conjugate-gradient iterations, in total (0 for plain direct solves)
   int factorizations = 0;         ///< numeric factorizations by the linear solver (0 for PCG)
   int true_hessian_steps = 0;     ///< iterations that used the unprojected Hessian
