@@ -191,7 +191,7 @@ TEST(Newton, AssemblesOneHessianPerNewtonStepAndNoneForAConvergedStart) {
 }
 
 /// Per DOF, E = ½ x² + ¼ c x⁴ (a convex "element") − ½ (1 + δ) x² (a concave one, as an element turned
-/// inside out has negative curvature): minimised at x² = δ / c, with the curvature −δ + 3 c x², negative near
+/// compressed or inside out has negative curvature): minimised at x² = δ / c, with the curvature −δ + 3 c x², negative near
 /// 0. Projected per element, the concave part's Hessian is clamped to 0, so the matrix says 1 + 3 c x²,
 /// a hundred times the energy's curvature: each projected Newton step from x is only about δ x long.
 class Clamped final : public Term {
@@ -221,7 +221,7 @@ class Clamped final : public Term {
 TEST(Newton, AFullStepWhoseSlopeStaysSteepIsDoubledWhereProjectionOverestimatesTheCurvature) {
   // δ = 0.01, c = 1: the minimum at x = 0.1; from 0.001 a projected Newton step grows x by about 1 %, so
   // full steps alone would take 444 iterations (the creep of the fist's contact frames, where the
-  // elements between the fingers are turned inside out). The energy's slope at each full step is nearly
+  // cells between the fingers are compressed or turned inside out). The energy's slope at each full step is nearly
   // its slope at the start, and the line search doubles such a step.
   Clamped term(0.01, 1.0);
   Problem problem{DofMap(std::vector<std::uint8_t>(3, 0))};

@@ -81,7 +81,8 @@ void newton_direction(Problem& problem, const Eigen::VectorXd& x, const Eigen::V
 /// still more than this fraction of its slope at x (the curvature condition of Wolfe's rules, c₂ = ½). An
 /// exact Newton direction's slope vanishes at α = 1 wherever the Hessian is the energy's curvature; a slope
 /// left at nearly its start says the matrix overestimated the curvature along d a great deal, as the
-/// per-element PSD projection does where elements are turned inside out: their negative curvature is
+/// per-element PSD projection does where elements are compressed or turned inside out (an SNH element's twist
+/// eigenvalues μ + λ(J − α)σ_k, 0 at rest, go negative as it is compressed): their negative curvature is
 /// clamped away, and full steps of a hundredth of the way follow one another (docs/solvers.md, "Line search").
 constexpr double kExpandSlope = 0.5;
 /// At most this many doublings per line search (a step 2¹⁰ times the Newton step).

@@ -13,7 +13,8 @@
 // iterate is passed to the problem's on_accepted. Near convergence, where the energy decrease is below
 // its rounding error, a full step that reduces ‖g‖ is accepted. A full step accepted at once is doubled
 // while the slope gᵀd at the new point stays above half its start and the energy falls (the projected
-// Hessian overestimates the curvature where elements are inverted: full steps then come out short). Iterative linear solves may stop once
+// Hessian overestimates the curvature where elements are compressed or inverted: full steps then come out
+// short). Iterative linear solves may stop once
 // ‖Hd + g‖ is below a tenth of the tolerance, which cannot decide convergence. Optionally (step_tolerance
 // > 0) Newton also stops when the Newton step's largest entry is below step_tolerance (the criterion of
 // IPC and PolyFEM: scale-aware where an absolute ‖g‖ is not), or (relative_step_tolerance > 0) below
