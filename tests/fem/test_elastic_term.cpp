@@ -141,8 +141,9 @@ std::tuple<double, Eigen::VectorXd, SparseLower> expect_same_for_one_and_two_thr
   EXPECT_EQ(E1, E2);
   EXPECT_EQ(std::memcmp(g1.data(), g2.data(), sizeof(double) * g1.size()), 0);
   EXPECT_EQ(H1.nonZeros(), H2.nonZeros());
-  if (H1.nonZeros() == H2.nonZeros())
+  if (H1.nonZeros() == H2.nonZeros()) {
     EXPECT_EQ(std::memcmp(H1.valuePtr(), H2.valuePtr(), sizeof(double) * H1.nonZeros()), 0);
+  }
   return {E1, g1, H1};
 }
 

@@ -87,7 +87,9 @@ TEST(Impact, ARubberCubeThrownAtTheGroundBouncesWithoutPassingThrough) {
       for (const StepRecord& f : l.result.frames) {
         EXPECT_EQ(f.inverted, 0) << "frame " << f.index;
         EXPECT_EQ(f.substeps, f.index == 0 ? 0 : 1) << "frame " << f.index << ": no step needed halving";
-        if (f.contact_pairs > 0) EXPECT_GT(f.min_contact_distance, 0.0) << "frame " << f.index;
+        if (f.contact_pairs > 0) {
+          EXPECT_GT(f.min_contact_distance, 0.0) << "frame " << f.index;
+        }
       }
       rebound[i] = l.final_centre;
       EXPECT_GT(l.final_centre, 0.3) << "it bounced back up past where it started";
@@ -106,7 +108,9 @@ TEST(Impact, AFleshCubeAtAHundredMetresASecondLandsAndAStepThatFailsIsRetriedInH
   EXPECT_TRUE(whole.result.all_converged) << whole.result.failure;
   for (const StepRecord& f : whole.result.frames) {
     EXPECT_EQ(f.substeps, f.index == 0 ? 0 : 1) << "frame " << f.index << ": no step needed halving";
-    if (f.contact_pairs > 0) EXPECT_GT(f.min_contact_distance, 0.0) << "frame " << f.index;
+    if (f.contact_pairs > 0) {
+      EXPECT_GT(f.min_contact_distance, 0.0) << "frame " << f.index;
+    }
   }
   // With 30 Newton iterations allowed a whole step after the impact fails, and its halves get through.
   j["solver"] = {{"max_iterations", 30}};
@@ -115,7 +119,9 @@ TEST(Impact, AFleshCubeAtAHundredMetresASecondLandsAndAStepThatFailsIsRetriedInH
   int extra = 0;
   for (const StepRecord& f : retried.result.frames) {
     if (f.index > 0) extra += f.substeps - 1;
-    if (f.contact_pairs > 0) EXPECT_GT(f.min_contact_distance, 0.0) << "frame " << f.index;
+    if (f.contact_pairs > 0) {
+      EXPECT_GT(f.min_contact_distance, 0.0) << "frame " << f.index;
+    }
   }
   EXPECT_GT(extra, 0) << "some step was retried in halves";
   j["solver"]["step_halvings"] = 0;

@@ -75,7 +75,9 @@ TEST(Lab, ReflectionSnhDoesNotDependOnTheAxisCorotatedDoes) {
   EXPECT_GT(spread("corotated"), std::max(1e-4, 100.0 * spread("stable_neo_hookean")));
   for (const char* c : {"reflect_x", "reflect_y", "reflect_z"}) {
     const LabRun& r = get(runs, c, "corotated");
-    if (!r.converged) EXPECT_NE(r.failure.find("Newton"), std::string::npos) << "a failure is reported: " << r.failure;
+    if (!r.converged) {
+      EXPECT_NE(r.failure.find("Newton"), std::string::npos) << "a failure is reported: " << r.failure;
+    }
   }
   std::filesystem::remove_all(o.out);
 }
@@ -123,7 +125,9 @@ TEST(Lab, LargeStretchPreservesVolumeBetterAsNuNearsOneHalf) {
   ASSERT_EQ(rows.size(), 5u);
   for (std::size_t i = 0; i < rows.size(); ++i) {
     ASSERT_TRUE(rows[i].converged) << rows[i].failure;
-    if (i > 0) EXPECT_LT(rows[i].volume_ratio, rows[i - 1].volume_ratio) << "nu " << rows[i].nu;
+    if (i > 0) {
+      EXPECT_LT(rows[i].volume_ratio, rows[i - 1].volume_ratio) << "nu " << rows[i].nu;
+    }
   }
   EXPECT_GT(rows.front().volume_ratio, 1.3);              // nu 0.3: +30 % volume or more
   EXPECT_NEAR(rows.back().volume_ratio, 1.0, 0.02);       // nu 0.495: nearly preserved

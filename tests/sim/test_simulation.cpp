@@ -78,7 +78,9 @@ TEST(Simulation, StepsQuasiStaticallyToTheProvidersTargets) {
   }
   // The top layer is where the script put it at t = 1.5; the body stretched in y only on average.
   for (Eigen::Index v = 0; v < sim.mesh().vertex_count(); ++v)
-    if (sim.mesh().vertices(1, v) == 1.0) EXPECT_EQ(sim.x()[3 * v + 1], 1.0 + 0.2 * 1.5);
+    if (sim.mesh().vertices(1, v) == 1.0) {
+      EXPECT_EQ(sim.x()[3 * v + 1], 1.0 + 0.2 * 1.5);
+    }
   EXPECT_EQ(script->calls, 3) << "the provider is asked once per step";
   const std::vector<bool> k = sim.kinematic_vertices();
   EXPECT_EQ(std::count(k.begin(), k.end(), true), 18);
