@@ -43,7 +43,9 @@ for x, y, r in zip(e, s, rows):
                 xytext=(6, -12), fontsize=7)
 ax.set_xlabel("hexahedra")
 ax.set_ylabel("seconds per quasi-static step")
-ax.set_title("Bone-driven hand lattice (nu = 0.488)" + (", self-contact" if sys.argv[3] == "1" else "") + ": time per step against size")
+# Two lines: with ", self-contact" one line was wider than the figure and was cut at both ends.
+ax.set_title("Bone-driven hand lattice (nu = 0.488)" + (", self-contact" if sys.argv[3] == "1" else "") + "\ntime per step against size",
+             fontsize=10)
 ax.legend(fontsize=8)
 ax.grid(True, which="both", alpha=0.3)
 fig.tight_layout()
