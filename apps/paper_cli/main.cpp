@@ -11,10 +11,10 @@
 #include <unistd.h>
 
 #include "../common/command_line.hpp"
-#include "snh/math/keep_memory.hpp"
 #include "../common/omp_env.hpp"
 #include "../common/run_report.hpp"
 #include "snh/io/atomic_file.hpp"
+#include "snh/math/keep_memory.hpp"
 #include "snh/run/interrupt.hpp"
 #include "snh/run/run_directory.hpp"
 #include "snh/setup/stretch.hpp"

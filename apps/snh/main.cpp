@@ -6,7 +6,6 @@
 #include <CLI/CLI.hpp>
 
 #include "../common/command_line.hpp"
-#include "snh/math/keep_memory.hpp"
 #include "../common/omp_env.hpp"
 #include "../common/out_option.hpp"
 #include "flesh_command.hpp"
@@ -15,6 +14,7 @@
 #include "mesh_commands.hpp"
 #include "report_commands.hpp"
 #include "run_command.hpp"
+#include "snh/math/keep_memory.hpp"
 #include "snh/solve/memory_estimate.hpp"
 #include "stretch_command.hpp"
 #include "snh/io/atomic_file.hpp"

@@ -190,9 +190,9 @@ TEST(Newton, AssemblesOneHessianPerNewtonStepAndNoneForAConvergedStart) {
   EXPECT_EQ(toy.term.hessians, 0);
 }
 
-/// Per DOF, E = ½ x² + ¼ c x⁴ (a convex "element") − ½ (1 + δ) x² (a concave one, as an element turned
-/// compressed or inside out has negative curvature): minimised at x² = δ / c, with the curvature −δ + 3 c x², negative near
-/// 0. Projected per element, the concave part's Hessian is clamped to 0, so the matrix says 1 + 3 c x²,
+/// Per DOF, E = ½ x² + ¼ c x⁴ (a convex "element") − ½ (1 + δ) x² (a concave one, as an element compressed
+/// or turned inside out has negative curvature): minimised at x² = δ / c, with the curvature −δ + 3 c x²,
+/// negative near 0. Projected per element, the concave part's Hessian is clamped to 0, so the matrix says 1 + 3 c x²,
 /// a hundred times the energy's curvature: each projected Newton step from x is only about δ x long.
 class Clamped final : public Term {
  public:
