@@ -481,7 +481,9 @@ TEST(ShapeColliderTerm, AQuasiStaticCarrierTakesTheFreeFleshAlongInTheStepsCheck
       splits += r.splits;
       ASSERT_GT(sphere->min_distance(sim.x()), 0.1) << "step " << s;
     }
-    if (carrier) EXPECT_EQ(splits, 0);
+    if (carrier) {
+      EXPECT_EQ(splits, 0);
+    }
     else EXPECT_GE(splits, 5);
     // Carried along rigidly: the cube's free vertices follow the pins.
     EXPECT_NEAR(sim.x()(Eigen::seqN(0, m.vertex_count(), 3)).mean(), 2.5, 1e-6) << (carrier ? "carried" : "held");

@@ -106,7 +106,9 @@ TEST(MuscleCells, AClampedMusclePullsHarderAsItsActivationGrows) {
     double pull = 0.0;  // the force on the end's holder: −Σ ∂E/∂x over the face, positive when pulled inwards
     for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
       if (m.vertices(0, v) == 1.0) pull += g[3 * v];
-    if (alpha == 0.0) EXPECT_NEAR(pull, 0.0, 1e-12);
+    if (alpha == 0.0) {
+      EXPECT_NEAR(pull, 0.0, 1e-12);
+    }
     else EXPECT_GT(pull, previous + 1e-3) << "alpha " << alpha;
     previous = pull;
   }

@@ -338,7 +338,9 @@ TEST_F(MeshRead, InputFilesAreCheckedBeforeReading) {
   EXPECT_EQ(error_of("zeros.node", std::string(10 << 20, '\0')), ":1: binary data (a NUL byte) where text was expected");
   EXPECT_EQ(error_of("zeros.vtu", std::string(10 << 20, '\0')), ":1: not a VTK UnstructuredGrid (.vtu) file");
   EXPECT_EQ(error_of("a.msh", std::string(10 << 20, 'a')), ":1: a word longer than 4096 characters where text was expected");
-  if (before >= 0) EXPECT_LT(test::bytes_read() - before, 2 << 20);  // bytes, not seconds: a busy machine cannot fail it
+  if (before >= 0) {
+    EXPECT_LT(test::bytes_read() - before, 2 << 20);  // bytes, not seconds: a busy machine cannot fail it
+  }
 }
 
 TEST_F(MeshRead, DataAfterTheMeshIsRefused) {

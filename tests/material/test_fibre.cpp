@@ -55,7 +55,9 @@ void check_eigensystem(const FibreEnergy& e, const Mat3& F, const Vec3& a, const
   // The projection: PSD, and the Hessian itself where nothing is negative.
   const Mat9 Hp = e.projected_hessian(F, a, PsdProjection::clamp);
   EXPECT_GE(Eigen::SelfAdjointEigenSolver<Mat9>(Hp).eigenvalues().minCoeff(), -1e-10 * scale) << where;
-  if (*std::min_element(es.values.begin(), es.values.end()) >= 0.0) EXPECT_LE((Hp - H).norm(), 1e-10 * scale) << where;
+  if (*std::min_element(es.values.begin(), es.values.end()) >= 0.0) {
+    EXPECT_LE((Hp - H).norm(), 1e-10 * scale) << where;
+  }
 }
 
 TEST(Fibre, DerivativesAndEigensystemsAtPositiveInvertedAndDegenerateF) {

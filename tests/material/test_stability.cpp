@@ -50,7 +50,9 @@ TEST(Stability, TableAgreesWithMathMd) {
     const Expected& e = expectations().at(r.name);
     EXPECT_EQ(r.inversion_ok, e.defined_inverted) << r.name;
     EXPECT_EQ(r.inverted_finite == r.inverted_samples, e.defined_inverted) << r.name;
-    if (!e.defined_inverted) EXPECT_EQ(r.inverted_finite, 0) << r.name;
+    if (!e.defined_inverted) {
+      EXPECT_EQ(r.inverted_finite, 0) << r.name;
+    }
     EXPECT_EQ(r.reflection_ok, e.reflection) << r.name;
     EXPECT_EQ(r.rest_ok, e.rest) << r.name;
     EXPECT_NEAR(r.psi_at_rest, 0.0, 1e-12) << r.name;

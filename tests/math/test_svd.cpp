@@ -45,7 +45,9 @@ TEST(Svd, RandomMatrices) {
     const Mat3 F = random_matrix(rng);
     const Svd3 s = rotation_variant_svd(F);
     expect_valid_svd(F, s);
-    if (std::abs(F.determinant()) > 1e-6) EXPECT_EQ(s.sigma[2] < 0.0, F.determinant() < 0.0);
+    if (std::abs(F.determinant()) > 1e-6) {
+      EXPECT_EQ(s.sigma[2] < 0.0, F.determinant() < 0.0);
+    }
   }
 }
 
@@ -129,7 +131,9 @@ TEST(Svd, ExtremeScalesAndRatiosKeepTheSignOfDet) {
         // Rotated, the entries of F keep the small singular values only while the ratio stays well
         // under 1/eps; past that even the sign of det F is rounding, so it is checked up to 1e6.
         const double ratio = sigma.cwiseAbs().maxCoeff() / sigma.cwiseAbs().minCoeff();
-        if (ratio <= 1e6) EXPECT_EQ(r.sigma[2] < 0.0, negative) << sigma.transpose() << " -> " << r.sigma.transpose();
+        if (ratio <= 1e6) {
+          EXPECT_EQ(r.sigma[2] < 0.0, negative) << sigma.transpose() << " -> " << r.sigma.transpose();
+        }
       }
     }
   }
@@ -158,7 +162,9 @@ TEST(Svd, MoveReflectionKeepsTheDecomposition) {
       EXPECT_NEAR(moved.U.determinant(), 1.0, 1e-13);
       EXPECT_LT(moved.sigma[k], 0.0);
       for (int i = 0; i < 3; ++i)
-        if (i != k) EXPECT_GE(moved.sigma[i], 0.0);
+        if (i != k) {
+          EXPECT_GE(moved.sigma[i], 0.0);
+        }
       EXPECT_NEAR(moved.sigma.prod(), base.sigma.prod(), 1e-13);
     }
   }

@@ -126,7 +126,9 @@ TEST(Box, MirroredTetSplitIsMirrorSymmetricInEachAxis) {
         ijk[axis] = res - ijk[axis];
         return lattice_index(res, ijk[0], ijk[1], ijk[2]);
       });
-      if (split == TetSplit::mirrored) EXPECT_EQ(mirrored, original) << "axis " << axis;
+      if (split == TetSplit::mirrored) {
+        EXPECT_EQ(mirrored, original) << "axis " << axis;
+      }
       else EXPECT_NE(mirrored, original) << "the paper's split is not mirror symmetric (axis " << axis << ")";
     }
   }

@@ -79,7 +79,9 @@ TEST_F(FleshLimb, TheEmbeddedSurfaceIsTheInputSurfaceAtRest) {
       if (f.bones[b].child >= 0) {
         EXPECT_GT(f.bound_per_bone[b], 0) << f.bones[b].name;
       }
-    if (std::string(volume) == "lattice") EXPECT_GT(f.volume_of_cells, f.surface_volume);
+    if (std::string(volume) == "lattice") {
+      EXPECT_GT(f.volume_of_cells, f.surface_volume);
+    }
     else EXPECT_NEAR(f.volume_of_cells, f.surface_volume, 1e-9 * f.surface_volume);
   }
   // Without "frames": the clip's second at 24 frames per second, or at flesh.fps; a material that names an

@@ -101,7 +101,9 @@ TEST(Bdf2, VariableStepsIntegrateAFreeFallExactly) {
       worst = std::max(worst, (sim.v() - velocity(sim.time())).cwiseAbs().maxCoeff());
       state = sim.state();
     }
-    if (integrator == Integrator::bdf2) EXPECT_LT(worst, 1e-11) << "BDF2 is exact on a parabola";
+    if (integrator == Integrator::bdf2) {
+      EXPECT_LT(worst, 1e-11) << "BDF2 is exact on a parabola";
+    }
     else EXPECT_GT(worst, 1e-4) << "backward Euler is not";
   }
 }

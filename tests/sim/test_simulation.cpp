@@ -145,7 +145,9 @@ TEST(Simulation, QuadraticExtrapolationStartsCloserAndResumesExactly) {
   for (int k = 1; k <= 6; ++k) {
     const StepReport a = linear.step(0.4 * k), b = quadratic.step(0.4 * k);
     ASSERT_TRUE(a.converged && b.converged) << a.failure << b.failure;
-    if (k < 3) EXPECT_EQ(a.newton.residuals, b.newton.residuals) << "the linear guess until three solutions exist";
+    if (k < 3) {
+      EXPECT_EQ(a.newton.residuals, b.newton.residuals) << "the linear guess until three solutions exist";
+    }
     else EXPECT_LT(b.newton.residuals.front(), 0.5 * a.newton.residuals.front()) << "step " << k;
   }
   EXPECT_LE((linear.x() - quadratic.x()).lpNorm<Eigen::Infinity>(), 1e-8) << "the same answers";
