@@ -279,5 +279,91 @@ TEST(Newton, AnInexactSolverIsAllowedATenthOfTheResidualAtFirstAndLessAsItFalls)
   EXPECT_NEAR((x - y).lpNorm<Eigen::Infinity>(), 0.0, 1e-8);
 }
 
+
+/// An inexact solver that stops exactly where it is allowed to, as conjugate gradients do at their bound: the
+/// exact solution scaled by 1 − θ, θ = enough / ‖b‖ (then ‖A x − b‖ = θ ‖b‖), and that residual reported.
+class Loose final : public LinearSolver {
+ public:
+  /// `reports`: false hides the residual (NaN, as a direct solver), which leaves only the rule.
+  explicit Loose(bool reports = true) : inner_(make_linear_solver({.name = "ldlt"})), reports_(reports) {}
+  double factorize(const SparseLower& A) override { return inner_->factorize(A); }
+  bool try_factorize(const SparseLower& A) override { return inner_->try_factorize(A); }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b, double enough) override {
+    const double theta = std::min(1.0, enough / b.norm());
+    allowed.push_back(theta);
+    residual_ = theta * b.norm();
+    return (1.0 - theta) * inner_->solve(b, 0.0);
+  }
+  double last_residual() const override { return reports_ ? residual_ : std::nan(""); }
+  std::string_view name() const override { return "loose"; }
+  bool inexact() const override { return true; }
+  std::vector<double> allowed;  ///< per solve, the allowed residual relative to ‖b‖
+
+ private:
+  std::unique_ptr<LinearSolver> inner_;
+  bool reports_;
+  double residual_ = 0.0;
+};
+
+/// E = Σ_i ½ k_i (x_i − c_i)²: a quadratic, whose Newton model is exact.
+class Springs final : public Term {
+ public:
+  std::string_view name() const override { return "springs"; }
+  double energy(const Eigen::VectorXd& x) const override { return evaluate(x, nullptr, nullptr, PsdProjection::none); }
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, const HessianValues* H, PsdProjection) const override {
+    double E = 0.0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      const double k = 1.0 + static_cast<double>(i), u = x[i] - 0.1 * static_cast<double>(i);
+      E += 0.5 * k * u * u;
+      if (g) (*g)[i] += k * u;
+      if (H) {
+        Mat3 block = Mat3::Zero();
+        block(i % 3, i % 3) = k;
+        H->add_block(static_cast<int>(i / 3), static_cast<int>(i / 3), block);
+      }
+    }
+    return E;
+  }
+};
+
+TEST(Newton, AnInexactSolveIsTightenedAtOnceWhereTheLastStepsLinearModelPredictedTheResidual) {
+  // A quadratic: the first step, solved to a tenth, leaves exactly the linear residual it was allowed, so the
+  // model's miss |‖g₁‖ − ‖g₀ + H d₀‖| is 0 (Eisenstat and Walker's first choice), and the second solve is
+  // allowed only the absolute bound (a tenth of the tolerance): two Newton steps. The rule
+  // min(0.1, √(‖g‖/‖g₀‖)) alone allows 0.1 again and takes seven (the same solver with its residual hidden).
+  Springs springs;
+  Problem quadratic{DofMap(std::vector<std::uint8_t>(6, 0))};
+  quadratic.add(springs);
+  Eigen::VectorXd x = kStart;
+  Loose loose;
+  const NewtonReport r = newton_solve(quadratic, x, loose, options(50, 1e-10));
+  ASSERT_TRUE(r.converged) << r.failure;
+  EXPECT_EQ(r.iterations, 2);
+  ASSERT_EQ(loose.allowed.size(), 2u);
+  EXPECT_DOUBLE_EQ(loose.allowed[0], 0.1);
+  EXPECT_LE(loose.allowed[1] * r.residuals[1], 0.1 * 1e-10 * (1 + 1e-12));
+  Eigen::VectorXd w = kStart;
+  Loose rule_only(false);
+  const NewtonReport s = newton_solve(quadratic, w, rule_only, options(50, 1e-10));
+  ASSERT_TRUE(s.converged) << s.failure;
+  EXPECT_EQ(s.iterations, 7);
+  // Nonlinear (the barrier): the model misses, and the solves stay loose while it does, never looser than the
+  // rule; the same minimum as an exact solver's.
+  Toy toy(true), again(true);
+  Eigen::VectorXd y = kStart, z = kStart;
+  Loose nonlinear;
+  Recording rule(true);
+  const NewtonReport q = newton_solve(toy.problem, y, nonlinear, options(200, 1e-10));
+  const NewtonReport p = newton_solve(again.problem, z, rule, options(200, 1e-10));
+  ASSERT_TRUE(q.converged && p.converged);
+  ASSERT_GE(nonlinear.allowed.size(), 3u);
+  EXPECT_GT(nonlinear.allowed[1], 0.01) << "far from the minimum the barrier's model misses by much";
+  for (std::size_t k = 0; k < nonlinear.allowed.size(); ++k) {  // the rule, or the absolute bound where larger
+    const double rule = std::max(std::min(0.1, std::sqrt(q.residuals[k] / q.residuals[0])), 0.1 * 1e-10 / q.residuals[k]);
+    EXPECT_LE(nonlinear.allowed[k], rule * (1 + 1e-12)) << k;
+  }
+  EXPECT_NEAR((y - z).lpNorm<Eigen::Infinity>(), 0.0, 1e-8);
+}
+
 }  // namespace
 }  // namespace snh

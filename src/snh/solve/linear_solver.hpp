@@ -17,6 +17,7 @@
 // does not converge within LinearSolverOptions::reuse_iterations, or when the last reuse needed more
 // than half of them, the matrix is factorized afresh. The answer is the same to the solve tolerance.
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -74,6 +75,9 @@ class LinearSolver {
   [[nodiscard]] virtual bool last_truncated() const { return false; }
   /// Conjugate-gradient iterations of the last solve (0 for a plain direct solve).
   [[nodiscard]] virtual int last_iterations() const { return 0; }
+  /// ‖A x − b‖ at the end of the last solve, as the iterative solver tracked it; NaN for a solver that does not
+  /// (a direct solve, exact up to rounding).
+  [[nodiscard]] virtual double last_residual() const { return std::numeric_limits<double>::quiet_NaN(); }
   /// Numeric factorizations so far (including shifted retries); 0 for PCG.
   [[nodiscard]] virtual int factorizations() const { return 0; }
   /// The registry name it was made under.

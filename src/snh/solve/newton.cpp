@@ -43,10 +43,11 @@ constexpr double kChordSteps = 30.0;
 /// positive definite (a direct solver's Cholesky succeeds, or PCG meets no non-positive curvature) and gives
 /// a descent direction, or when an inexact solver (mg, amg) met negative curvature late enough to return the
 /// iterate before it (truncated Newton, LinearSolver::solve); otherwise the projected Hessian. CG stops at
-/// a residual of `enough`.
+/// a residual of `enough`, or of `projected_enough` on a projected Hessian that replaces a true one which
+/// failed (another model than the one whose predictions set `enough`).
 void newton_direction(Problem& problem, const Eigen::VectorXd& x, const Eigen::VectorXd& g, HessianMatrix& H,
-                      LinearSolver& solver, const NewtonOptions& options, double enough, NewtonReport& report,
-                      Eigen::VectorXd& d) {
+                      LinearSolver& solver, const NewtonOptions& options, double enough, double projected_enough,
+                      NewtonReport& report, Eigen::VectorXd& d) {
   const bool try_true = options.try_true_hessian;
   auto t = Clock::now();
   problem.hessian(x, H, try_true ? PsdProjection::none : options.projection);
@@ -71,7 +72,7 @@ void newton_direction(Problem& problem, const Eigen::VectorXd& x, const Eigen::V
       t = Clock::now();
     }
     solver.factorize(H.matrix);
-    d = solver.solve(-g, enough);
+    d = solver.solve(-g, try_true ? projected_enough : enough);
     report.linear_iterations += solver.last_iterations();
   }
   report.solve_seconds += seconds_since(t);
@@ -189,6 +190,10 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
   double r0 = 0.0;
   // The last step taken was within kChordSteps of the step rule, and was not itself a chord step.
   bool chord_next = false;
+  // Eisenstat and Walker's first choice of forcing term: how far the last full step's linear model missed the
+  // residual it reached, |‖g_k‖ − ‖g_{k−1} + H d_{k−1}‖| / ‖g_{k−1}‖ (the forcing's largest value where there is
+  // no such step).
+  double model_eta = options.forcing;
   for (;;) {
     const double r = g.norm();
     if (report.iterations == 0) r0 = r;
@@ -212,10 +217,14 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     ++report.iterations;
 
     Eigen::VectorXd d;
-    // Inexact Newton (Eisenstat and Walker's forcing terms, in the form η = min(forcing, √(‖g‖/‖g₀‖))): an
-    // iterative solver stops at a residual η‖g‖, loose while ‖g‖ is far above its first value and ever
-    // tighter as it falls, so that convergence stays superlinear; the stopping rule above is unchanged.
-    const double eta = solver.inexact() ? std::min(options.forcing, std::sqrt(r / r0)) : 0.0;
+    // Inexact Newton (Eisenstat and Walker's forcing terms): an iterative solver stops at a residual η‖g‖ with
+    // η = min(forcing, √(‖g‖/‖g₀‖), model_eta). The rule √(‖g‖/‖g₀‖) is loose while ‖g‖ is far above its first
+    // value and ever tighter as it falls, so that convergence stays superlinear. model_eta tightens the solve at
+    // once where the last step's model predicted well (elasticity between two nearby frames is nearly
+    // linear: one solve to the bound then does the work of several loose ones, and spares their assemblies) and
+    // leaves the rule in charge where it did not (contact, inverted cells). The stopping rule is unchanged.
+    const double rule_eta = solver.inexact() ? std::min(options.forcing, std::sqrt(r / r0)) : 0.0;
+    const double eta = std::min(rule_eta, model_eta);
     const double enough = std::max(linear_enough, eta * r);
     // A chord step (an inexact solver, after a step within kChordSteps of the step rule): the matrix and
     // preconditioner of the last iteration serve again, sparing an assembly and a V-cycle set-up where a
@@ -232,15 +241,16 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
       if (have_step) ++report.chord_steps;
     }
     const bool chord = have_step;
-    if (!have_step) newton_direction(problem, x, g, H, solver, options, enough, report, d);
+    if (!have_step) newton_direction(problem, x, g, H, solver, options, enough, std::max(linear_enough, rule_eta * r), report, d);
     // Complete: solved afresh from this iterate's Hessian, neither truncated at negative curvature nor
     // replaced by steepest descent. Only such a direction's length says how far the answer is.
     bool complete = !chord && !solver.last_truncated();
     double slope = g.dot(d);
+    bool d_from_solve = !solver.last_truncated();
     if (!d.allFinite() || !(slope < 0.0)) {  // not a descent direction: fall back to steepest descent
       d = -g;
       slope = -g.squaredNorm();
-      complete = false;
+      complete = d_from_solve = false;
     }
     if (complete) report.last_step = d.lpNorm<Eigen::Infinity>();
     // The step rules end the solve only on a complete direction, and only where the force residual is
@@ -252,9 +262,15 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
       return report;
     }
 
+    // The linear residual ‖g + H d‖ the solve left (NaN where d is not a complete solve's: truncated, steepest
+    // descent, or a direct solver's).
+    const double linear_residual = d_from_solve ? solver.last_residual() : std::numeric_limits<double>::quiet_NaN();
     LineSearch ls = line_search(problem, x, d, E, slope, r, options, report);
     if (!ls.accepted) return report;
     chord_next = !chord && solver.inexact() && step_is_small(ls.alpha * d, x, x0, options, kChordSteps);
+    // From a full step only: a shorter or a longer one says the model did not hold along d.
+    model_eta = ls.alpha == 1.0 && std::isfinite(linear_residual) ? std::abs(ls.gradient.norm() - linear_residual) / r
+                                                                  : options.forcing;
     x = std::move(ls.x);
     problem.on_accepted(x);
     E = ls.energy;

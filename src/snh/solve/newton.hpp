@@ -49,9 +49,9 @@ struct NewtonOptions {
   bool try_true_hessian = true;   ///< first try the unprojected Hessian
   int max_halvings = 60;
   /// Inexact Newton's largest forcing term: a solver that allows it (LinearSolver::inexact, mg and amg) solves
-  /// each step to a residual min(forcing, √(‖g‖/‖g₀‖)) ‖g‖ only. 0.1: on flesh the fewest Newton and CG
-  /// iterations together (docs/results.md); the stretch test, whose Newton iterations cost more than its CG
-  /// ones, uses 0.01.
+  /// each step to a residual min(forcing, √(‖g‖/‖g₀‖), η_model) ‖g‖ only, η_model being how far the last full
+  /// step's linear model missed (newton.cpp). 0.1: on flesh the fewest Newton and CG iterations together
+  /// (docs/results.md); the stretch test, whose Newton iterations cost more than its CG ones, uses 0.01.
   double forcing = 0.1;
   /// Called at the start of every iteration with its number (0 = the starting state) and ‖g‖.
   std::function<void(int iteration, double residual)> on_iteration;

@@ -37,6 +37,7 @@ class MultigridSolver final : public LinearSolver {
     const MatrixProduct A = [this](const Eigen::VectorXd& p, Eigen::VectorXd& Ap) { vcycle_.multiply(p, Ap); };
     const CgResult r = conjugate_gradients(A, b, vcycle_, std::max(tolerance_ * b.norm(), enough), max_iterations, x);
     iterations_ = r.iterations;
+    residual_ = r.residual;
     if (fresh_iterations_ < 0) fresh_iterations_ = r.iterations;
     // Truncated Newton (Nocedal and Wright, Algorithm 7.1): a matrix given to try_factorize() that shows
     // negative curvature after the first CG step yields the iterate before it, if that already solves the
@@ -51,6 +52,7 @@ class MultigridSolver final : public LinearSolver {
   }
   bool last_truncated() const override { return truncated_; }
   int last_iterations() const override { return iterations_; }
+  double last_residual() const override { return residual_; }
   std::string_view name() const override { return name_; }
   bool inexact() const override { return true; }
 
@@ -78,6 +80,7 @@ class MultigridSolver final : public LinearSolver {
   int fresh_iterations_ = -1;  ///< iterations of the first solve with the current coarse levels (−1: none yet)
   MultigridPreconditioner vcycle_;
   int iterations_ = 0;
+  double residual_ = std::nan("");
   bool may_truncate_ = false;  ///< the matrix came from try_factorize() (it may be indefinite)
   bool truncated_ = false;     ///< the last solve was truncated at non-positive curvature
 };
