@@ -89,7 +89,7 @@ class MultigridPreconditioner final : public Preconditioner {
   [[nodiscard]] Eigen::SparseMatrix<double> level_matrix(int level) const;
   [[nodiscard]] Eigen::SparseMatrix<double> prolongation(int level) const;
   /// Levels of fewer nodes than this run on one thread with a lexicographic Gauss–Seidel smoother, larger
-  /// ones in parallel with the multi-colour smoother (default 16 384; tests set 1 to run every level so).
+  /// ones in parallel with the multi-colour smoother (default 4 096; tests set 1 to run every level so).
   void set_parallel_nodes(int nodes);
 
  private:

@@ -189,8 +189,9 @@ struct MultigridPreconditioner::Impl {
   /// A level of fewer nodes runs on one thread (a parallel region costs more than it saves) and smooths by
   /// lexicographic Gauss–Seidel (x read in node order); larger ones by the multi-colour sweep in parallel.
   /// Chosen by size when the structure is made (Level::lexicographic), never by the thread count, so results
-  /// stay the same for any thread count.
-  int parallel_nodes = 16384;
+  /// stay the same for any thread count. 4096: on Figure 1 (levels of 53 158, 8 778, 1 690 and 392 nodes)
+  /// level 1 in parallel took 0.90 of the wall time without contact and the same with it (docs/results.md).
+  int parallel_nodes = 4096;
   [[nodiscard]] bool parallel(const Level& L) const { return L.nodes >= parallel_nodes; }
   /// The sweeps: also at least parallel_nodes / 8 nodes per colour on average (a barrier after each colour).
   [[nodiscard]] bool parallel_sweep(const Level& L) const {
