@@ -1,7 +1,8 @@
 // Projected Newton on toy problems: trials outside an energy's domain (+∞) shorten the step and never
 // enter the state, a term's step bound starts the line search, accepted iterates reach the terms, and the
-// step-size stopping rule, the looser linear solves an inexact solver is allowed, one Hessian per Newton step,
-// and full steps doubled where the projected Hessian overestimates the curvature.
+// step-size stopping rule, the looser linear solves an inexact solver is allowed (and the tighter ones where
+// the last step's model held), one Hessian per Newton step, and full steps doubled where the projected Hessian
+// overestimates the curvature.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -278,7 +279,6 @@ TEST(Newton, AnInexactSolverIsAllowedATenthOfTheResidualAtFirstAndLessAsItFalls)
   for (std::size_t k = 0; k < exact.allowed.size(); ++k) EXPECT_LT(exact.allowed[k], inexact.allowed[std::min(k, inexact.allowed.size() - 1)]);
   EXPECT_NEAR((x - y).lpNorm<Eigen::Infinity>(), 0.0, 1e-8);
 }
-
 
 /// An inexact solver that stops exactly where it is allowed to, as conjugate gradients do at their bound: the
 /// exact solution scaled by 1 − θ, θ = enough / ‖b‖ (then ‖A x − b‖ = θ ‖b‖), and that residual reported.
