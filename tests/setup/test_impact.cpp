@@ -77,6 +77,9 @@ Landing land(const json& j, const std::string& name) {
 /// Every frame with contact pairs keeps them apart (its smallest distance positive).
 void expect_pairs_apart(const SceneResult& result) {
   for (const StepRecord& f : result.frames) {
+    if (f.contact_pairs > 0) {
+      EXPECT_GT(f.min_contact_distance, 0.0) << "frame " << f.index;
+    }
   }
 }
 
