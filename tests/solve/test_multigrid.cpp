@@ -150,6 +150,32 @@ int check_vcycle(const VolumeMesh& mesh, int levels_at_least, int max_iterations
 
 TEST(Multigrid, VCycleIsSymmetricPositiveAndConvergesFastOnAPinnedBox) { check_vcycle(box_hexes(16), 2, 30); }
 
+// The smoother keeps its rows in half precision (largest value 65 504, smallest normal 6·10⁻⁵), each node's
+// row scaled by a power of two so that its entries are at most 1. The same matrix times 10⁻³⁰ … 10³⁰ (a
+// material's units, a contact barrier's stiffness) must then be smoothed as well as the unit one: unscaled,
+// 10⁸ times this box's entries overflow half precision, and 10⁻⁸ times them vanish.
+TEST(Multigrid, TheSmootherHoldsAMatrixOfAnyMagnitude) {
+  const VolumeMesh mesh = box_hexes(12);
+  System s(mesh, pins(mesh), 7);
+  const SparseLower& A = s.H.matrix;
+  MultigridPreconditioner M(mesh, s.problem.dofs().free_index());
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n;
+  Eigen::VectorXd b(A.rows());
+  for (Eigen::Index i = 0; i < b.size(); ++i) b[i] = n(rng);
+  ASSERT_TRUE(M.compute(A));
+  Eigen::VectorXd x;
+  const int unit = iterations_with(A, M, b, x);
+  for (const double c : {1e-30, 1e-8, 1e8, 1e30}) {
+    const SparseLower cA = c * A;
+    ASSERT_TRUE(M.compute(cA)) << c;
+    Eigen::VectorXd y;
+    const int scaled = iterations_with(cA, M, b, y);
+    EXPECT_LE(std::abs(scaled - unit), 1) << "the matrix times " << c << ": " << scaled << " CG iterations, " << unit << " for it unscaled";
+    EXPECT_LE((c * y - x).norm(), 1e-8 * x.norm()) << c;
+  }
+}
+
 /// A box of 20³ hexes less a tunnel along y, a cavity, and a slab along z that splits it into two pieces.
 VolumeMesh partial_lattice() {
   const int res = 20;

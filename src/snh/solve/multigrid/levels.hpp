@@ -26,6 +26,14 @@
 namespace snh {
 namespace multigrid {
 
+/// The smoother's stored matrix entries: IEEE half precision (its bits) where the CPU converts it (F16C),
+/// single precision otherwise. Both hold the rows scaled (Level::scale), so that every entry is at most 1.
+#ifdef __F16C__
+using RowValue = std::uint16_t;
+#else
+using RowValue = float;
+#endif
+
 using Block3 = Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
 using ConstBlock3 = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
 
@@ -100,9 +108,13 @@ struct Level {
   std::vector<int> row_start, row_end;   ///< per node, its blocks' range; rows lie in sweep order (by colour,
                                          ///< or by node on a lexicographic level) so that a sweep streams them
   std::vector<int> row_slot, row_node, before;
-  std::vector<float> row_val;           ///< the blocks A_ik of those rows, 9 each by columns (column-major), as
-                                        ///< the rows lie, in single precision (half the memory traffic; the
-                                        ///< smoother's alone), and 3 more floats (read, never used: subtract_row)
+  std::vector<RowValue> row_val;        ///< the scaled blocks σ_i A_ik σ_k of those rows, 9 each by columns
+                                        ///< (column-major), as the rows lie, in half precision (a quarter of the
+                                        ///< doubles' memory traffic; the smoother's alone), and 3 more values
+                                        ///< (read, never used: subtract_row)
+  std::vector<double> scale;            ///< per node, σ_i: the largest power of two at most 1/√ of its largest
+                                        ///< free diagonal entry (prepare_smoother()), so that every scaled entry
+                                        ///< of a positive definite A is at most 1 in magnitude
   // The product A x by a fixed number of row chunks (not the thread count): each chunk's rows i sum their
   // blocks (i, k ≤ i) and spill the transposed ones into the chunk's own buffer, rows chunk_low .. its end.
   std::vector<int> chunk_start, chunk_low;
@@ -144,6 +156,8 @@ void backward_sweep_in_order(Level& L);                          // smoother.cpp
 void forward_sweep(Level& L, bool parallel);                     // smoother.cpp
 void backward_sweep(Level& L, bool parallel);                    // smoother.cpp
 void forward_residual(Level& L, bool parallel);                  // smoother.cpp
+void scale_right_side(Level& L, bool parallel);                  // smoother.cpp
+void unscale_solution(Level& L, bool parallel);                  // smoother.cpp
 void subtract_product(Level& L, const double* x, double* y, bool parallel);  // smoother.cpp
 void rigid_body_modes(const VolumeMesh& mesh, Level& L);         // aggregation.cpp
 void lattice_level(const VolumeMesh& mesh, const LatticeCoordinates& lattice, Level& L);  // lattice.cpp

@@ -86,6 +86,9 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
     return;
   }
   Level& C = levels[l + 1];
+  // The sweeps run in the scaled unknowns (prepare_smoother()): b̂ = σ b in, x = σ x̂ out; the residual and the
+  // coarse correction pass between the two.
+  scale_right_side(L, parallel(L));
   if (L.lexicographic) forward_sweep_in_order(L);
   else forward_sweep(L, parallel_sweep(L));
   forward_residual(L, parallel(L));
@@ -117,11 +120,13 @@ void MultigridPreconditioner::Impl::vcycle(std::size_t l) {
         for (int a = 0; a < 3; ++a) e[a] -= w * x[a];
       }
     }
+    const double to_scaled = 1.0 / L.scale[static_cast<std::size_t>(i)];
     for (int a = 0; a < 3; ++a)
-      if (L.free[3 * i + a]) L.x[3 * i + a] -= e[a];
+      if (L.free[3 * i + a]) L.x[3 * i + a] -= e[a] * to_scaled;
   }
   if (L.lexicographic) backward_sweep_in_order(L);
   else backward_sweep(L, parallel_sweep(L));
+  unscale_solution(L, parallel(L));
 }
 
 MultigridPreconditioner::MultigridPreconditioner(const VolumeMesh& mesh, const std::vector<int>& free_index, Coarsening how)

@@ -1,11 +1,12 @@
-// The smoother (multigrid.hpp): its values for each matrix (single-precision rows in sweep order, the
-// inverses of the diagonal blocks), the nodal-block Gauss–Seidel sweeps (multi-colour in parallel, or
-// lexicographic on one thread), the residual after the forward sweep, and the product A x from the lower
-// block triangle. The inner loops use GCC's and Clang's vector extensions (AVX and FMA where the CPU has them).
+// The smoother (multigrid.hpp): its values for each matrix (rows in sweep order, scaled node by node and
+// stored in half precision; the inverses of the diagonal blocks), the nodal-block Gauss–Seidel sweeps
+// (multi-colour in parallel, or lexicographic on one thread) in the scaled unknowns, the residual after the
+// forward sweep, and the product A x from the lower block triangle. The inner loops use GCC's and Clang's vector extensions (AVX and FMA where the CPU has them).
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
-#ifdef __AVX__
+#if defined(__AVX__) || defined(__F16C__)
 #include <immintrin.h>
 #endif
 
@@ -21,8 +22,27 @@ namespace {
 using Lanes = double __attribute__((vector_size(32)));
 using FloatLanes = float __attribute__((vector_size(16)));
 
+#ifdef __F16C__
+/// The four half-precision values from p on, as doubles.
+inline Lanes widen4(const std::uint16_t* p) {
+  std::int64_t bits;
+  std::memcpy(&bits, p, sizeof bits);
+  return Lanes(_mm256_cvtps_pd(_mm_cvtph_ps(_mm_cvtsi64_si128(bits))));
+}
+/// Nine values rounded to the nearest half-precision ones (their bits), saturated at ±65 504 (a NaN stays one:
+/// min and max return their second operand where either is NaN).
+inline void store_row_values(const float* v, std::uint16_t* to) {
+  const __m256 largest = _mm256_set1_ps(65504.0f);
+  const __m256 eight = _mm256_max_ps(-largest, _mm256_min_ps(largest, _mm256_loadu_ps(v)));
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(to), _mm256_cvtps_ph(eight, _MM_FROUND_TO_NEAREST_INT));
+  to[8] = _cvtss_sh(std::clamp(v[8], -65504.0f, 65504.0f), _MM_FROUND_TO_NEAREST_INT);
+}
+#else
+inline void store_row_values(const float* v, float* to) { std::copy(v, v + 9, to); }
+#endif
+
 /// The four floats from p on, as doubles.
-inline Lanes widen4(const float* p) {
+[[maybe_unused]] inline Lanes widen4(const float* p) {
 #ifdef __AVX__
   return Lanes(_mm256_cvtps_pd(_mm_loadu_ps(p)));  // GCC splits the generic form's load into halves
 #else
@@ -44,13 +64,13 @@ inline Lanes multiply_add(const Lanes& a, double x, const Lanes& t) {
 #endif
 }
 
-/// s −= Σ A_ik x_k over row i's off-diagonal blocks `from` .. `to` (sweep_rows()), single-precision blocks
-/// stored by columns: column j of a block, widened to four doubles (the fourth is the float after it; it goes
-/// to the sums' unused lane), times x_kj. Six independent sums (the columns of the even and of the odd blocks)
+/// s −= Σ Â_ik x_k over row i's off-diagonal blocks `from` .. `to` (sweep_rows()), the scaled blocks stored
+/// by columns in half (or single) precision: column j of a block, widened to four doubles (the fourth is the
+/// value after it; it goes to the sums' unused lane), times x_kj. Six independent sums (the columns of the even and of the odd blocks)
 /// with fused multiply-adds (one rounding and one instruction each): the loop is not one chain of dependent
 /// additions, whose latency would bound it.
 inline void subtract_row(const Level& L, int from, int to, const double* x, Lanes& s) {
-  const float* val = L.row_val.data() + 9 * static_cast<std::size_t>(from);
+  const RowValue* val = L.row_val.data() + 9 * static_cast<std::size_t>(from);
   const int* node = L.row_node.data();
   Lanes t0{}, t1{}, t2{}, u0{}, u1{}, u2{};
   int e = from;
@@ -73,13 +93,17 @@ inline void subtract_row(const Level& L, int from, int to, const double* x, Lane
   s -= ((t0 + u0) + (t1 + u1)) + (t2 + u2);
 }
 
-/// x_i = D_i⁻¹ (b_i − Σ A_ik x_k) over all blocks of row i (whole = true) or its first `before` (the others
-/// meet x = 0).
+/// x̂_i = D̂_i⁻¹ (b̂_i − Σ Â_ik x̂_k) over all blocks of row i (whole = true) or its first `before` (the others
+/// meet x = 0), in the scaled unknowns (x̂ = x / σ, b̂ = σ b, Â = σ A σ): D̂_i⁻¹ = D_i⁻¹ / σ_i², both factors
+/// applied as divisions by σ_i, a power of two (exact).
 inline void relax_node(Level& L, int i, bool whole) {
   Lanes s = lanes3(L.b.data() + 3 * i);
   subtract_row(L, L.row_start[i], whole ? L.row_end[i] : L.row_start[i] + L.before[i], L.x.data(), s);
-  const double t[3] = {s[0], s[1], s[2]};
-  solve_diagonal(L, i, t, L.x.data() + 3 * i);
+  const double to_unscaled = 1.0 / L.scale[static_cast<std::size_t>(i)];
+  const double t[3] = {s[0] * to_unscaled, s[1] * to_unscaled, s[2] * to_unscaled};
+  double* x = L.x.data() + 3 * i;
+  solve_diagonal(L, i, t, x);
+  for (int a = 0; a < 3; ++a) x[a] *= to_unscaled;
 }
 
 /// relax_node() for the nodes of colour c. Nodes of one colour are not coupled: they update in parallel,
@@ -131,11 +155,12 @@ void backward_sweep(Level& L, bool parallel) {
   for (int c = colours - 1; c >= 0; --c) relax_colour(L, c, true);
 }
 
-/// L.r = L.b − Ã L.x right after forward_sweep() (or forward_sweep_in_order()), row by row in parallel, Ã the
-/// smoother's matrix (single-precision off-diagonal blocks: the sweeps' residuals are Ã's, so this one must be
-/// too for the V-cycle to stay symmetric). The sweep made row i's equation hold with the lower colours' (nodes')
-/// final x and the higher ones' zeros, so only the blocks of higher colours (nodes) are left: r_i = −Σ A_ik x_k
-/// over them (equal in exact arithmetic, half the blocks).
+/// L.r = (L.b − Â L.x) / σ right after forward_sweep() (or forward_sweep_in_order()), row by row in parallel:
+/// the residual of the unscaled equations, b − Ã x with Ã the smoother's matrix (half-precision off-diagonal
+/// blocks: the sweeps' residuals are Ã's, so this one must be too for the V-cycle to stay symmetric). The
+/// sweep made row i's equation hold with the lower colours' (nodes') final x̂ and the higher ones' zeros, so
+/// only the blocks of higher colours (nodes) are left: r_i = −Σ Â_ik x̂_k / σ_i over them (equal in exact
+/// arithmetic, half the blocks).
 void forward_residual(Level& L, bool parallel) {
   const double* x = L.x.data();
 #pragma omp parallel for schedule(static) if (parallel)
@@ -143,8 +168,22 @@ void forward_residual(Level& L, bool parallel) {
     const int i = L.lexicographic ? q : L.by_colour[q];
     Lanes s{0.0, 0.0, 0.0, 0.0};
     subtract_row(L, L.row_start[i] + L.before[i], L.row_end[i], x, s);
-    store3(s, L.r.data() + 3 * i);
+    store3(s * (1.0 / L.scale[static_cast<std::size_t>(i)]), L.r.data() + 3 * i);
   }
+}
+
+/// Into the scaled unknowns before a level's sweeps: b̂ = σ b.
+void scale_right_side(Level& L, bool parallel) {
+#pragma omp parallel for schedule(static) if (parallel)
+  for (int i = 0; i < L.nodes; ++i)
+    for (int a = 0; a < 3; ++a) L.b[3 * i + a] *= L.scale[static_cast<std::size_t>(i)];
+}
+
+/// Out of them after the last sweep: x = σ x̂.
+void unscale_solution(Level& L, bool parallel) {
+#pragma omp parallel for schedule(static) if (parallel)
+  for (int i = 0; i < L.nodes; ++i)
+    for (int a = 0; a < 3; ++a) L.x[3 * i + a] *= L.scale[static_cast<std::size_t>(i)];
 }
 
 /// y = −A x from A's lower block triangle, by L's chunks in parallel: each
@@ -194,26 +233,34 @@ void subtract_product(Level& L, const double* x, double* y, bool parallel) {
 
 using namespace multigrid;
 
-/// The smoother's values for L's A: the rows' blocks in row order (read in a stream, each block as A_ik), and
-/// the inverses of the diagonal blocks' free parts (Cholesky: false where a block is not positive definite,
-/// which proves that A is not).
+/// The smoother's values for L's A: each node's scale σ_i, the rows' scaled blocks σ_i A_ik σ_k in row order
+/// (read in a stream, each block as A_ik), and the inverses of the diagonal blocks' free parts (Cholesky:
+/// false where a block is not positive definite, which proves that A is not).
+///
+/// σ_i is the largest power of two at most 1/√m_i, m_i the largest diagonal entry of node i's free DOFs. In a
+/// positive definite A every entry satisfies |A_(ia,kb)| ≤ √(A_(ia,ia) A_(kb,kb)) ≤ √(m_i m_k), so every scaled
+/// entry is at most 1: none overflows half precision (largest 65 504), and the largest ones lie where half
+/// precision is finest (its relative rounding 2⁻¹¹). An indefinite matrix (a true Hessian) may have larger
+/// entries: those saturate at ±65 504 (the smoother stays symmetric; conjugate gradients find the matrix's
+/// negative curvature as they would). A power of two scales exactly.
 bool MultigridPreconditioner::Impl::prepare_smoother(Level& L) {
-  L.row_val.resize(9 * L.row_slot.size() + 3);
-  std::fill(L.row_val.end() - 3, L.row_val.end(), 0.0f);
-#pragma omp parallel for schedule(static) if (parallel(L))
-  for (int i = 0; i < L.nodes; ++i)
-    for (int e = L.row_start[i]; e < L.row_end[i]; ++e) {
-      const ConstBlock3 a(&L.A.val[9 * static_cast<std::size_t>(L.row_slot[e])]);
-      Eigen::Map<Eigen::Matrix<float, 3, 3, Eigen::ColMajor>> to(&L.row_val[9 * static_cast<std::size_t>(e)]);
-      if (L.row_node[e] < i) to = a.cast<float>();
-      else to = a.transpose().cast<float>();
-    }
+  L.scale.resize(static_cast<std::size_t>(L.nodes));
   int failed = 0;  // nodes whose block is not positive definite (each node's inverse is its own: any order)
 #pragma omp parallel for schedule(static) reduction(+ : failed) if (parallel(L))
   for (int i = 0; i < L.nodes; ++i) {
-    Eigen::Matrix3d D = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&L.A.val[9 * static_cast<std::size_t>(L.diagonal[i])]);
-    for (int a = 0; a < 3; ++a)
-      if (!L.free[3 * i + a]) D(a, a) = 1.0;
+    Eigen::Matrix3d D = ConstBlock3(&L.A.val[9 * static_cast<std::size_t>(L.diagonal[i])]);
+    double m = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      if (L.free[3 * i + a]) m = std::max(m, D(a, a));
+      else D(a, a) = 1.0;
+    }
+    double s = 1.0;
+    if (m > 0.0 && std::isfinite(m)) {
+      int exponent = 0;
+      std::frexp(1.0 / std::sqrt(m), &exponent);  // 1/√m = f 2^exponent, f in [0.5, 1)
+      s = std::ldexp(1.0, exponent - 1);
+    }
+    L.scale[static_cast<std::size_t>(i)] = s;
     const Eigen::LLT<Eigen::Matrix3d> llt(D);
     if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().array() > 0.0).all()) {
       ++failed;
@@ -222,9 +269,27 @@ bool MultigridPreconditioner::Impl::prepare_smoother(Level& L) {
     Eigen::Matrix3d inv = llt.solve(Eigen::Matrix3d::Identity());
     for (int a = 0; a < 3; ++a)
       if (!L.free[3 * i + a]) inv.row(a).setZero(), inv.col(a).setZero();
-    Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&L.inverse[9 * static_cast<std::size_t>(i)]) = inv;
+    Block3(&L.inverse[9 * static_cast<std::size_t>(i)]) = inv;
   }
-  return failed == 0;
+  if (failed > 0) return false;  // A is not positive definite: no smoother for it
+  L.row_val.resize(9 * L.row_slot.size() + 3);
+  std::fill(L.row_val.end() - 3, L.row_val.end(), RowValue{0});
+#pragma omp parallel for schedule(static) if (parallel(L))
+  for (int i = 0; i < L.nodes; ++i)
+    for (int e = L.row_start[i]; e < L.row_end[i]; ++e) {
+      const double* a = &L.A.val[9 * static_cast<std::size_t>(L.row_slot[e])];  // row-major
+      const int k = L.row_node[e];
+      const double s = L.scale[static_cast<std::size_t>(i)] * L.scale[static_cast<std::size_t>(k)];
+      float column_major[9];
+      if (k < i) {  // A_ik stored: its transpose's rows are its columns
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 3; ++r) column_major[3 * c + r] = static_cast<float>(s * a[3 * r + c]);
+      } else {  // A_ki stored: its rows are A_ik's columns
+        for (int j = 0; j < 9; ++j) column_major[j] = static_cast<float>(s * a[j]);
+      }
+      store_row_values(column_major, &L.row_val[9 * static_cast<std::size_t>(e)]);
+    }
+  return true;
 }
 
 }  // namespace snh
