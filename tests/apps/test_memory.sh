@@ -55,6 +55,14 @@ if [ "$code" -eq 2 ] && [ "$(lines "$work/a3.stderr")" = 1 ] && grep -q '^snh: e
    grep -q 'the scene.s "solver": {"linear": "pcg"} needs less' "$work/a3.stderr" && [ ! -e "$work/a3_out/000.obj" ]; then ok
 else bad "(a) snh run refusal: exit $code: $(cat "$work/a3.stderr")"; fi
 
+# A scene with contact is estimated with its contact terms (their pairs, and a Newton matrix of a new pattern
+# made beside the old one), and the line says so.
+run 300000 "$work/a4" "$SNH" run "$scenes/cube_press.json" --out "$work/a4_out" --no-report
+code=$?
+if [ "$code" -eq 2 ] && [ "$(lines "$work/a4.stderr")" = 1 ] &&
+   grep -q '^snh: error: not enough memory: tet4 mesh with cholmod (64 vertices, 162 cells, contact) needs about' "$work/a4.stderr"; then ok
+else bad "(a) snh run refusal with contact: exit $code: $(cat "$work/a4.stderr")"; fi
+
 # (b) CHOLMOD at hex res 20 under 450 MB (the issue's case, once hexcli 20: its factor needs about 620 MiB of
 # address space).
 SNH_MEMORY_CHECK=off run 450000 "$work/b" "$SNH" stretch --element hex --res 20 --solver cholmod --out "$work/b_out"

@@ -50,6 +50,27 @@ TEST(MemoryEstimate, BracketsTheMeasuredPeaks) {
   }
 }
 
+// The fist of bench/figure1.sh with the skin's self-contact, mg, 2 threads (docs/results.md, "Memory"): the peak
+// resident set (MiB) at each lattice size, 2026-11-28. Without contact the same lattices peak 250–1 822 MiB,
+// under the estimate without contact; with it 251–963 MiB more, which the contact allowance covers.
+TEST(MemoryEstimate, BracketsTheMeasuredPeaksWithContact) {
+  struct Measured {
+    std::int64_t vertices, cells;
+    double rss_mib, without_contact_mib;
+  };
+  for (const Measured& m : {Measured{30698, 25347, 501, 250}, Measured{53158, 45274, 712, 413}, Measured{59006, 50536, 824, 482},
+                            Measured{114342, 100945, 1530, 943}, Measured{220847, 199754, 2785, 1822}}) {
+    ProblemSize size{.vertices = m.vertices, .cells = m.cells, .nodes_per_cell = 8};
+    const double without = estimate_memory(size, "mg").resident_bytes / kMiB;
+    EXPECT_GT(without, m.without_contact_mib) << m.cells << " hexes without contact";
+    EXPECT_LT(without, m.rss_mib) << m.cells << " hexes: the estimate without contact is below the run with it";
+    size.contact = true;
+    const double e = estimate_memory(size, "mg").resident_bytes / kMiB;
+    EXPECT_GT(e, m.rss_mib) << m.cells << " hexes with contact";
+    EXPECT_LT(e, 2.0 * m.rss_mib) << m.cells << " hexes with contact";
+  }
+}
+
 // Peak address space (MiB, VmPeak) of `snh stretch` on one CPU (taskset -c 0, --threads 1) and on two
 // (docs/results.md, "Memory"): the estimate for that many threads is above each, by less than half. The allowance
 // for threads was calibrated on two only and gave 2.9 times the measurement of PCG on one.

@@ -1,5 +1,6 @@
 #include "snh/run/driver.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -77,6 +78,14 @@ struct WriteOnException {
 };
 
 /// One run of a plan (run_simulation): what its stages share.
+/// The size the memory estimate needs: the mesh's, and whether any term is a contact term.
+ProblemSize problem_size(const Simulation& sim) {
+  ProblemSize size = problem_size(sim.mesh());
+  const auto& terms = sim.setup().terms;
+  size.contact = std::any_of(terms.begin(), terms.end(), [](const std::shared_ptr<Term>& t) { return t && t->reports_contact(); });
+  return size;
+}
+
 class RunLoop {
  public:
   RunLoop(Simulation& sim, const RunPlan& plan, std::ostream& log)
@@ -86,7 +95,7 @@ class RunLoop {
         table_(*plan.table),
         word_(table_.index),
         lock_(plan.lock ? plan.lock : std::make_shared<RunDirectoryLock>(plan.out)),
-        size_(problem_size(sim.mesh())),
+        size_(problem_size(sim)),
         solver_(sim.solver().name()) {}
 
   RunResult run() {

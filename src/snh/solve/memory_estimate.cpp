@@ -35,6 +35,12 @@ constexpr double kReservedDirect = 170.0 * kMiB;
 // measurements (docs/results.md, "Multigrid"), so the same allowance covers it.
 constexpr double kMultigridPerVertex = 3.0 * 1024.0;
 
+// Contact (calibration: the fist of bench/figure1.sh with and without the skin's self-contact, mg, 25k to 200k
+// hexes: 251, 299, 342, 587 and 963 MiB more at 30.7k, 53.2k, 59.0k, 114k and 221k vertices, 8.4 to 4.5 KiB
+// per vertex; docs/results.md, "Memory"). The largest per vertex, rounded up: a fixed part fitted to these
+// runs would make a small scene with contact look hundreds of MiB larger than it is.
+constexpr double kContactPerVertex = 8.5 * 1024.0;
+
 bool is_direct(std::string_view solver) { return solver != "pcg" && solver != "mg" && solver != "amg"; }
 
 }  // namespace
@@ -56,6 +62,7 @@ MemoryEstimate estimate_memory(const ProblemSize& size, std::string_view solver,
   double resident = kBaseResident + kPerVertex * v + kPerCellNodePair * c * npc * npc;
   if (is_direct(solver)) resident += kFactorPerN43 * std::pow(3.0 * v, 4.0 / 3.0);
   if (solver == "mg" || solver == "amg") resident += kMultigridPerVertex * v;
+  if (size.contact) resident += kContactPerVertex * v;
   const double t = std::max(1u, threads ? threads : std::thread::hardware_concurrency());
   const double reserved = kReservedFixed + (t - 1.0) * kReservedPerExtraThread + (is_direct(solver) ? kReservedDirect : 0.0);
   return {.resident_bytes = resident, .address_space_bytes = resident + reserved};
@@ -103,9 +110,9 @@ void check_memory(const ProblemSize& size, std::string_view solver, std::string_
   const MemoryLimits limits = memory_limits();
   const std::string shortfall = memory_shortfall(estimate_memory(size, solver), limits);
   if (shortfall.empty()) return;
-  throw MemoryEstimateError(fmt::format("not enough memory: {} with {} ({} vertices, {} cells) {}{} "
+  throw MemoryEstimateError(fmt::format("not enough memory: {} with {} ({} vertices, {} cells{}) {}{} "
                                         "(SNH_MEMORY_CHECK=off runs it anyway)",
-                                        what, solver, size.vertices, size.cells, shortfall,
+                                        what, solver, size.vertices, size.cells, size.contact ? ", contact" : "", shortfall,
                                         pcg_alternative(size, solver, limits)));
 }
 

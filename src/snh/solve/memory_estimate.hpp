@@ -6,6 +6,8 @@
 //   resident  = base + per_vertex · #V + per_cell · #C (nodes_per_cell² scaled) + 8 · 2 · nnz(H)
 //               + for a direct solver, the factor: fill · n^{4/3} nonzeros of L (n = 3 #V, the 3D
 //                 nested-dissection growth) at 8 bytes each, times the factorization's workspace ratio
+//               + with contact, a part per vertex (the fist with self-contact at 25k–200k hexes against the
+//                 same runs without: docs/results.md, "Memory")
 //   address space = resident + the libraries' reserved but untouched space: a fixed part, per hardware
 //               thread after the first an OpenBLAS worker (its 128 MiB buffer and its stack, reserved when
 //               the library starts, whatever the solver) and an OpenMP worker's stack, and with a direct
@@ -43,6 +45,8 @@ struct ProblemSize {
   std::int64_t vertices = 0;
   std::int64_t cells = 0;
   int nodes_per_cell = 4;  ///< 4 (tet4) or 8 (hex8)
+  bool contact = false;    ///< contact terms (self-contact, colliders, planes): their pairs, and a Newton matrix
+                           ///< of a new pattern made beside the old one as pairs come and go
 };
 
 /// The size of a mesh.
