@@ -421,7 +421,7 @@ void number_cells(Lattice& L, const std::vector<unsigned char>& keep, const std:
 }
 
 /// The connections across the +x, +y and +z faces of each kept cube (by its first cell), and the cubes near a
-/// split or a separation (where cubes that meet only along an edge or at a corner are not joined).
+/// split or a separation (whose nodes are grouped: group_at_node()).
 struct FaceLinks {
   std::vector<std::array<std::vector<std::pair<int, int>>, 3>> links;
   std::vector<unsigned char> near_split;
@@ -435,8 +435,8 @@ struct FaceLinks {
 /// A sliver (a touched cube whose samples are all outside) joins the pieces whose material reaches its faces;
 /// between two parts that the other links keep apart (a prop just beyond a limb's end) it would bridge them.
 /// Each sliver keeps its links to the one part it touches most (then the first), and is marked near a split;
-/// `part` then numbers the parts the links make, through which cubes that meet only along an edge or at a
-/// corner may be joined.
+/// `part` then numbers the parts the links make (a node whose cells lie in more than one part is grouped:
+/// group_at_node()).
 template <class Above>
 void keep_slivers_to_one_part(const Lattice& L, const std::vector<int>& pieces_of, const std::vector<int>& kept, const Above& above,
                               FaceLinks& out) {
@@ -557,8 +557,11 @@ struct NodeCells {
   bool clean = true;             ///< no cube near a split: one vertex, as without pieces
 };
 
-/// The groups of the cells at a node that are connected (through a face's links, or meeting along an edge or
-/// at a corner with nothing split nearby); each group's root.
+/// The groups of the cells at a node that are connected through a face's links around it; each group's root.
+/// Cells that meet there only along an edge or at a corner get a vertex each: of one part, they are joined
+/// through faces elsewhere, and a vertex they shared would be a hinge, a joint with no material around it
+/// whose nearly free rotation made Newton creep where such flesh was squeezed (docs/results.md, "Where the
+/// 25k contact frames creep"); of two parts, the skin keeps them apart.
 UnionFind group_at_node(const Lattice& L, const FaceLinks& F, const NodeCells& at) {
   const int n = static_cast<int>(at.cell.size());
   UnionFind groups(static_cast<std::size_t>(n));
@@ -573,13 +576,25 @@ UnionFind group_at_node(const Lattice& L, const FaceLinks& F, const NodeCells& a
         const int pa = L.piece_of_cell[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(a)])];
         const int pb = L.piece_of_cell[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(b)])];
         if (F.joined(L, a_low ? ca : cb, differ == 1 ? 0 : differ == 2 ? 1 : 2, a_low ? pa : pb, a_low ? pb : pa)) groups.join(a, b);
-      } else if (!F.near_split[static_cast<std::size_t>(ca)] && !F.near_split[static_cast<std::size_t>(cb)] &&
-                 F.part[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(a)])] ==
-                     F.part[static_cast<std::size_t>(at.cell[static_cast<std::size_t>(b)])]) {
-        groups.join(a, b);
       }
     }
   return groups;
+}
+
+/// Whether the kept cubes around a node (by offset bit; −1: none) are connected through the faces they share
+/// around it (cubes whose bits differ in one place).
+bool faces_join_around(const std::array<int, 8>& cube_at) {
+  int present = 0;
+  for (int b = 0; b < 8; ++b)
+    if (cube_at[static_cast<std::size_t>(b)] >= 0) present |= 1 << b;
+  int reached = present & -present;  // the lowest present bit's cube
+  for (int grown = 0; grown != reached;) {
+    grown = reached;
+    for (int b = 0; b < 8; ++b)
+      if (reached >> b & 1)
+        for (const int flip : {1, 2, 4}) reached |= present & (1 << (b ^ flip));
+  }
+  return reached == present;
 }
 
 /// The hex mesh of the kept cubes: a cell per piece of each cube (one for a cube without pieces sought, or
@@ -628,6 +643,7 @@ void build_cells(Lattice& L, const Eigen::Matrix3Xd& V, const Eigen::Matrix3Xi& 
         if (at.cell.empty()) continue;
         for (std::size_t a = 1; a < at.cell.size() && at.clean && !links.part.empty(); ++a)
           at.clean = links.part[static_cast<std::size_t>(at.cell[a])] == links.part[static_cast<std::size_t>(at.cell[0])];
+        if (at.clean && !links.part.empty()) at.clean = faces_join_around(at.cube_at);
         const Eigen::Vector3d x = L.origin + L.spacing * Eigen::Vector3d(i, j, k);
         const int n = static_cast<int>(at.cell.size());
         const std::size_t first_vertex = position.size();

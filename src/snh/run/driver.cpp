@@ -77,7 +77,6 @@ struct WriteOnException {
   }
 };
 
-/// One run of a plan (run_simulation): what its stages share.
 /// The size the memory estimate needs: the mesh's, and whether any term is a contact term.
 ProblemSize problem_size(const Simulation& sim) {
   ProblemSize size = problem_size(sim.mesh());
@@ -86,6 +85,7 @@ ProblemSize problem_size(const Simulation& sim) {
   return size;
 }
 
+/// One run of a plan (run_simulation): what its stages share.
 class RunLoop {
  public:
   RunLoop(Simulation& sim, const RunPlan& plan, std::ostream& log)

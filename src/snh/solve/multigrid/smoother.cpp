@@ -1,7 +1,8 @@
 // The smoother (multigrid.hpp): its values for each matrix (rows in sweep order, scaled node by node and
 // stored in half precision; the inverses of the diagonal blocks), the nodal-block Gauss–Seidel sweeps
 // (multi-colour in parallel, or lexicographic on one thread) in the scaled unknowns, the residual after the
-// forward sweep, and the product A x from the lower block triangle. The inner loops use GCC's and Clang's vector extensions (AVX and FMA where the CPU has them).
+// forward sweep, and the product A x from the lower block triangle. The inner loops use GCC's and Clang's
+// vector extensions (AVX, FMA and F16C where the CPU has them).
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -66,9 +67,9 @@ inline Lanes multiply_add(const Lanes& a, double x, const Lanes& t) {
 
 /// s −= Σ Â_ik x_k over row i's off-diagonal blocks `from` .. `to` (sweep_rows()), the scaled blocks stored
 /// by columns in half (or single) precision: column j of a block, widened to four doubles (the fourth is the
-/// value after it; it goes to the sums' unused lane), times x_kj. Six independent sums (the columns of the even and of the odd blocks)
-/// with fused multiply-adds (one rounding and one instruction each): the loop is not one chain of dependent
-/// additions, whose latency would bound it.
+/// value after it; it goes to the sums' unused lane), times x_kj. Six independent sums (the columns of the
+/// even and of the odd blocks) with fused multiply-adds (one rounding and one instruction each): the loop is
+/// not one chain of dependent additions, whose latency would bound it.
 inline void subtract_row(const Level& L, int from, int to, const double* x, Lanes& s) {
   const RowValue* val = L.row_val.data() + 9 * static_cast<std::size_t>(from);
   const int* node = L.row_node.data();
