@@ -35,6 +35,12 @@ class StrictReader {
   }
   bool key(json::string_t& k) {
     Frame& f = frames_.back();
+    // No scene key holds a control character, and a key is written into messages as it is: one with a line
+    // break (JSON's "\n") made a two-line message. Refused here, the key shown escaped.
+    if (std::any_of(k.begin(), k.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == '\x7f'; })) {
+      f.key.clear();
+      fail(path(), fmt::format("the key {} holds a control character (no scene key does)", json(k).dump(-1, ' ', false, json::error_handler_t::replace)));
+    }
     f.key = k;
     if (!f.keys.insert(k).second) fail(path(), "the key is given twice in the same object (give each key once)");
     return dom_.key(k);
