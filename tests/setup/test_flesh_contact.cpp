@@ -10,10 +10,8 @@
 
 #include <algorithm>
 #include <array>
-#include <functional>
-#include <set>
-#include <numeric>
 #include <map>
+#include <set>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +24,7 @@
 #include "snh/io/surface_read.hpp"
 #include "snh/rig/gltf.hpp"
 #include "snh/fem/collider_term.hpp"
+#include "snh/math/union_find.hpp"
 #include "snh/setup/flesh.hpp"
 #include "snh/setup/scene_run.hpp"
 
@@ -166,14 +165,12 @@ std::vector<int> hinge_vertices(const VolumeMesh& mesh) {
       by_face[key].push_back(c);
     }
   std::vector<std::vector<int>> neighbours(static_cast<std::size_t>(cells));
-  std::vector<int> part(static_cast<std::size_t>(cells));
-  std::iota(part.begin(), part.end(), 0);
-  const std::function<int(int)> root = [&](int c) { return part[static_cast<std::size_t>(c)] == c ? c : part[static_cast<std::size_t>(c)] = root(part[static_cast<std::size_t>(c)]); };
+  UnionFind parts(static_cast<std::size_t>(cells));
   for (const auto& [key, cs] : by_face)
     if (cs.size() == 2) {
       neighbours[static_cast<std::size_t>(cs[0])].push_back(cs[1]);
       neighbours[static_cast<std::size_t>(cs[1])].push_back(cs[0]);
-      part[static_cast<std::size_t>(root(cs[0]))] = root(cs[1]);
+      parts.join(cs[0], cs[1]);
     }
   std::vector<std::vector<int>> around(static_cast<std::size_t>(mesh.vertex_count()));
   for (int c = 0; c < cells; ++c)
@@ -189,15 +186,16 @@ std::vector<int> hinge_vertices(const VolumeMesh& mesh) {
       for (const int d : neighbours[static_cast<std::size_t>(c)])
         if (std::find(cs.begin(), cs.end(), d) != cs.end() && reached.insert(d).second) stack.push_back(d);
     }
-    const bool one_part = std::all_of(cs.begin(), cs.end(), [&](int c) { return root(c) == root(cs[0]); });
+    const bool one_part = std::all_of(cs.begin(), cs.end(), [&](int c) { return parts.root(c) == parts.root(cs[0]); });
     if (reached.size() < cs.size() && one_part) hinges.push_back(static_cast<int>(v));
   }
   return hinges;
 }
 
-// The hand's lattice at the resolution of Figure 1's 25k-hex run, where 11 vertices were such hinges (cells of one
-// part sharing a vertex at an edge or a corner alone) and Newton crept on the squeezed flesh around them: frames
-// 10-15 took 12, 6, 6, 18, 14 and 7 iterations, 3-4 each once the hinges were split (docs/results.md).
+// The hand's lattice at the resolution of Figure 1's 25k-hex run (83), whose cells of one part shared a vertex at an
+// edge or a corner alone in places (here 2 such hinges; the run's lattice gained 11 vertices when they were split)
+// and where Newton crept on the squeezed flesh next to one: frames 10-15 took 12, 6, 6, 18, 14 and 7 iterations,
+// 3-4 each once the hinges were split (docs/results.md).
 TEST(FleshLattice, CellsOfOnePartShareNoVertexAtAnEdgeOrCornerAlone) {
   FleshSpec spec;
   spec.model = fs::path(SNH_SOURCE_DIR) / "data" / "hand" / "left.glb";

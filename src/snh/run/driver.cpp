@@ -1,6 +1,5 @@
 #include "snh/run/driver.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -77,11 +76,10 @@ struct WriteOnException {
   }
 };
 
-/// The size the memory estimate needs: the mesh's, and whether any term is a contact term.
+/// The size the memory estimate needs: the mesh's, and whether it has contact terms.
 ProblemSize problem_size(const Simulation& sim) {
   ProblemSize size = problem_size(sim.mesh());
-  const auto& terms = sim.setup().terms;
-  size.contact = std::any_of(terms.begin(), terms.end(), [](const std::shared_ptr<Term>& t) { return t && t->reports_contact(); });
+  size.contact = sim.has_contact();
   return size;
 }
 

@@ -253,8 +253,7 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
   };
   if (b.body->flesh) add_flesh_output(b, sim, plan);
   if (b.muscles) add_muscle_output(b, plan);
-  const auto& terms = sim.problem().terms();
-  if (std::any_of(terms.begin(), terms.end(), [](const Term* t) { return t->reports_contact(); })) add_contact_statistics(sim, plan);
+  if (sim.has_contact()) add_contact_statistics(sim, plan);
   return plan;
 }
 

@@ -192,6 +192,10 @@ bool Simulation::carried_check() const {
   return std::any_of(setup_.terms.begin(), setup_.terms.end(), [](const std::shared_ptr<Term>& t) { return t->moving(); });
 }
 
+bool Simulation::has_contact() const {
+  return std::any_of(setup_.terms.begin(), setup_.terms.end(), [](const std::shared_ptr<Term>& t) { return t->reports_contact(); });
+}
+
 Eigen::VectorXd Simulation::carry(const Eigen::VectorXd& x, double from, double to) const {
   std::vector<Frame> at_from, at_to;
   setup_.carrier(from, at_from);

@@ -159,6 +159,8 @@ class Simulation {
   [[nodiscard]] const LinearSolver& solver() const { return *solver_; }
   /// The setup (its mesh moved into the elastic term: mesh(); its initial positions into x()).
   [[nodiscard]] const SimulationSetup& setup() const { return setup_; }
+  /// Whether any of the further terms is a contact term (Term::reports_contact).
+  [[nodiscard]] bool has_contact() const;
   /// Per vertex: true if any of its DOFs is kinematic.
   [[nodiscard]] std::vector<bool> kinematic_vertices() const;
   /// Sets the kinematic DOFs of `state` to their targets at time t.
