@@ -87,6 +87,19 @@ TEST_F(SurfaceFiles, EveryFormatGivesTheCube) {
   }
 }
 
+// An OBJ file's vertex normals: each vertex gets the first normal its corners name (v//vn and v/vt/vn,
+// negative indices too); none at all when a vertex has none, or in the other formats.
+TEST_F(SurfaceFiles, ObjNormalsBelongToTheirVertices) {
+  const SurfaceMesh s = read_surface(write("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 -1\nvt 0 0\n"
+                                                      "f 1//2 2/1/1 3/1/-1\nf 1//1 3//1 2//1\n"));
+  ASSERT_EQ(s.normals.cols(), 3);
+  EXPECT_EQ(s.normals.col(0), Eigen::Vector3d(0, 0, -1));
+  EXPECT_EQ(s.normals.col(1), Eigen::Vector3d(0, 0, 1));
+  EXPECT_EQ(s.normals.col(2), Eigen::Vector3d(0, 0, -1));
+  EXPECT_EQ(read_surface(write("m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3\n")).normals.cols(), 0);
+  EXPECT_EQ(read_surface(write("c.off", cube_files().at(1).second)).normals.cols(), 0);
+}
+
 TEST_F(SurfaceFiles, ErrorsAreOneLine) {
   auto error = [&](const std::string& name, const std::string& text) {
     try {
@@ -100,6 +113,8 @@ TEST_F(SurfaceFiles, ErrorsAreOneLine) {
   };
   EXPECT_EQ(error("a.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\n"), ":3: face refers to vertex 3, but there are 2");
   EXPECT_EQ(error("b.obj", "v 0 0 nan\n"), ":1: a coordinate is not finite: 'nan'");
+  EXPECT_EQ(error("b2.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n"), ":5: face refers to normal 2, but there are 1");
+  EXPECT_EQ(error("b3.obj", "vn 0 x 1\n"), ":1: expected a normal's coordinate (a number), got 'x'");
   EXPECT_EQ(error("c.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n"), ":5: the file ends where a coordinate was expected");
   EXPECT_EQ(error("d.ply", "ply\nformat binary_little_endian 1.0\n"), ":2: PLY format 'binary_little_endian' is not supported (ascii is)");
   EXPECT_EQ(error("e.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0\n"), ":5: the file ends where z was expected");

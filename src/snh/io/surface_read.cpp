@@ -5,8 +5,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <random>
 #include <vector>
@@ -60,13 +62,24 @@ SurfaceMesh read_obj_surface(const fs::path& path) {
   Lexer file = Lexer::open(path, detail::text_head(path, '#'));
   Lexer err(path, "");
   Collect c;
+  std::vector<double> vn;            // the "vn" lines' normals, 3 each
+  std::vector<long long> normal_of;  // per corner read so far: its vertex and its normal (-1: none), in pairs
   int line_no = 0;
+  // A corner's index (v, vt or vn: 1-based, negative relative to the `count` read so far) as 0-based.
+  const auto index = [&](std::string_view text, std::string_view t, long long count) {
+    long long i = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), i);
+    if (ec != std::errc() || end != text.data() + text.size() || i == 0)
+      err.fail(fmt::format("expected a vertex index, got '{}'", t), line_no);
+    return i > 0 ? i - 1 : count + i;
+  };
   for (std::string line; file.rest_of_line(line, line_no);) {
     Lexer lx(path, line, '#');
     const std::string_view tag = lx.next();
-    if (tag == "v") {
+    if (tag == "v" || tag == "vn") {
+      std::vector<double>& to = tag == "v" ? c.xyz : vn;
       try {
-        for (int a = 0; a < 3; ++a) c.xyz.push_back(lx.number("a coordinate"));
+        for (int a = 0; a < 3; ++a) to.push_back(lx.number(tag == "v" ? "a coordinate" : "a normal's coordinate"));
       } catch (const MeshError& e) {
         const std::string what = e.what();
         err.fail(what.substr(what.find(": ", path.string().size()) + 2), line_no);
@@ -74,18 +87,34 @@ SurfaceMesh read_obj_surface(const fs::path& path) {
     } else if (tag == "f") {
       std::vector<long long> v;
       for (std::string_view t = lx.next(); !t.empty(); t = lx.next()) {
-        const std::string_view first = t.substr(0, t.find('/'));  // v, v/vt, v//vn, v/vt/vn
-        long long i = 0;
-        const auto [end, ec] = std::from_chars(first.data(), first.data() + first.size(), i);
-        if (ec != std::errc() || end != first.data() + first.size() || i == 0)
-          err.fail(fmt::format("expected a vertex index, got '{}'", t), line_no);
-        const long long n = static_cast<long long>(c.xyz.size() / 3);
-        v.push_back(i > 0 ? i - 1 : n + i);  // negative: relative to the end
+        const std::size_t slash = t.find('/');
+        v.push_back(index(t.substr(0, slash), t, static_cast<long long>(c.xyz.size() / 3)));
+        // v//vn or v/vt/vn: the normal's index after the second slash.
+        const std::size_t second = slash == std::string_view::npos ? slash : t.find('/', slash + 1);
+        long long n = -1;
+        if (second != std::string_view::npos) {
+          const long long normals = static_cast<long long>(vn.size() / 3);
+          n = index(t.substr(second + 1), t, normals);
+          if (n < 0 || n >= normals) err.fail(fmt::format("face refers to normal {}, but there are {}", n + 1, normals), line_no);
+        }
+        normal_of.insert(normal_of.end(), {v.back(), n});
       }
       c.polygon(err, v, line_no);
-    }  // vt, vn, o, g, s, usemtl, mtllib, l: not needed
+    }  // vt, o, g, s, usemtl, mtllib, l: not needed
   }
-  return c.finish(err);
+  SurfaceMesh s = c.finish(err);
+  // Each vertex's normal: the first its corners name; none at all unless every vertex has one.
+  const Eigen::Index nv = s.vertices.cols();
+  Eigen::Matrix3Xd normals = Eigen::Matrix3Xd::Constant(3, nv, std::numeric_limits<double>::quiet_NaN());
+  std::vector<char> has(static_cast<std::size_t>(nv), 0);
+  for (std::size_t k = 0; k < normal_of.size(); k += 2) {
+    const long long v = normal_of[k], n = normal_of[k + 1];
+    if (n < 0 || has[static_cast<std::size_t>(v)]) continue;
+    normals.col(v) = Eigen::Vector3d(vn[3 * n], vn[3 * n + 1], vn[3 * n + 2]);
+    has[static_cast<std::size_t>(v)] = 1;
+  }
+  if (nv > 0 && std::all_of(has.begin(), has.end(), [](char h) { return h != 0; })) s.normals = std::move(normals);
+  return s;
 }
 
 SurfaceMesh read_off(const fs::path& path) {

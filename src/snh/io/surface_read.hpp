@@ -12,6 +12,9 @@ namespace snh {
 struct SurfaceMesh {
   Eigen::Matrix3Xd vertices;
   Eigen::Matrix3Xi triangles;  ///< polygons are split into fans
+  /// 3 by #vertices: an OBJ file's vertex normals ("vn", by the corners' v/vt/vn), the first a vertex's corners
+  /// name; empty unless every vertex has one (and for the other formats).
+  Eigen::Matrix3Xd normals;
 };
 
 /// Reads .obj, .off, .ply (ASCII) or .stl (ASCII or binary). STL's repeated corners are merged.

@@ -457,7 +457,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where, std::string_v
   } else {
     f.cell_size = longest / f.resolution;
     // No tet larger than a sixth of a cube of the lattice's size (the five or six tets a cube splits into).
-    MeshFile tets = tetrahedralize(SurfaceMesh{m.surface_vertices, m.surface_triangles}, spec.model,
+    MeshFile tets = tetrahedralize(SurfaceMesh{m.surface_vertices, m.surface_triangles, {}}, spec.model,
                                    std::pow(f.cell_size, 3) / 6.0);
     f.volume = std::move(tets.mesh);
     f.volume_of_cells = mesh_volume(f.volume);
