@@ -56,41 +56,76 @@ void add_report_commands(CLI::App& app, int& exit_code) {
   });
 
   struct RenderArgs {
-    std::string dir, out, field, browser, show;
+    std::string dir, out, field, browser, show, view, fit, focus, video, frames;
     int frame = -1, width = 1200, height = 900;
-    bool wireframe = false;
+    double fps = 0.0;
+    bool wireframe = false, bones = false;
   };
   auto r = std::make_shared<RenderArgs>();
   CLI::App* render = app.add_subcommand(
       "render",
-      "Saves a picture of one frame of a run (the report's 3D view with its legend) as a PNG, through headless "
-      "Chromium (Debian package chromium; or set SNH_CHROMIUM). Writes the report first if the directory has none.");
+      "Saves a picture of one frame of a run (the report's 3D view with its legend) as a PNG (--out), or a video of "
+      "its frames (--video, with ffmpeg: Debian package ffmpeg), through headless Chromium (Debian package chromium; "
+      "or set SNH_CHROMIUM). The camera frames the surface shown. Writes the report first if the directory has none.");
   render->add_option("dir", r->dir, "The run's output directory")->required();
   render->add_option("--frame", r->frame, "The frame (default: the last)")->check(finite_number(Sign::non_negative));
   render->add_option("--field", r->field, "Colour by J (default), psi (energy density) or displacement");
-  render->add_option("--out", r->out, "The PNG to write")->required();
+  CLI::Option* png = render->add_option("--out", r->out, "The PNG to write");
+  CLI::Option* video = render->add_option(
+      "--video", r->video,
+      "A video to write instead: .mp4 (H.264) or .gif (for web pages), of every frame (or --frames) at the run's "
+      "frame rate (or --fps), the camera still (--fit animation unless given)");
+  png->excludes(video);
+  render->add_option("--frames", r->frames, "A video's frames, FIRST:LAST (e.g. 12:36, or 12: to the end; default all)");
+  render->add_option("--fps", r->fps, "A video's frames per second (default: the run's own, from its frames' times)")
+      ->check(finite_number(Sign::non_negative));
   render->add_option("--width", r->width, "Picture width in pixels (default 1200)");
   render->add_option("--height", r->height, "Picture height in pixels (default 900)");
   render->add_flag("--wireframe", r->wireframe, "Draw the triangle edges");
   render->add_option("--show", r->show,
                      "A flesh run: the render surface simulated as flesh (default), posed by linear blend skinning "
-                     "(lbs), or the volume with its colours")
-      ->check(CLI::IsMember({"flesh", "lbs", "volume"}));
+                     "(lbs), the flesh coloured by its signed distance from the skinned surface in millimetres "
+                     "(difference: red outside it, blue inside, with a legend), or the volume with its colours; "
+                     "up to four comma-separated side by side, e.g. --show flesh,lbs");
+  render->add_option("--view", r->view,
+                     "The camera: three-quarter (default: front right, a little above), front, back, left, right or "
+                     "top, as the model's up axis has them (glTF: +Y up, the front facing +Z)");
+  render->add_option("--fit", r->fit,
+                     "frame (default): the frame shown fills the picture; animation: the camera that every frame "
+                     "of the run would fit (steady across frames)");
+  render->add_option("--focus", r->focus,
+                     "A flesh run: a close-up on a joint by name (e.g. index-finger-phalanx-proximal): the surface "
+                     "round it fills the picture");
+  render->add_flag("--bones", r->bones, "A flesh run: draw the bones over the surface (off by default)");
   render->add_option("--browser", r->browser, "Chromium or Chrome binary (default: $SNH_CHROMIUM, else chromium on PATH)");
   render->callback([r, &exit_code]() {
+    if (r->out.empty() == r->video.empty())
+      throw CLI::ValidationError("snh render", "give --out PICTURE.png, or --video VIDEO.mp4 (or .gif)");
     RenderOptions o;
     o.frame = r->frame;
     o.field = r->field;
     o.wireframe = r->wireframe;
     o.show = r->show;
+    o.view = r->view;
+    o.fit = r->fit;
+    o.focus = r->focus;
+    o.bones = r->bones;
     o.width = r->width;
     o.height = r->height;
     o.out = r->out;
     o.browser = r->browser;
+    o.video = r->video;
+    o.frames = r->frames;
+    o.fps = r->fps;
     install_stop_handlers();  // Ctrl-C stops the browser and removes what it left
     exit_code = exit_code_of([&] {
-      render_png(r->dir, o);
-      std::cout << fmt::format("{} ({}x{})\n", r->out, o.width, o.height);
+      if (r->video.empty()) {
+        render_png(r->dir, o);
+        std::cout << fmt::format("{} ({}x{})\n", r->out, o.width, o.height);
+      } else {
+        const VideoSummary v = render_video(r->dir, o);
+        std::cout << fmt::format("{} ({}x{}, {} frames at {:.4g} a second)\n", r->video, o.width, o.height, v.frames, v.fps);
+      }
     });
   });
 }

@@ -27,6 +27,7 @@
 #include "snh/io/obj.hpp"
 #include "snh/io/vtu.hpp"
 #include "snh/mesh/box.hpp"
+#include "snh/contact/point_triangle_distance.hpp"
 #include "snh/report/render.hpp"
 #include "snh/report/report.hpp"
 #include "snh/run/interrupt.hpp"
@@ -427,6 +428,41 @@ TEST(RunReport, FleshRunRenderSurfaceBonesAndSettings) {
     EXPECT_NEAR(r["bounds"]["max"][a].get<double>(), hi[a], 1e-9);
   }
 
+  // Each flesh vertex's signed distance from the skinned surface, in millimetres (stats.json gives no unit: metres):
+  // the nearest of every triangle (IPC's distance, brute force), outside (the flesh grows, the skin shrinks), zero
+  // in frame 0 where the two are one surface; its range over the frames, and the largest per frame as a plot.
+  double largest = 0.0;
+  std::vector<double> outside(f.frames, 0.0);
+  for (int i = 0; i < f.frames; ++i) {
+    const json fd = js_payload(f.dir / d["mesh"]["frames"][i]["src"].get<std::string>(), fmt::format("snhReportFrame({}, ", i), ");");
+    const auto dist = decode<float>(fd["render"]["distance"]);
+    ASSERT_EQ(dist.size(), 6u);
+    for (int v = 0; v < 6; ++v) {
+      double nearest = 1e300;
+      for (int t = 0; t < 8; ++t)
+        nearest = std::min(nearest, contact::point_triangle_distance(f.flesh[i].col(v), f.lbs[i].col(f.triangles(0, t)),
+                                                                      f.lbs[i].col(f.triangles(1, t)), f.lbs[i].col(f.triangles(2, t))));
+      const double expected = 1000.0 * std::sqrt(nearest);
+      EXPECT_NEAR(dist[v], expected, 1e-6 * (1.0 + expected)) << "frame " << i << " vertex " << v;
+      if (i == 0) EXPECT_EQ(dist[v], 0.0f) << "vertex " << v;
+      largest = std::max(largest, expected);
+      outside[i] = std::max(outside[i], expected);
+    }
+  }
+  EXPECT_NEAR(r["distance"]["max"].get<double>(), largest, 1e-9 * largest);
+  EXPECT_EQ(r["distance"]["min"].get<double>(), 0.0);
+  EXPECT_EQ(r["distance"]["unit"], "mm");
+  EXPECT_EQ(decode<std::uint32_t>(r["normal_groups"]), (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5}));
+  const json* distance_plot = nullptr;
+  for (const json& p : d["plots"])
+    if (p["id"] == "lbs_surface_distance") distance_plot = &p;
+  ASSERT_NE(distance_plot, nullptr);
+  for (int i = 0; i < f.frames; ++i) {
+    EXPECT_NEAR((*distance_plot)["series"][0]["y"][i].get<double>(), outside[i], 1e-9 * (1.0 + outside[i])) << "frame " << i;
+    EXPECT_EQ((*distance_plot)["series"][1]["y"][i].get<double>(), 0.0) << "frame " << i;
+  }
+  EXPECT_EQ(r["up_axis"], "+Y");
+
   // The render volumes: one plot, both curves, one point per frame.
   const json* render_volume = nullptr;
   for (const json& p : d["plots"])
@@ -653,8 +689,39 @@ TEST(Render, ChecksFrameFieldAndBrowserBeforeStartingIt) {
   EXPECT_EQ(message({.width = 8}), "the picture size must be from 16 to 8192 pixels each way, got 8x900");
   EXPECT_EQ(message({.browser = "/nonexistent/chromium"}),
             "the browser /nonexistent/chromium cannot be run (from SNH_CHROMIUM or --browser)");
+  EXPECT_EQ(message({.view = "side"}), "--view side: expected three-quarter, front, back, left, right or top");
+  EXPECT_EQ(message({.fit = "all"}),
+            "--fit all: expected frame (the frame shown fills the picture) or animation (every frame would fit)");
+  EXPECT_EQ(message({.show = "flesh,skin"}), "--show flesh,skin: expected flesh, lbs, difference or volume, or up to four "
+                                             "of them comma-separated (side by side), got 'skin'");
+  EXPECT_EQ(message({.show = "flesh,lbs,flesh,lbs,flesh"}), "--show flesh,lbs,flesh,lbs,flesh: at most four side by side");
+  EXPECT_EQ(message({.show = "lbs"}), fmt::format("--show: {} is not a flesh run (it has no render surface)", run.dir.string()));
+  EXPECT_EQ(message({.focus = "elbow"}), fmt::format("--focus: {} is not a flesh run (it has no render surface)", run.dir.string()));
+  EXPECT_EQ(message({.bones = true}), fmt::format("--bones: {} is not a flesh run (it has no render surface)", run.dir.string()));
   EXPECT_FALSE(fs::exists(run.dir / "x.png"));
   fs::remove_all(run.dir);
+  // A flesh run: --focus names a joint of its bones; --show difference needs a report with the distances.
+  const FleshRun f = flesh_run("render_flesh");
+  (void)write_report(f.dir);
+  auto flesh_message = [&](RenderOptions o) {
+    o.out = f.dir / "x.png";
+    o.browser = "/nonexistent/chromium";  // every check passed when the browser is the complaint
+    try {
+      render_png(f.dir, o);
+    } catch (const ReportError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(flesh_message({.focus = "knee"}), "--focus knee: no joint of that name (the run's joints: shoulder, elbow, wrist)");
+  EXPECT_EQ(flesh_message({.show = "difference", .focus = "elbow"}), "the browser /nonexistent/chromium cannot be run (from SNH_CHROMIUM or --browser)");
+  json old = read_report_data(f.dir);
+  old["render"].erase("distance");
+  std::ofstream(f.dir / "report" / "data.js") << "window.SNH_REPORT = " << old.dump() << ";\n";
+  EXPECT_EQ(flesh_message({.show = "flesh,difference"}),
+            fmt::format("--show difference: the report of {} has no flesh–LBS distances (an older snh wrote it): run snh report {} first",
+                        f.dir.string(), f.dir.string()));
+  fs::remove_all(f.dir);
 }
 
 TEST(Render, ABrowserThatNeverAnswersIsKilledAtTheTimeoutAndLeavesNothing) {

@@ -118,6 +118,12 @@ export class FrameStore {
         throw new Error(`render surface "${name}" has ${out[name].length} values, expected ${3 * r.vertex_count}`);
       }
     }
+    if (r.distance) {
+      out.distance = decodeBase64(raw.distance, Float32Array, 'render surface "distance"');
+      if (out.distance.length !== r.vertex_count) {
+        throw new Error(`render surface "distance" has ${out.distance.length} values, expected ${r.vertex_count} (one per vertex)`);
+      }
+    }
     if (Array.isArray(r.bones)) {
       out.bones = decodeBase64(raw.bones, Float32Array, 'bones');
       if (out.bones.length !== 6 * r.bones.length) {

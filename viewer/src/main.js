@@ -7,7 +7,8 @@ import { header, tablesSection } from './page.js';
 import { legendElement, Player } from './player.js';
 import { plotsSection } from './plots.js';
 import { el, message } from './util.js';
-import { BACKGROUND, MeshView } from './view3d.js';
+import { decisivePoints, viewBasis } from './camera.js';
+import { BACKGROUND, FOV, MeshView, SHOWS } from './view3d.js';
 
 const noMesh = () => Promise.reject(new Error('the report has no mesh'));
 const hooks = {
@@ -26,21 +27,28 @@ window.addEventListener('unhandledrejection', (e) => record(e.reason));
 
 /**
  * Settings from the location hash: #render&frame=5&field=psi&wireframe=1, or #frame=N&field=NAME; a flesh
- * run also show=flesh|lbs|volume and bones=0; a run with muscles fibres=0.
+ * run also show=flesh|lbs|difference|volume (render mode: up to four, comma-separated, side by side) and
+ * bones=0|1 (on in the report, off in render mode); a run with muscles fibres=0. The framing: view= (camera.js
+ * VIEWS), fit=frame|animation, focus=JOINT; render mode's video=1 waits for the frames the animation's
+ * framing needs and then for setFrame() calls.
  */
 function hashSettings() {
   const h = location.hash.replace(/^#/, '');
   const q = new URLSearchParams(h);
   const flag = (k, dflt) => (q.has(k) ? !['0', 'false', 'no', 'off'].includes(q.get(k)) : dflt);
+  const render = h.startsWith('render');
   return {
-    render: h.startsWith('render'),
+    render,
     frame: q.get('frame'),
     field: q.get('field'),
     wireframe: flag('wireframe', false),
     pins: flag('pins', true),
     show: q.get('show'),
-    bones: flag('bones', true),
+    bones: flag('bones', !render),
     fibres: flag('fibres', true),
+    view: q.get('view') || 'three-quarter',
+    fit: q.get('fit') || (render ? 'frame' : 'animation'),
+    focus: q.get('focus') || '',
   };
 }
 
@@ -71,12 +79,32 @@ function meshInfo(m, r) {
     ` — surface: ${s.vertex_count} vertices, ${s.triangle_count} triangles${render} · ${m.frames.length} frames`;
 }
 
-/** What a flesh run shows first: the hash's choice, else the flesh (the volume for other runs). */
+/** What a flesh run shows first: the hash's choice, else the flesh (the volume for other runs); a list. */
 function showFromHash(value, render) {
   if (!render) return null;
-  if (value === null || value === '') return 'flesh';
-  if (!['flesh', 'lbs', 'volume'].includes(value)) throw new Error(`no "${value}" to show (flesh, lbs or volume)`);
-  return value;
+  if (value === null || value === '') return ['flesh'];
+  const list = value.split(',');
+  for (const v of list) if (!['flesh', 'lbs', 'difference', 'volume'].includes(v)) throw new Error(`no "${v}" to show (flesh, lbs, difference or volume)`);
+  if (list.length > 4) throw new Error(`show=${value}: at most four side by side`);
+  return list;
+}
+
+/** The part of the picture the framing fills (NDC): below the caption and the panels' labels, above the legend. */
+function framingBox(box, parts) {
+  const height = Math.max(box.clientHeight, 1);
+  const view = box.getBoundingClientRect();
+  let top = 0;
+  let bottom = height;
+  for (const e of [parts.caption, ...(parts.labels || [])]) {
+    if (e && !e.hidden) top = Math.max(top, e.getBoundingClientRect().bottom - view.top);
+  }
+  if (parts.legend && !parts.legend.hidden) bottom = Math.min(bottom, parts.legend.getBoundingClientRect().top - view.top);
+  const margin = 0.05 * height;
+  const ndc = (y) => 1 - (2 * y) / height;
+  const box2 = { left: -0.94, right: 0.94, top: Math.min(0.94, ndc(top + margin)), bottom: Math.max(-0.94, ndc(bottom - margin)) };
+  // A shape in a narrow strip would be tiny: give the overlays' room back where too little is left.
+  if (box2.top - box2.bottom < 0.8) { box2.top = 0.94; box2.bottom = -0.94; }
+  return box2;
 }
 
 async function renderMode(root, data, s) {
@@ -89,17 +117,54 @@ async function renderMode(root, data, s) {
     if (!mesh.frames || !mesh.frames.length) throw new Error('the report has no frames');
     const frame = frameFromHash(s.frame, mesh.frames.length) ?? 0;
     const render = data.render || null;
-    const show = showFromHash(s.show, render);
+    const panels = showFromHash(s.show, render);
     const view = new MeshView(box, mesh, render);
     view.setWireframe(s.wireframe);
     view.setPinsVisible(s.pins);
     view.setBonesVisible(s.bones);
     view.setFibresVisible(s.fibres);
-    const player = new Player({ mesh, store: new FrameStore(mesh, render), view, hooks, parts, onError: record });
+    const store = new FrameStore(mesh, render);
+    const player = new Player({ mesh, store, view, hooks, parts, onError: record });
     const field = s.field || mesh.default_field || (mesh.fields[0] && mesh.fields[0].name);
     if (field) await player.setField(field);
-    if (show) player.setShow(show);
+    if (panels) {
+      player.setPanels(panels);
+      if (panels.length > 1) {
+        parts.labels = panels.map((p, i) => {
+          const label = el('div', { class: 'snh-panel-label' }, SHOWS.find(([k]) => k === p)[1]);
+          label.style.left = `${((i + 0.5) * 100) / panels.length}%`;
+          box.append(label);
+          return label;
+        });
+      }
+    }
+    // The framing: the frame's own shape, or the whole animation's (the decisive points of every frame).
+    view.framing.view = s.view;
+    view.framing.fit = s.fit;
+    if (s.fit !== 'frame' && s.fit !== 'animation') throw new Error(`fit=${s.fit}: expected frame or animation`);
+    const framingFor = () => ({ box: framingBox(box, parts) });
+    if (s.fit === 'animation' && !s.focus) {
+      const { w, h } = view.panelSize();
+      const f = framingFor();
+      const basis = viewBasis(s.view, view.framing.up);
+      const points = [];
+      for (let i = 0; i < store.count; i++) {
+        await player.setFrame(i);
+        points.push(...decisivePoints(view.shownPoints(), basis, FOV, w / h, f.box));
+      }
+      f.points = points;
+      view.setFraming(f);
+    }
     await player.setFrame(frame);
+    view.setFraming({ ...framingFor(), focus: s.focus });
+    player.draw(await store.get(frame)); // the framing as it stands for this frame
+    hooks.setFrame = async (i) => {
+      await player.setFrame(i);
+      await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+    };
+    hooks.camera = () => view.lastFit;
+    hooks.framingBox = () => view.framing.box;
+    hooks.projectedExtent = () => view.projectedExtent();
     await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
     hooks.ready = true;
     document.title = 'snh-render-ready';
@@ -137,7 +202,8 @@ function meshSection(data, s) {
       const frame = pick(() => frameFromHash(s.frame, store.count)) ?? 0;
       const field = (s.field && pick(() => player.fieldByName(s.field).name)) ||
         mesh.default_field || (mesh.fields[0] && mesh.fields[0].name);
-      const show = pick(() => showFromHash(s.show, render)) || (render ? 'flesh' : null);
+      const shows = pick(() => showFromHash(s.show, render));
+      const show = shows ? shows[0] : render ? 'flesh' : null; // one at a time here
       view.setWireframe(s.wireframe);
       view.setPinsVisible(s.pins);
       view.setBonesVisible(s.bones);

@@ -74,6 +74,7 @@ export class Player {
     if (this.field) this.view.setColors(this.field, data.fields[this.field.name], this.colors);
     if (data.render) this.view.setRender(data.render);
     if (data.fibres) this.view.setFibres(data.fibres);
+    this.view.refit();
     this.view.render();
     this.showMessage('');
     const label = this.frameLabel(this.frame);
@@ -87,14 +88,21 @@ export class Player {
   /** Render mode's caption: the frame, and for a flesh run what is shown. */
   updateCaption() {
     if (!this.parts.caption || this.frame < 0) return;
-    const shown = this.view.skins ? ` · ${SHOWS.find(([k]) => k === this.view.show)[1]}` : '';
+    const label = (k) => SHOWS.find(([key]) => key === k)[1];
+    const shown = this.view.skins && this.view.panels.length === 1 ? ` · ${label(this.view.show)}` : '';
     this.parts.caption.lastChild.textContent = this.frameLabel(this.frame) + shown;
   }
 
   /** A flesh run: shows 'flesh' or 'lbs' (the render surface, simulated or skinned) or 'volume' (coloured by the field). */
   setShow(what) {
-    this.view.setShow(what);
-    this.hooks.show = what;
+    this.setPanels([what]);
+  }
+
+  /** Render mode: one to four of those side by side. */
+  setPanels(list) {
+    this.view.setPanels(list);
+    const what = list[0];
+    this.hooks.show = list.join(',');
     if (this.ui) {
       for (const b of this.ui.shows) b.setAttribute('aria-pressed', b.dataset.show === what ? 'true' : 'false');
       this.ui.field.disabled = what !== 'volume';
@@ -127,23 +135,27 @@ export class Player {
     this.parts.message.hidden = !text;
   }
 
+  /** The legend of the colours shown: the volume's field, or the flesh's distance from the skinned surface. */
   updateLegend() {
-    const f = this.field;
+    const panels = this.view.panels || [this.view.show];
+    const distance = panels.includes('difference') && !panels.includes('volume');
+    const f = distance ? this.view.distanceField : this.field;
+    const colors = distance ? this.view.distanceColors : this.colors;
     const lg = this.parts.legend;
-    lg.hidden = !f || this.view.show !== 'volume'; // the colours are the volume's only
+    lg.hidden = !f || !(distance || panels.includes('volume')); // the flesh and the LBS surface have no colours
     if (!f) return;
     this.hooks.legend = { field: f.name, min: f.min, max: f.max };
     lg.dataset.field = f.name;
     lg.dataset.min = String(f.min);
     lg.dataset.max = String(f.max);
     lg.querySelector('.snh-legend-label').textContent = f.label || f.name;
-    lg.querySelector('.snh-legend-bar').style.background = this.colors.gradient();
+    lg.querySelector('.snh-legend-bar').style.background = colors.gradient();
     lg.querySelector('.snh-legend-min').textContent = fmt4(f.min);
     lg.querySelector('.snh-legend-max').textContent = fmt4(f.max);
     // The diverging map's centre (white), when it lies inside min..max.
     const mark = lg.querySelector('.snh-legend-center');
     const c = f.center;
-    const inside = this.colors.name === 'diverging' && Number.isFinite(c) && c > f.min && c < f.max;
+    const inside = colors.name === 'diverging' && Number.isFinite(c) && c > f.min && c < f.max;
     mark.hidden = !inside;
     if (inside) {
       mark.style.left = `${(100 * (c - f.min)) / (f.max - f.min)}%`;

@@ -4,24 +4,28 @@
 // its bones as lines drawn over everything: one of flesh, lbs or the volume is shown at a time. A run with
 // muscles draws their fibres over everything too, coloured by their muscle's activation.
 import {
-  AmbientLight, BufferAttribute, BufferGeometry, Color, DirectionalLight, DoubleSide, LineBasicMaterial,
-  LineSegments, Mesh, MeshBasicMaterial, MeshLambertMaterial, Object3D, PerspectiveCamera, Points, PointsMaterial,
-  Scene, Vector3, WebGLRenderer,
+  AmbientLight, BufferAttribute, BufferGeometry, Color, DirectionalLight, DoubleSide, HemisphereLight, LineBasicMaterial,
+  LineSegments, Mesh, MeshBasicMaterial, MeshLambertMaterial, MeshStandardMaterial, Object3D, PerspectiveCamera, Points,
+  PointsMaterial, Scene, Vector3, WebGLRenderer,
 } from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import { LineMaterial } from 'three/examples/jsm/lines/LineMaterial.js';
 import { LineSegments2 } from 'three/examples/jsm/lines/LineSegments2.js';
 import { LineSegmentsGeometry } from 'three/examples/jsm/lines/LineSegmentsGeometry.js';
+import { fitView, jointAt, modelAxes, pointsNear, viewBasis } from './camera.js';
 import { fieldColors } from './colormap.js';
 import { decodeBase64 } from './util.js';
 
 /** The background colour (sRGB 0-255); tests compare pixels against it. */
 export const BACKGROUND = [224, 228, 233];
-const FOV = 30; // degrees, vertical
-const VIEW_DIR = new Vector3(0.9, 0.55, 1.35).normalize(); // from front-right, above; y is up
+export const FOV = 30; // degrees, vertical
+/** How much of the picture the framing leaves round the shape, in NDC (1 = the edge). */
+const FRAME_MARGIN = 0.92;
+/** A close-up on a joint takes in the surface within this many times its longest bone. */
+const FOCUS_REACH = 1.3;
 const CREASE_COS = Math.cos((35 * Math.PI) / 180); // feature edges: where the surface bends more
 /** What a flesh run's view can show, with the labels of its switch. */
-export const SHOWS = [['flesh', 'flesh'], ['lbs', 'skinning (LBS)'], ['volume', 'volume']];
+export const SHOWS = [['flesh', 'flesh'], ['lbs', 'skinning (LBS)'], ['difference', 'flesh − LBS distance'], ['volume', 'volume']];
 const SKIN_SRGB = { flesh: [226, 168, 142], lbs: [146, 170, 206] }; // warm for the flesh, cool for the comparison
 const BONE_COLOR = 0x16233f;
 const BONE_WIDTH = 3; // CSS pixels
@@ -74,10 +78,13 @@ export class MeshView {
     this.scene.background = new Color().setRGB(...BACKGROUND.map((c) => c / 255), 'srgb');
     this.camera = new PerspectiveCamera(FOV, 1, 0.01, 100);
     this.scene.add(this.camera);
-    this.scene.add(new AmbientLight(0xffffff, 2.2));
-    // A head light: it moves with the camera, so the side in view is always lit.
-    const light = new DirectionalLight(0xffffff, 1.15);
-    light.position.set(0.6, 1.0, 0.4);
+    // Soft light: an even base, a sky above and a warm floor below (the model's up), and a key light that
+    // moves with the camera from its upper left, so that the side in view is always lit and shaped.
+    this.scene.add(new AmbientLight(0xffffff, 1.1));
+    this.hemisphere = new HemisphereLight(0xffffff, 0x8a7d74, 1.1);
+    this.scene.add(this.hemisphere);
+    const light = new DirectionalLight(0xffffff, 1.5);
+    light.position.set(-0.5, 0.8, 0.6);
     light.target = new Object3D();
     light.target.position.set(0, 0, -1);
     this.camera.add(light, light.target);
@@ -109,6 +116,8 @@ export class MeshView {
     }
     this.setPositions(rest);
     this.show = 'volume';
+    this.panels = ['volume'];
+    this.framing = { view: 'three-quarter', up: '+Y', fit: 'animation', focus: '', box: null, points: null };
     this.wireOn = false;
     this.pinsOn = true;
     this.bonesOn = true;
@@ -120,6 +129,8 @@ export class MeshView {
     if (render) this.addRender(render);
     if (mesh.fibres) this.addFibres(mesh.fibres);
 
+    this.camera.up.set(...modelAxes(this.framing.up).up); // before the controls, which orbit about it
+    this.hemisphere.position.set(...modelAxes(this.framing.up).up);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.addEventListener('change', () => this.render());
     this.controls.addEventListener('start', () => { this.userMoved = true; });
@@ -188,15 +199,29 @@ export class MeshView {
     const tris = decodeBase64(r.triangles, Uint32Array, 'render triangles');
     if (tris.length !== 3 * r.triangle_count) throw new Error('render: the triangle count does not match');
     if (tris.some((v) => v >= n)) throw new Error('render: a triangle refers to a vertex past the surface');
+    this.renderTris = tris;
+    // Smooth shading: one normal per group of vertices (a seam's copies share one, a hard edge's do not).
+    this.normalGroups = r.normal_groups ? decodeBase64(r.normal_groups, Uint32Array, 'render normal_groups') : null;
+    if (this.normalGroups && this.normalGroups.length !== n) throw new Error('render: normal_groups does not have one group per vertex');
+    this.distanceField = r.distance ? {
+      name: 'distance', label: r.distance.label, per: 'vertex', colormap: 'diverging', center: 0,
+      min: r.distance.min, max: r.distance.max, unit: r.distance.unit,
+    } : null;
+    this.distanceColors = this.distanceField ? fieldColors(this.distanceField) : null;
     this.skins = {};
-    for (const name of ['flesh', 'lbs']) {
+    for (const name of ['flesh', 'lbs', 'difference']) {
+      if (name === 'difference' && !this.distanceField) continue;
       const geometry = new BufferGeometry();
       geometry.setAttribute('position', new BufferAttribute(new Float32Array(3 * n), 3));
+      geometry.setAttribute('normal', new BufferAttribute(new Float32Array(3 * n), 3));
+      if (name === 'difference') geometry.setAttribute('color', new BufferAttribute(new Float32Array(3 * n), 3));
       geometry.setIndex(new BufferAttribute(tris, 1));
-      const color = new Color().setRGB(...SKIN_SRGB[name].map((c) => c / 255), 'srgb');
-      const solid = new Mesh(geometry, new MeshLambertMaterial({
-        color, side: DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
-      }));
+      const solid = new Mesh(geometry, name === 'difference'
+        ? new MeshStandardMaterial({ vertexColors: true, roughness: 0.7, metalness: 0, side: DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1 })
+        : new MeshStandardMaterial({
+          color: new Color().setRGB(...SKIN_SRGB[name].map((c) => c / 255), 'srgb'), roughness: 0.62, metalness: 0,
+          side: DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+        }));
       const wire = new Mesh(geometry, new MeshBasicMaterial({
         color: 0x202020, wireframe: true, transparent: true, opacity: 0.3,
       }));
@@ -224,6 +249,8 @@ export class MeshView {
       this.scene.add(o);
     }
     this.show = 'flesh';
+    this.panels = ['flesh'];
+    if (typeof r.up_axis === 'string') this.framing.up = r.up_axis;
     this.applyVisibility();
   }
 
@@ -279,33 +306,60 @@ export class MeshView {
     }
   }
 
+  /** Fills the skins shown (their positions, normals and, for the difference, colours) from the frame given. */
   updateSkin() {
-    const skin = this.skins && this.skins[this.show];
-    if (!skin || !this.renderData || skin.filled === this.renderFrame) return;
-    skin.geometry.attributes.position.array.set(this.renderData[this.show]);
-    skin.geometry.attributes.position.needsUpdate = true;
-    skin.geometry.computeVertexNormals(); // indexed: smooth across the triangles
-    skin.filled = this.renderFrame;
+    if (!this.skins || !this.renderData) return;
+    for (const show of this.panels) {
+      const skin = this.skins[show];
+      if (!skin || skin.filled === this.renderFrame) continue;
+      const source = show === 'lbs' ? this.renderData.lbs : this.renderData.flesh;
+      skin.geometry.attributes.position.array.set(source);
+      skin.geometry.attributes.position.needsUpdate = true;
+      groupNormals(source, this.renderTris, this.normalGroups, skin.geometry.attributes.normal.array);
+      skin.geometry.attributes.normal.needsUpdate = true;
+      if (show === 'difference') {
+        const col = skin.geometry.attributes.color.array;
+        const d = this.renderData.distance;
+        for (let v = 0; v < d.length; v++) this.distanceColors.fill(col, 3 * v, d[v]);
+        skin.geometry.attributes.color.needsUpdate = true;
+      }
+      skin.filled = this.renderFrame;
+    }
   }
 
-  /** Shows 'flesh' or 'lbs' (a flesh run's render surface) or 'volume' (the boundary, coloured by a field). */
+  /** Shows 'flesh', 'lbs' or 'difference' (a flesh run's render surface: simulated, skinned, or simulated and
+   * coloured by its distance from the skinned one) or 'volume' (the boundary, coloured by a field). */
   setShow(what) {
-    if (what !== 'volume' && !(this.skins && this.skins[what])) throw new Error(`nothing to show as "${what}"`);
-    this.show = what;
+    this.setPanels([what]);
+  }
+
+  /** Shows one to four of those side by side, left to right, seen by one camera. */
+  setPanels(list) {
+    if (!Array.isArray(list) || list.length < 1 || list.length > 4) throw new Error('show one to four surfaces side by side');
+    for (const what of list) {
+      if (what !== 'volume' && !(this.skins && this.skins[what])) {
+        throw new Error(what === 'difference' && this.skins ? 'this report has no flesh–LBS distances (write it again with snh report)'
+          : `nothing to show as "${what}"`);
+      }
+    }
+    this.panels = list.slice();
+    this.show = list[0];
     this.updateSkin();
     this.applyVisibility();
+    this.resize();
   }
 
-  applyVisibility() {
-    const volume = this.show === 'volume';
+  /** Makes what panel `show` draws visible (and the rest not). */
+  applyVisibility(show = this.show) {
+    const volume = show === 'volume';
     this.solid.visible = volume;
     this.creases.visible = volume;
     this.wire.visible = volume && this.wireOn;
     this.pins.visible = volume && this.pinsOn;
     if (!this.skins) return;
     for (const [name, skin] of Object.entries(this.skins)) {
-      skin.solid.visible = name === this.show;
-      skin.wire.visible = name === this.show && this.wireOn;
+      skin.solid.visible = name === show;
+      skin.wire.visible = name === show && this.wireOn;
     }
     const bones = this.bonesOn && this.bonePositions.length > 0;
     this.boneLines.visible = bones;
@@ -317,6 +371,7 @@ export class MeshView {
     const s = this.skins;
     return {
       volume: this.solid.visible, flesh: !!s && s.flesh.solid.visible, lbs: !!s && s.lbs.solid.visible,
+      difference: !!s && !!s.difference && s.difference.solid.visible,
       bones: !!s && this.boneLines.visible,
       fibres: !!this.fibreLines && this.fibreLines.visible,
     };
@@ -337,36 +392,162 @@ export class MeshView {
     if (this.skins) this.applyVisibility();
   }
 
-  /** Puts the camera where the whole of `bounds` is in view. */
-  frameBounds() {
-    const { min, max } = this.bounds || { min: [-1, -1, -1], max: [1, 1, 1] };
-    const center = new Vector3((min[0] + max[0]) / 2, (min[1] + max[1]) / 2, (min[2] + max[2]) / 2);
-    const radius = Math.max(new Vector3(...max).distanceTo(new Vector3(...min)) / 2, 1e-6);
-    const vfov = (FOV * Math.PI) / 180;
-    const hfov = 2 * Math.atan(Math.tan(vfov / 2) * this.camera.aspect);
-    const dist = (radius / Math.sin(Math.min(vfov, hfov) / 2)) * 1.1; // a margin for the overlays
-    this.camera.position.copy(center).addScaledVector(VIEW_DIR, dist);
-    this.camera.near = dist / 100;
-    this.camera.far = dist * 100;
+  /**
+   * How the camera frames the picture: {view (camera.js VIEWS), fit ('frame': what the frame shown holds,
+   * 'animation': the whole run's bounds, or those of `points`, a flat x, y, z array the caller gathered over
+   * the frames), focus (a joint's name: a close-up on the surface round it, in the frame shown), box (the
+   * part of the picture to fill, in NDC; null: all of it less a margin)}. Framing stops once the user moves
+   * the camera.
+   */
+  setFraming(f) {
+    Object.assign(this.framing, f);
+    if (this.framing.focus && this.skins && !jointAt(this.boneNames, this.renderData ? this.renderData.bones : this.bonePositions, this.framing.focus)) {
+      throw new Error(`no joint "${this.framing.focus}" in this run's bones`);
+    }
+    viewBasis(this.framing.view, this.framing.up); // a bad name throws here
+    if (!this.userMoved) this.frameView();
+    this.render();
+  }
+
+  /** Frames again if the framing follows the frame (fit 'frame', or a focus); called when a frame is drawn. */
+  refit() {
+    if (!this.userMoved && (this.framing.fit === 'frame' || this.framing.focus)) this.frameView();
+  }
+
+  /** The points of what the panels show in the frame drawn (and the bones when they are drawn). */
+  shownPoints() {
+    const parts = [];
+    for (const show of new Set(this.panels)) {
+      if (show === 'volume') parts.push(this.geometry.attributes.position.array);
+      else if (this.renderData) parts.push(show === 'lbs' ? this.renderData.lbs : this.renderData.flesh);
+    }
+    if (this.skins && this.bonesOn && this.bonePositions.length) parts.push(this.bonePositions);
+    const out = new Float32Array(parts.reduce((n, p) => n + p.length, 0));
+    let at = 0;
+    for (const p of parts) {
+      out.set(p, at);
+      at += p.length;
+    }
+    return out;
+  }
+
+  /** Puts the camera where it frames the picture as setFraming() says. */
+  frameView() {
+    const f = this.framing;
+    let points;
+    if (f.focus && this.skins && this.renderData) {
+      const joint = jointAt(this.boneNames, this.renderData.bones || this.bonePositions, f.focus);
+      points = joint ? pointsNear(this.shownPoints(), joint.position, FOCUS_REACH * joint.reach) : this.shownPoints();
+    } else if (f.fit === 'frame') {
+      points = this.shownPoints();
+    } else if (f.points) {
+      points = f.points;
+    } else {
+      const { min, max } = this.bounds || { min: [-1, -1, -1], max: [1, 1, 1] };
+      points = [];
+      for (let c = 0; c < 8; c++) points.push(c & 1 ? max[0] : min[0], c & 2 ? max[1] : min[1], c & 4 ? max[2] : min[2]);
+    }
+    const { w, h } = this.panelSize();
+    const box = f.box || { left: -FRAME_MARGIN, right: FRAME_MARGIN, bottom: -FRAME_MARGIN, top: FRAME_MARGIN };
+    const cam = fitView(points, viewBasis(f.view, f.up), FOV, w / h, box);
+    this.camera.up.set(...cam.up);
+    this.camera.position.set(...cam.position);
+    this.camera.near = cam.near;
+    this.camera.far = cam.far;
+    this.camera.aspect = w / h;
+    // The lens shift that puts the target at the box's centre (setViewOffset moves the window the other way).
+    this.camera.setViewOffset(w, h, (-cam.shift[0] * w) / 2, (cam.shift[1] * h) / 2, w, h);
     this.camera.updateProjectionMatrix();
-    this.controls.target.copy(center);
+    this.controls.target.set(...cam.target);
+    this.camera.lookAt(this.controls.target);
     this.controls.update();
+    this.lastFit = { ...cam, fov: FOV, aspect: w / h, points: points.length / 3 };
+  }
+
+  /** The NDC extent {left, right, bottom, top} of the shown points through the camera as drawn (for tests). */
+  projectedExtent() {
+    const p = this.shownPoints();
+    const v = new Vector3();
+    const e = { left: Infinity, right: -Infinity, bottom: Infinity, top: -Infinity, points: p.length / 3 };
+    this.camera.updateMatrixWorld();
+    for (let i = 0; i < p.length; i += 3) {
+      v.set(p[i], p[i + 1], p[i + 2]).project(this.camera);
+      e.left = Math.min(e.left, v.x); e.right = Math.max(e.right, v.x);
+      e.bottom = Math.min(e.bottom, v.y); e.top = Math.max(e.top, v.y);
+    }
+    return e;
+  }
+
+  /** The size of one panel in CSS pixels. */
+  panelSize() {
+    const w = Math.max(this.container.clientWidth, 1);
+    const h = Math.max(this.container.clientHeight, 1);
+    return { w: w / Math.max(this.panels.length, 1), h };
   }
 
   resize() {
     const w = Math.max(this.container.clientWidth, 1);
     const h = Math.max(this.container.clientHeight, 1);
     this.renderer.setSize(w, h);
-    this.camera.aspect = w / h;
+    const panel = this.panelSize();
+    this.camera.aspect = panel.w / panel.h;
     this.camera.updateProjectionMatrix();
-    if (this.boneMaterial) this.boneMaterial.resolution.set(w, h);
-    if (this.fibreMaterial) this.fibreMaterial.resolution.set(w, h);
-    if (!this.userMoved) this.frameBounds();
+    if (this.boneMaterial) this.boneMaterial.resolution.set(panel.w, panel.h);
+    if (this.fibreMaterial) this.fibreMaterial.resolution.set(panel.w, panel.h);
+    if (!this.userMoved) this.frameView();
     this.render();
   }
 
+  /** Draws the panels side by side, each with what it shows, all from one camera. */
   render() {
-    this.renderer.render(this.scene, this.camera);
+    const n = this.panels.length;
+    const { w, h } = this.panelSize();
+    this.renderer.setScissorTest(n > 1);
+    for (let i = 0; i < n; i++) {
+      this.applyVisibility(this.panels[i]);
+      this.renderer.setViewport(i * w, 0, w, h);
+      this.renderer.setScissor(i * w, 0, w, h);
+      this.renderer.render(this.scene, this.camera);
+    }
+    this.applyVisibility(this.show);
+  }
+}
+
+/**
+ * Unit normals (into `out`, 3 per vertex) of the surface at positions `x`: each group's sum over its vertices'
+ * triangle corners of the face normal times the corner's angle, the same for every vertex of the group
+ * (`groups` null: each vertex its own group).
+ */
+function groupNormals(x, tris, groups, out) {
+  const n = x.length / 3;
+  let count = n;
+  if (groups) {
+    count = 0;
+    for (let v = 0; v < n; v++) count = Math.max(count, groups[v] + 1);
+  }
+  const group = (v) => (groups ? groups[v] : v);
+  const sum = new Float64Array(3 * count);
+  const edge = (from, to) => [x[3 * to] - x[3 * from], x[3 * to + 1] - x[3 * from + 1], x[3 * to + 2] - x[3 * from + 2]];
+  for (let t = 0; t < tris.length; t += 3) {
+    const i = [tris[t], tris[t + 1], tris[t + 2]];
+    const e1 = edge(i[0], i[1]);
+    const e2 = edge(i[0], i[2]);
+    const nrm = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+    const len = Math.hypot(...nrm);
+    if (!(len > 0)) continue;
+    for (let c = 0; c < 3; c++) {
+      const u = edge(i[c], i[(c + 1) % 3]);
+      const w = edge(i[c], i[(c + 2) % 3]);
+      const cos = (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (Math.hypot(...u) * Math.hypot(...w) || 1);
+      const weight = Math.acos(Math.min(1, Math.max(-1, cos))) / len;
+      const G = 3 * group(i[c]);
+      for (let k = 0; k < 3; k++) sum[G + k] += weight * nrm[k];
+    }
+  }
+  for (let v = 0; v < n; v++) {
+    const G = 3 * group(v);
+    const len = Math.hypot(sum[G], sum[G + 1], sum[G + 2]) || 1;
+    for (let k = 0; k < 3; k++) out[3 * v + k] = sum[G + k] / len;
   }
 }
 

@@ -179,9 +179,9 @@ test('flesh run report', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', time
   const pressed = () => page.$$eval('.snh-seg', (bs) => bs.filter((b) => b.getAttribute('aria-pressed') === 'true').map((b) => b.dataset.show));
 
   // The flesh first, with its bones; the volume's colours (legend, field) are not in use.
-  assert.deepEqual(await page.$$eval('.snh-seg', (bs) => bs.map((b) => b.textContent)), ['flesh', 'skinning (LBS)', 'volume']);
+  assert.deepEqual(await page.$$eval('.snh-seg', (bs) => bs.map((b) => b.textContent)), ['flesh', 'skinning (LBS)', 'flesh − LBS distance', 'volume']);
   assert.deepEqual(await pressed(), ['flesh']);
-  assert.deepEqual(await visible(), { flesh: true, lbs: false, volume: false, bones: true, fibres: false });
+  assert.deepEqual(await visible(), { flesh: true, lbs: false, difference: false, volume: false, bones: true, fibres: false });
   assert.ok(await page.$eval('#snh-legend', (e) => e.hidden), 'no legend over the flesh');
   assert.ok(await page.$eval('#snh-field', (e) => e.disabled), 'the field select is off over the flesh');
   const bg = await page.evaluate(() => window.snhReport.background);
@@ -192,18 +192,28 @@ test('flesh run report', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', time
   // The switch: each choice shows its mesh alone, and the picture changes.
   await page.click('#snh-show-lbs');
   assert.deepEqual(await pressed(), ['lbs']);
-  assert.deepEqual(await visible(), { flesh: false, lbs: true, volume: false, bones: true, fibres: false });
+  assert.deepEqual(await visible(), { flesh: false, lbs: true, difference: false, volume: false, bones: true, fibres: false });
   const lbs = await canvasShot();
   assert.ok(changedBetween(flesh, lbs) > 0.01, `skinning changes ${(100 * changedBetween(flesh, lbs)).toFixed(2)}% of the pixels`);
+  // The flesh coloured by its distance from the skinned surface, with its legend (millimetres, 0 at the centre).
+  await page.click('#snh-show-difference');
+  assert.deepEqual(await visible(), { flesh: false, lbs: false, difference: true, volume: false, bones: true, fibres: false });
+  assert.ok(!(await page.$eval('#snh-legend', (e) => e.hidden)), 'the distance has a legend');
+  const legend = await page.evaluate(() => window.snhReport.legend);
+  assert.equal(legend.field, 'distance');
+  assert.deepEqual([legend.min, legend.max], [report.render.distance.min, report.render.distance.max]);
+  assert.match(await page.$eval('.snh-legend-label', (e) => e.textContent), /\(mm\)/);
+  const diff = await canvasShot();
+  assert.ok(changedBetween(flesh, diff) > 0.01, `the colours change ${(100 * changedBetween(flesh, diff)).toFixed(2)}% of the pixels`);
   await page.click('#snh-show-volume');
-  assert.deepEqual(await visible(), { flesh: false, lbs: false, volume: true, bones: true, fibres: false });
+  assert.deepEqual(await visible(), { flesh: false, lbs: false, difference: false, volume: true, bones: true, fibres: false });
   assert.equal(await page.evaluate(() => window.snhReport.show), 'volume');
   assert.ok(!(await page.$eval('#snh-legend', (e) => e.hidden)), 'the legend is back with the volume');
   assert.ok(!(await page.$eval('#snh-field', (e) => e.disabled)), 'the field select is on with the volume');
   const vol = await canvasShot();
   assert.ok(changedBetween(lbs, vol) > 0.01, `the volume changes ${(100 * changedBetween(lbs, vol)).toFixed(2)}% of the pixels`);
   await page.click('#snh-show-flesh');
-  assert.deepEqual(await visible(), { flesh: true, lbs: false, volume: false, bones: true, fibres: false });
+  assert.deepEqual(await visible(), { flesh: true, lbs: false, difference: false, volume: false, bones: true, fibres: false });
 
   // The bones follow the frames: at each frame shown, the segments of bones.json.
   const segmentsAt = (k) => bones.frames[k].segments.flat();
@@ -247,11 +257,69 @@ test('flesh run report', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', time
 
   // The hash picks what is shown first and hides the bones.
   const again = await open(FLESH, '#show=lbs&bones=0');
-  assert.deepEqual(await again.page.evaluate(() => window.snhReport.visible()), { flesh: false, lbs: true, volume: false, bones: false, fibres: false });
+  assert.deepEqual(await again.page.evaluate(() => window.snhReport.visible()), { flesh: false, lbs: true, difference: false, volume: false, bones: false, fibres: false });
   assert.equal(await again.page.$eval('#snh-bones', (e) => e.checked), false);
   await assertNoErrors(again.page, again.problems);
   await again.page.close();
 });
+
+test('render mode frames the surface it shows', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', timeout: 120000 }, async () => {
+  const report = readReport(FLESH);
+  const last = report.mesh.frames.length - 1;
+  // A joint in the middle of the skeleton's list (make-flesh-run.mjs's "middle"; a hand's finger joint).
+  const joints = [...new Set(report.render.bones.flatMap((b) => b.split('>')))];
+  const joint = joints[Math.floor(joints.length / 2)];
+  const cases = [
+    ['#render&show=flesh', 1200, 900], ['#render&show=lbs&view=front', 640, 900], ['#render&show=difference&view=top', 1200, 500],
+    ['#render&show=flesh,lbs&view=left', 1200, 600], [`#render&show=volume&frame=${last}&fit=animation`, 800, 800],
+    [`#render&show=flesh&bones=1&focus=${encodeURIComponent(joint)}`, 900, 900],
+  ];
+  for (const [hash, width, height] of cases) {
+    const page = await browser.newPage({ viewport: { width, height } });
+    const problems = [];
+    page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
+    await page.goto(pathToFileURL(join(FLESH, 'index.html')).href + hash);
+    await page.waitForFunction(() => document.title.startsWith('snh-render'), null, { timeout: TIMEOUT });
+    assert.equal(await page.title(), 'snh-render-ready', `${hash}: ${await page.title()}`);
+    // Every point shown projects inside the box the framing fills, which leaves the caption and legend clear;
+    // and the shape reaches both sides of that box along one axis (the frame shown fills it; a close-up and
+    // the whole animation's framing fill it less).
+    const box = await page.evaluate(() => window.snhReport.framingBox());
+    const e = await page.evaluate(() => window.snhReport.projectedExtent());
+    const eps = 1e-4;
+    assert.ok(e.points > 0, hash);
+    if (!hash.includes('focus')) {
+      assert.ok(e.left >= box.left - eps && e.right <= box.right + eps && e.bottom >= box.bottom - eps && e.top <= box.top + eps,
+        `${hash}: the shape spans x ${e.left}..${e.right}, y ${e.bottom}..${e.top}, outside the box ${JSON.stringify(box)}`);
+    }
+    if (!hash.includes('fit=animation') && !hash.includes('focus')) {
+      const touch = (a, b) => Math.abs(a - b) < 2e-3;
+      assert.ok((touch(e.left, box.left) && touch(e.right, box.right)) || (touch(e.bottom, box.bottom) && touch(e.top, box.top)),
+        `${hash}: the shape x ${e.left}..${e.right}, y ${e.bottom}..${e.top} does not fill the box ${JSON.stringify(box)}`);
+    }
+    assert.ok(box.top - box.bottom > 1 && box.top <= 0.94 && box.bottom >= -0.94, `${hash}: a margin all round: ${JSON.stringify(box)}`);
+    // In the picture: the margins are background, and the shape is there.
+    const png = PNG.sync.read(await page.screenshot());
+    const bg = BACKGROUND_OF(png);
+    const rim = 8; // pixels (the caption and the legend sit 10 to 12 in)
+    const edge = (p, x, y) => (x < rim || y < rim || x >= width - rim || y >= height - rim) && differs(p, bg);
+    if (!hash.includes('focus')) assert.equal(fraction(png, edge), 0, `${hash}: something is drawn on the picture's rim`);
+    assert.ok(fraction(png, (p) => differs(p, bg)) > 0.02, `${hash}: the picture is blank`);
+    assert.deepEqual(problems, []);
+    await page.close();
+  }
+});
+
+/** The background colour of a render: the most common one. */
+function BACKGROUND_OF(png) {
+  const counts = new Map();
+  for (let i = 0; i < png.data.length; i += 4) {
+    const key = (png.data[i] << 16) | (png.data[i + 1] << 8) | png.data[i + 2];
+    counts.set(key, (counts.get(key) || 0) + 1);
+  }
+  const [key] = [...counts].reduce((a, b) => (b[1] > a[1] ? b : a));
+  return [key >> 16, (key >> 8) & 255, key & 255];
+}
 
 test('lab report', { skip: !LAB && 'SNH_TEST_LAB_DIR is not set', timeout: 60000 }, async () => {
   const { page, problems } = await open(LAB);

@@ -1,6 +1,10 @@
 #include "snh/report/render.hpp"
 
+#include <algorithm>
 #include <cctype>
+#include <charconv>
+#include <cmath>
+#include <functional>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -9,6 +13,10 @@
 #include <string_view>
 #include <vector>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
@@ -19,6 +27,8 @@
 #include "snh/report/browser.hpp"
 #include "snh/report/report.hpp"
 #include "snh/run/interrupt.hpp"
+
+extern char** environ;
 
 namespace snh {
 namespace {
@@ -106,10 +116,20 @@ constexpr const char* kAwaitTitle = R"(new Promise((resolve) => {
   look();
 }))";
 
+/// The PNG bytes of the page's view now.
+std::string capture(HeadlessBrowser& chromium, const std::string& page) {
+  const json shot = chromium.call("Page.captureScreenshot", {{"format", "png"}}, page);
+  std::string png;
+  if (!base64_decode(shot.value("data", std::string()), png)) throw BrowserError("the browser's picture is not valid base64");
+  return png;
+}
+
 /// Opens `url` in a fresh headless browser (its profile, log and temporary files in `work`) with a
-/// width by height view, waits until the page has drawn the frame (or reported why not) and returns the
-/// PNG of the view. The browser is stopped when this returns or throws.
-std::string screenshot(const std::string& browser, const std::string& url, const RenderOptions& o, const fs::path& work) {
+/// width by height view, waits until the page has drawn the frame (or reported why not), then calls
+/// `shoot(browser, page session)`. The browser is stopped when this returns or throws; every wait ends
+/// `timeout_seconds` after the start.
+void session(const std::string& browser, const std::string& url, const RenderOptions& o, const fs::path& work,
+             double timeout_seconds, const std::function<void(HeadlessBrowser&, const std::string&)>& shoot) {
   const std::vector<std::string> flags = {
       "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--disable-quic", "--no-first-run", "--no-startup-window",
       "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-extensions",
@@ -119,7 +139,7 @@ std::string screenshot(const std::string& browser, const std::string& url, const
   std::error_code ec;
   if (!fs::create_directory(temp, ec))
     throw WriteError(fmt::format("cannot create {}: {}", temp.string(), ec ? ec.message() : "it exists"));
-  HeadlessBrowser chromium(browser, flags, work / "browser.log", temp, o.timeout_seconds);
+  HeadlessBrowser chromium(browser, flags, work / "browser.log", temp, timeout_seconds);
   const json target = chromium.call("Target.createTarget", {{"url", "about:blank"}});
   const std::string page =
       chromium.call("Target.attachToTarget", {{"targetId", target.at("targetId")}, {"flatten", true}}).at("sessionId");
@@ -143,11 +163,7 @@ std::string screenshot(const std::string& browser, const std::string& url, const
   if (!said.is_string()) throw BrowserError("the report page could not be watched: " + title.dump());
   const std::string text = said.get<std::string>();
   if (text != kReady) throw BrowserError("the report page: " + text.substr(kFailed.size()));
-  const json shot = chromium.call("Page.captureScreenshot", {{"format", "png"}}, page);
-  std::string png;
-  if (!base64_decode(shot.value("data", std::string()), png))
-    throw BrowserError("the browser's picture is not valid base64");
-  return png;
+  shoot(chromium, page);
 }
 
 /// Width and height of PNG bytes from their header; {0, 0} if they are not a PNG.
@@ -160,6 +176,59 @@ std::pair<int, int> png_header_size(std::string_view head) {
   return {be32(16), be32(20)};
 }
 
+/// The camera's named views (viewer/src/camera.js VIEWS).
+constexpr std::string_view kViews[] = {"three-quarter", "front", "back", "left", "right", "top"};
+
+/// --show's list: one to four of flesh, lbs, difference and volume, comma-separated ("" → none given).
+std::vector<std::string> split_show(const std::string& show) {
+  std::vector<std::string> out;
+  if (show.empty()) return out;
+  std::size_t at = 0;
+  while (true) {
+    const std::size_t comma = show.find(',', at);
+    const std::string part = show.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+    if (part != "flesh" && part != "lbs" && part != "difference" && part != "volume")
+      throw ReportError(fmt::format("--show {}: expected flesh, lbs, difference or volume, or up to four of them "
+                                    "comma-separated (side by side), got '{}'", show, part));
+    out.push_back(part);
+    if (comma == std::string::npos) break;
+    at = comma + 1;
+  }
+  if (out.size() > 4) throw ReportError(fmt::format("--show {}: at most four side by side", show));
+  return out;
+}
+
+/// Refuses a --focus that names no joint of the run's bones ("head>tail" names, or one name for an end).
+void check_joint(const json& render, const std::string& joint) {
+  std::vector<std::string> joints;
+  if (render.contains("bones") && render.at("bones").is_array())
+    for (const json& b : render.at("bones")) {
+      const std::string name = b.is_string() ? b.get<std::string>() : std::string();
+      for (std::size_t at = 0; at <= name.size();) {
+        const std::size_t gt = std::min(name.find('>', at), name.size());
+        const std::string j = name.substr(at, gt - at);
+        if (!j.empty() && std::find(joints.begin(), joints.end(), j) == joints.end()) joints.push_back(j);
+        at = gt + 1;
+      }
+    }
+  if (std::find(joints.begin(), joints.end(), joint) != joints.end()) return;
+  if (joints.empty()) throw ReportError(fmt::format("--focus {}: the run has no bones (no bones.json)", joint));
+  std::string list;
+  for (std::size_t k = 0; k < joints.size() && k < 12; ++k) list += (k ? ", " : "") + joints[k];
+  if (joints.size() > 12) list += fmt::format(", … ({} in all)", joints.size());
+  throw ReportError(fmt::format("--focus {}: no joint of that name (the run's joints: {})", joint, list));
+}
+
+/// Text for a URL's fragment: every byte but the unreserved characters percent-encoded.
+std::string url_component(const std::string& text) {
+  std::string out;
+  for (unsigned char c : text) {
+    if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~') out += static_cast<char>(c);
+    else out += fmt::format("%{:02X}", c);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::pair<int, int> png_size(const fs::path& png) {
@@ -169,22 +238,36 @@ std::pair<int, int> png_size(const fs::path& png) {
   return png_header_size(std::string_view(head, static_cast<std::size_t>(in.gcount())));
 }
 
-void render_png(const fs::path& dir, const RenderOptions& o) {
+namespace {
+
+/// What the checks of a render found: the browser, the page's address (with the frame to show first) and
+/// the run's frames (index and time).
+struct Plan {
+  std::string browser, url;
+  std::vector<double> times;  ///< of every frame of the run
+};
+
+/// Checks the options against the run in `dir` (writing its report first if it has none) and the browser,
+/// each failure one line: ReportError for a bad argument, BrowserError for a missing browser.
+Plan plan_render(const fs::path& dir, const RenderOptions& o, const fs::path& out, bool video) {
   if (o.width < 16 || o.height < 16 || o.width > 8192 || o.height > 8192)
     throw ReportError(fmt::format("the picture size must be from 16 to 8192 pixels each way, got {}x{}", o.width, o.height));
-  if (o.out.empty()) throw ReportError("no output file given");
-  const fs::path out = fs::absolute(o.out);
   check_output_path(out);
-  if (!o.show.empty() && (o.show != "flesh" && o.show != "lbs" && o.show != "volume"))
-    throw ReportError(fmt::format("--show {}: expected flesh, lbs or volume", o.show));
+  const std::vector<std::string> shows = split_show(o.show);
+  if (!o.view.empty() && std::find(std::begin(kViews), std::end(kViews), o.view) == std::end(kViews))
+    throw ReportError(fmt::format("--view {}: expected three-quarter, front, back, left, right or top", o.view));
+  if (!o.fit.empty() && o.fit != "frame" && o.fit != "animation")
+    throw ReportError(fmt::format("--fit {}: expected frame (the frame shown fills the picture) or animation (every frame would fit)", o.fit));
   if (!fs::exists(dir / "index.html") || !fs::exists(dir / "report" / "data.js")) (void)write_report(dir);
   // The frame and field are checked here, so that the page is only asked for what it has.
   const json data = read_report_data(dir);
   if (!data.contains("mesh") || data.at("mesh").is_null())
     throw ReportError(fmt::format("{}: the run has no 3D frames to render (no frames.pvd)", dir.string()));
   const json& mesh = data.at("mesh");
-  const int frames = static_cast<int>(mesh.at("frames").size());
-  const int frame = o.frame < 0 ? frames - 1 : o.frame;
+  Plan plan;
+  for (const json& f : mesh.at("frames")) plan.times.push_back(f.contains("time") && f.at("time").is_number() ? f.at("time").get<double>() : NAN);
+  const int frames = static_cast<int>(plan.times.size());
+  const int frame = video ? 0 : o.frame < 0 ? frames - 1 : o.frame;
   if (frame >= frames)
     throw ReportError(fmt::format("frame {} does not exist: {} has frames 0 to {}", o.frame, dir.string(), frames - 1));
   std::string field = o.field.empty() ? mesh.value("default_field", std::string("J")) : o.field;
@@ -195,17 +278,89 @@ void render_png(const fs::path& dir, const RenderOptions& o) {
     found = found || f.value("name", std::string()) == field;
   }
   if (!found) throw ReportError(fmt::format("unknown field '{}' (this run has: {})", field, known));
-  if (!o.show.empty() && (!data.contains("render") || data.at("render").is_null()))
-    throw ReportError(fmt::format("--show {}: {} is not a flesh run (it has no render surface)", o.show, dir.string()));
+  const bool flesh = data.contains("render") && !data.at("render").is_null();
+  if (!flesh) {
+    const char* given = !o.show.empty() ? "--show" : !o.focus.empty() ? "--focus" : o.bones ? "--bones" : nullptr;
+    if (given) throw ReportError(fmt::format("{}: {} is not a flesh run (it has no render surface)", given, dir.string()));
+  } else {
+    const json& render = data.at("render");
+    if (std::find(shows.begin(), shows.end(), "difference") != shows.end() && !render.contains("distance"))
+      throw ReportError(fmt::format("--show difference: the report of {} has no flesh–LBS distances (an older snh wrote it): run "
+                                    "snh report {} first", dir.string(), dir.string()));
+    if (!o.focus.empty()) check_joint(render, o.focus);
+  }
 
-  const std::string browser = find_browser(o.browser);
-  if (browser.empty())
+  plan.browser = find_browser(o.browser);
+  if (plan.browser.empty())
     throw BrowserError("snh render needs Chromium, and none was found on PATH: install the Debian package chromium "
                        "(apt-get install chromium), or set SNH_CHROMIUM to a Chromium or Chrome binary");
-  if (::access(browser.c_str(), X_OK) != 0)
-    throw ReportError(fmt::format("the browser {} cannot be run (from SNH_CHROMIUM or --browser)", browser));
-  const std::string url = fmt::format("{}#render&frame={}&field={}{}{}", file_url(fs::absolute(dir / "index.html")), frame,
-                                      field, o.wireframe ? "&wireframe=1" : "", o.show.empty() ? "" : "&show=" + o.show);
+  if (::access(plan.browser.c_str(), X_OK) != 0)
+    throw ReportError(fmt::format("the browser {} cannot be run (from SNH_CHROMIUM or --browser)", plan.browser));
+  plan.url = fmt::format("{}#render&frame={}&field={}{}{}", file_url(fs::absolute(dir / "index.html")), frame, field,
+                         o.wireframe ? "&wireframe=1" : "", o.show.empty() ? "" : "&show=" + o.show);
+  if (flesh) plan.url += o.bones ? "&bones=1" : "&bones=0";
+  if (!o.view.empty()) plan.url += "&view=" + o.view;
+  const std::string fit = !o.fit.empty() ? o.fit : video ? "animation" : "";  // a video's camera holds still
+  if (!fit.empty()) plan.url += "&fit=" + fit;
+  if (!o.focus.empty()) plan.url += "&focus=" + url_component(o.focus);
+  return plan;
+}
+
+/// Refuses PNG bytes that are not a picture of the size asked for.
+void check_png(const std::string& png, const RenderOptions& o) {
+  const auto [w, h] = png_header_size(png);
+  if (w != o.width || h != o.height)
+    throw BrowserError(w == 0 ? std::string("the browser's picture is not a PNG")
+                              : fmt::format("the browser's picture is {}x{}, not {}x{}", w, h, o.width, o.height));
+}
+
+/// Runs `argv` (found on PATH) with its output in `log` and waits for it, stopping it at a stop request
+/// (then BrowserInterrupted); the exit status, or 128 + the signal that ended it.
+int run_program(const std::vector<std::string>& argv, const fs::path& log) {
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  posix_spawnattr_setpgroup(&attr, 0);  // its own group: a Ctrl-C at the terminal reaches us, and we stop it
+  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
+  pid_t pid = -1;
+  const int err = ::posix_spawnp(&pid, args[0], &actions, &attr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attr);
+  if (err != 0) throw EncoderError(fmt::format("{} could not be started: {}", argv[0], std::strerror(err)));
+  int status = 0;
+  while (::waitpid(pid, &status, WNOHANG) == 0) {
+    if (stop_requested()) {
+      ::kill(-pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      throw BrowserInterrupted(stop_signal());
+    }
+    ::usleep(20000);
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+/// The last line of a program's log that says something ("" when none does).
+std::string last_line(const fs::path& log) {
+  std::ifstream in(log);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
+  return last;
+}
+
+}  // namespace
+
+void render_png(const fs::path& dir, const RenderOptions& o) {
+  if (o.out.empty()) throw ReportError("no output file given");
+  const fs::path out = fs::absolute(o.out);
+  const Plan plan = plan_render(dir, o, out, false);
   // The browser is driven over its DevTools pipe, in real time: the picture is taken once the page says
   // it drew the frame, however long that takes (within the timeout). Every wait in here is interrupted by
   // a stop signal, after which the browser is killed and its directory removed before this returns, so a
@@ -215,14 +370,94 @@ void render_png(const fs::path& dir, const RenderOptions& o) {
     PromptStopScope prompt;
     if (stop_requested()) throw BrowserInterrupted(stop_signal());
     TempDir work;
-    png = screenshot(browser, url, o, work.path);
+    session(plan.browser, plan.url, o, work.path, o.timeout_seconds,
+            [&](HeadlessBrowser& chromium, const std::string& page) { png = capture(chromium, page); });
   }
   if (stop_requested()) throw BrowserInterrupted(stop_signal());
-  const auto [w, h] = png_header_size(png);
-  if (w != o.width || h != o.height)
-    throw BrowserError(w == 0 ? std::string("the browser's picture is not a PNG")
-                              : fmt::format("the browser's picture is {}x{}, not {}x{}", w, h, o.width, o.height));
+  check_png(png, o);
   write_atomically(out, [&](std::ostream& file) { file.write(png.data(), static_cast<std::streamsize>(png.size())); });
+}
+
+VideoSummary render_video(const fs::path& dir, const RenderOptions& o) {
+  if (o.video.empty()) throw ReportError("no video file given");
+  const fs::path out = fs::absolute(o.video);
+  const std::string ext = out.extension().string();
+  if (ext != ".mp4" && ext != ".gif")
+    throw ReportError(fmt::format("{}: a video is .mp4 (H.264) or .gif (for web pages)", out.string()));
+  if (ext == ".mp4" && (o.width % 2 != 0 || o.height % 2 != 0))
+    throw ReportError(fmt::format("an .mp4 video needs an even width and height (H.264 in 4:2:0), got {}x{}", o.width, o.height));
+  if (o.frame >= 0) throw ReportError("--frame picks a picture's frame; a video takes --frames FIRST:LAST");
+  if (!(o.fps >= 0.0) || !std::isfinite(o.fps) || o.fps > 1000.0)
+    throw ReportError(fmt::format("--fps must be a number from 0 (the run's own rate) to 1000, got {}", o.fps));
+  const Plan plan = plan_render(dir, o, out, true);
+  const int count = static_cast<int>(plan.times.size());
+  // The frames: FIRST:LAST (either may be left out), all by default.
+  int first = 0, last = count - 1;
+  if (!o.frames.empty()) {
+    const std::size_t colon = o.frames.find(':');
+    const auto number = [&](const std::string& text, int fallback) {
+      if (text.empty()) return fallback;
+      int v = -1;
+      const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+      if (ec != std::errc() || end != text.data() + text.size() || v < 0)
+        throw ReportError(fmt::format("--frames {}: expected FIRST:LAST, frame numbers from 0 to {}", o.frames, count - 1));
+      return v;
+    };
+    if (colon == std::string::npos) throw ReportError(fmt::format("--frames {}: expected FIRST:LAST (e.g. 0:24, or 12: to the end)", o.frames));
+    first = number(o.frames.substr(0, colon), 0);
+    last = number(o.frames.substr(colon + 1), count - 1);
+    if (first > last || last >= count)
+      throw ReportError(fmt::format("--frames {}: {} has frames 0 to {}", o.frames, dir.string(), count - 1));
+  }
+  // The run's rate: frames over the time they span (the scenes' frames are evenly spaced).
+  double fps = o.fps;
+  if (fps == 0.0) {
+    const double span = plan.times[static_cast<std::size_t>(count - 1)] - plan.times[0];
+    fps = count > 1 && span > 0.0 && std::isfinite(span) ? (count - 1) / span : 0.0;
+    if (!(fps >= 0.1 && fps <= 1000.0)) fps = 10.0;  // steps without a time (snh stretch): ten a second
+  }
+  std::string url = plan.url;
+  if (first != 0) url.replace(url.find("&frame=0&"), 9, fmt::format("&frame={}&", first));
+  {
+    PromptStopScope prompt;
+    if (stop_requested()) throw BrowserInterrupted(stop_signal());
+    TempDir work;
+    // Each frame drawn and taken in one browser, into numbered PNG files; then ffmpeg makes the video of them.
+    session(plan.browser, url, o, work.path, o.timeout_seconds + 10.0 * (last - first + 1),
+            [&](HeadlessBrowser& chromium, const std::string& page) {
+              for (int i = first; i <= last; ++i) {
+                const json r = chromium.call(
+                    "Runtime.evaluate",
+                    {{"expression", fmt::format("window.snhReport.setFrame({}).then(() => document.title)", i)},
+                     {"awaitPromise", true}, {"returnByValue", true}}, page);
+                if (r.contains("exceptionDetails"))
+                  throw BrowserError(fmt::format("the report page could not show frame {}: {}", i, r.at("exceptionDetails").value("text", std::string())));
+                const std::string png = capture(chromium, page);
+                check_png(png, o);
+                write_atomically(work.path / fmt::format("frame{:05d}.png", i - first),
+                                 [&](std::ostream& f) { f.write(png.data(), static_cast<std::streamsize>(png.size())); });
+              }
+            });
+    std::vector<std::string> argv = {"ffmpeg", "-nostdin", "-hide_banner", "-loglevel", "error", "-y",
+                                     "-framerate", fmt::format("{:.6g}", fps), "-i", (work.path / "frame%05d.png").string()};
+    if (ext == ".mp4") argv.insert(argv.end(), {"-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "18", "-movflags", "+faststart", "-f", "mp4"});
+    else argv.insert(argv.end(), {"-filter_complex", "split[a][b];[a]palettegen=stats_mode=full[p];[b][p]paletteuse", "-f", "gif"});
+    const fs::path encoded = work.path / ("video" + ext);
+    argv.push_back(encoded.string());
+    const fs::path log = work.path / "ffmpeg.log";
+    int status = 0;
+    try {
+      status = run_program(argv, log);
+    } catch (const EncoderError&) {
+      throw EncoderError("snh render --video needs ffmpeg, and it could not be run: install the Debian package ffmpeg "
+                         "(apt-get install ffmpeg)");
+    }
+    if (status != 0) throw EncoderError(fmt::format("ffmpeg failed (exit status {}): {}", status, last_line(log)));
+    if (stop_requested()) throw BrowserInterrupted(stop_signal());
+    std::ifstream video(encoded, std::ios::binary);
+    write_atomically(out, [&](std::ostream& file) { file << video.rdbuf(); });
+  }
+  return {last - first + 1, fps};
 }
 
 }  // namespace snh

@@ -1,7 +1,11 @@
 #include "snh/report/report.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <map>
+#include <numbers>
 #include <fstream>
 #include <functional>
 #include <optional>
@@ -11,6 +15,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "snh/contact/surface_distance.hpp"
 #include "snh/io/atomic_file.hpp"
 #include "snh/io/base64.hpp"
 #include "snh/io/input_file.hpp"
@@ -113,26 +118,31 @@ struct Range {
 /// The render surface of a flesh run: for each frame NNN.vtu, surface/NNN.obj (the surface simulated as
 /// flesh) and lbs/NNN.obj (posed by linear blend skinning), every file with the triangles of surface/000.obj;
 /// and, when bones.json is there, the bones' segments of every frame. frame() gives what a frame's file
-/// holds of it, summary() the "render" object of data.js.
+/// holds of it, with the flesh's signed distance from the skinned surface at each vertex (positive outside
+/// it, in millimetres: `mm_per_unit` is the model's), summary() the "render" object of data.js, with the
+/// vertices' normal groups (smooth shading: one normal per group) and the distances' range and extremes per frame.
 class RenderSurface {
  public:
-  RenderSurface(const fs::path& dir, std::size_t frame_count) : dir_(dir) {
+  RenderSurface(const fs::path& dir, std::size_t frame_count, double mm_per_unit) : dir_(dir), mm_per_unit_(mm_per_unit) {
     const SurfaceMesh first = read(dir / "surface" / "000.obj");
     triangles_ = first.triangles;
     vertex_count_ = first.vertices.cols();
+    group_normals(first);
     if (fs::exists(dir / "bones.json")) read_bones(dir / "bones.json", frame_count);
   }
 
-  /// Frame i's positions (the frame's .vtu file is `vtu`): {"flesh", "lbs", "bones"}, base64 Float32.
+  /// Frame i's positions (the frame's .vtu file is `vtu`): {"flesh", "lbs", "distance", "bones"}, base64 Float32.
   json frame(std::size_t i, const std::string& vtu) {
     const std::string name = fs::path(vtu).stem().string() + ".obj";
     json out;
-    for (const char* part : {"surface", "lbs"}) {
+    SurfaceMesh shape[2];
+    for (int k = 0; k < 2; ++k) {
+      const char* part = k == 0 ? "surface" : "lbs";
       const fs::path path = dir_ / part / name;
       if (!fs::exists(path))
         throw ReportError(fmt::format("{}: missing: a flesh run writes one per frame, and frame {} ({}) has none",
                                       path.string(), i, vtu));
-      const SurfaceMesh s = read(path);
+      SurfaceMesh& s = shape[k] = read(path);
       if (s.vertices.cols() != vertex_count_ || s.triangles.cols() != triangles_.cols())
         throw ReportError(fmt::format("{}: {} vertices and {} triangles, but surface/000.obj has {} and {}", path.string(),
                                       s.vertices.cols(), s.triangles.cols(), vertex_count_, triangles_.cols()));
@@ -144,8 +154,25 @@ class RenderSurface {
           xyz[3 * v + a] = static_cast<float>(s.vertices(a, v));
           bounds_[a].add(s.vertices(a, v));
         }
-      out[part == std::string_view("surface") ? "flesh" : "lbs"] = encode(xyz);
+      out[k == 0 ? "flesh" : "lbs"] = encode(xyz);
     }
+    // Each flesh vertex's signed distance from the skinned surface; its own skinned position bounds the search.
+    std::vector<float> distance(static_cast<std::size_t>(vertex_count_));
+    Range frame_range;
+    try {
+      const contact::SurfaceDistance lbs(shape[1].vertices, triangles_);
+      for (Eigen::Index v = 0; v < vertex_count_; ++v) {
+        const double d = mm_per_unit_ * lbs.signed_distance(shape[0].vertices.col(v), v);
+        distance[static_cast<std::size_t>(v)] = static_cast<float>(d);
+        frame_range.add(d);
+        distance_range_.add(d);
+      }
+    } catch (const std::invalid_argument& e) {
+      throw ReportError(fmt::format("{}: {}", (dir_ / "lbs" / name).string(), e.what()));
+    }
+    out["distance"] = encode(distance);
+    outside_.push_back(frame_range.hi >= frame_range.lo ? json(std::max(0.0, frame_range.hi)) : json(nullptr));
+    inside_.push_back(frame_range.hi >= frame_range.lo ? json(std::max(0.0, -frame_range.lo)) : json(nullptr));
     if (has_bones_) {
       std::vector<float> segments(bones_[i].begin(), bones_[i].end());
       for (std::size_t k = 0; k < segments.size(); ++k) bounds_[k % 3].add(bones_[i][k]);
@@ -153,6 +180,10 @@ class RenderSurface {
     }
     return out;
   }
+
+  /// The largest distance outside and inside the skinned surface of each frame, in millimetres.
+  [[nodiscard]] const json& outside() const { return outside_; }
+  [[nodiscard]] const json& inside() const { return inside_; }
 
   [[nodiscard]] json summary() const {
     std::vector<std::uint32_t> tri(triangles_.data(), triangles_.data() + triangles_.size());
@@ -166,7 +197,12 @@ class RenderSurface {
             {"triangle_count", triangles_.cols()},
             {"triangles", encode(tri)},
             {"bones", has_bones_ ? json(bone_names_) : json(nullptr)},
-            {"bounds", {{"min", lo}, {"max", hi}}}};
+            {"bounds", {{"min", lo}, {"max", hi}}},
+            {"normal_groups", encode(groups_)},
+            {"distance", {{"label", "distance from the LBS surface (mm)"},
+                          {"unit", "mm"},
+                          {"min", distance_range_.to_json(0.0)[0]},
+                          {"max", distance_range_.to_json(0.0)[1]}}}};
   }
 
  private:
@@ -209,9 +245,36 @@ class RenderSurface {
     }
   }
 
+  /// groups_: vertices at one position whose normals in surface/000.obj agree within about 8° share a group
+  /// (a seam's copies do, a hard edge's do not); all at one position where the file has no normals.
+  void group_normals(const SurfaceMesh& s) {
+    const double agree = std::cos(8.0 * std::numbers::pi / 180.0);
+    std::map<std::array<double, 3>, std::vector<std::uint32_t>> at;  // position -> its groups' first vertices
+    groups_.resize(static_cast<std::size_t>(vertex_count_));
+    std::uint32_t count = 0;
+    for (Eigen::Index v = 0; v < vertex_count_; ++v) {
+      std::vector<std::uint32_t>& here = at[{s.vertices(0, v), s.vertices(1, v), s.vertices(2, v)}];
+      std::uint32_t g = count;
+      for (const std::uint32_t first : here)
+        if (s.normals.cols() == 0 || s.normals.col(first).dot(s.normals.col(v)) >= agree * s.normals.col(first).norm() * s.normals.col(v).norm()) {
+          g = groups_[first];
+          break;
+        }
+      if (g == count) {
+        here.push_back(static_cast<std::uint32_t>(v));
+        ++count;
+      }
+      groups_[static_cast<std::size_t>(v)] = g;
+    }
+  }
+
   fs::path dir_;
+  double mm_per_unit_;
   Eigen::Matrix3Xi triangles_;
   Eigen::Index vertex_count_ = 0;
+  std::vector<std::uint32_t> groups_;  ///< per vertex: its normal group
+  Range distance_range_;
+  json outside_ = json::array(), inside_ = json::array();
   std::vector<std::string> bone_names_;
   bool has_bones_ = false;                  ///< bones.json was read
   std::vector<std::vector<double>> bones_;  ///< per frame: 6 values per bone
@@ -321,7 +384,8 @@ json frame_values(const VtuData& data, const fs::path& file, const VolumeMesh& r
 /// (surface positions and fields of each frame, and a flesh run's render surface) and returns the "mesh"
 /// object of data.js; `render` is set to the "render" object of a flesh run (surface/000.obj there), else null.
 /// A frame in `unconverged` (a run that went past it) is labelled so.
-json write_frames(const fs::path& dir, const std::string& frame_word, const std::vector<int>& unconverged, json& render) {
+json write_frames(const fs::path& dir, const std::string& frame_word, const std::vector<int>& unconverged, json& render,
+                  json& distance_plot, double meters_per_unit) {
   std::vector<std::pair<double, std::string>> pvd;
   try {
     pvd = read_pvd(dir / "frames.pvd");
@@ -331,7 +395,7 @@ json write_frames(const fs::path& dir, const std::string& frame_word, const std:
   const fs::path frames_dir = dir / "report" / "frames";
   fs::create_directories(frames_dir);
   std::optional<RenderSurface> render_surface;
-  if (fs::exists(dir / "surface" / "000.obj")) render_surface.emplace(dir, pvd.size());
+  if (fs::exists(dir / "surface" / "000.obj")) render_surface.emplace(dir, pvd.size(), 1000.0 * meters_per_unit);
 
   auto read_frame = [&](std::size_t i) {
     try {
@@ -372,6 +436,16 @@ json write_frames(const fs::path& dir, const std::string& frame_word, const std:
   }
 
   render = render_surface ? render_surface->summary() : json(nullptr);
+  if (render_surface) {
+    json times = json::array();
+    for (const auto& f : pvd) times.push_back(f.first);
+    // Beside the run's own "largest offset" (each vertex from its skinned position, sliding along the surface
+    // included), the shape's difference: what the view's distance colouring shows.
+    distance_plot = plot("lbs_surface_distance", "Flesh against skinning", "The flesh's largest distance from the skinned (LBS) surface",
+                         "time", "mm", false, times,
+                         json::array({series("largest distance outside", render_surface->outside()),
+                                      series("largest distance inside", render_surface->inside())}));
+  }
   json field_list = json::array();
   for (const Field& f : fields) {
     const json r = f.range.to_json(0.0);
@@ -525,7 +599,16 @@ json run_data(const fs::path& dir, const json& stats) {
     if (const auto it = stats.find("unconverged_frames"); it != stats.end() && it->is_array())
       for (const json& f : *it)
         if (f.is_number_integer()) unconverged.push_back(f.get<int>());
-    d["mesh"] = write_frames(dir, scene ? "frame" : "step", unconverged, d["render"]);
+    json distance_plot;
+    const auto mpu = stats.find("model_meters_per_unit");
+    const double meters_per_unit = mpu != stats.end() && mpu->is_number() && mpu->get<double>() > 0.0 ? mpu->get<double>() : 1.0;
+    d["mesh"] = write_frames(dir, scene ? "frame" : "step", unconverged, d["render"], distance_plot, meters_per_unit);
+    if (d["render"].is_object())  // the model's up axis, which the views' names depend on
+      d["render"]["up_axis"] = stats.contains("model_up_axis") && stats.at("model_up_axis").is_string() ? stats.at("model_up_axis") : json("+Y");
+    if (!distance_plot.is_null()) {
+      if (!d["plots"].empty()) distance_plot["group"] = d["plots"].front().value("group", std::string());  // beside the run's own
+      d["plots"].push_back(distance_plot);
+    }
   }
   else d["meta"].push_back({"3D view", "none: the run wrote no .vtu frames (frames.pvd is missing)"});
   return d;
