@@ -56,7 +56,7 @@ void add_report_commands(CLI::App& app, int& exit_code) {
   });
 
   struct RenderArgs {
-    std::string dir, out, field, browser, show, view, fit, focus, video, frames;
+    std::string dir, out, field, browser, show, view, fit, focus, video, frames, range;
     int frame = -1, width = 1200, height = 900;
     double fps = 0.0;
     bool wireframe = false, bones = false;
@@ -97,6 +97,9 @@ void add_report_commands(CLI::App& app, int& exit_code) {
                      "A flesh run: a close-up on a joint by name (e.g. index-finger-phalanx-proximal): the surface "
                      "round it fills the picture");
   render->add_flag("--bones", r->bones, "A flesh run: draw the bones over the surface (off by default)");
+  render->add_option("--range", r->range,
+                     "--show difference: the colours' range, run (default: the whole run's distances, the same "
+                     "colour for the same distance in every frame), frame (the frame's own) or LO:HI in mm");
   render->add_option("--browser", r->browser, "Chromium or Chrome binary (default: $SNH_CHROMIUM, else chromium on PATH)");
   render->callback([r, &exit_code]() {
     if (r->out.empty() == r->video.empty())
@@ -110,6 +113,7 @@ void add_report_commands(CLI::App& app, int& exit_code) {
     o.fit = r->fit;
     o.focus = r->focus;
     o.bones = r->bones;
+    o.range = r->range;
     o.width = r->width;
     o.height = r->height;
     o.out = r->out;

@@ -698,6 +698,10 @@ TEST(Render, ChecksFrameFieldAndBrowserBeforeStartingIt) {
   EXPECT_EQ(message({.show = "lbs"}), fmt::format("--show: {} is not a flesh run (it has no render surface)", run.dir.string()));
   EXPECT_EQ(message({.focus = "elbow"}), fmt::format("--focus: {} is not a flesh run (it has no render surface)", run.dir.string()));
   EXPECT_EQ(message({.bones = true}), fmt::format("--bones: {} is not a flesh run (it has no render surface)", run.dir.string()));
+  EXPECT_EQ(message({.range = "frame"}), fmt::format("--range: {} is not a flesh run (it has no render surface)", run.dir.string()));
+  for (const char* bad : {"5:1", "1:1", "0:x", "0:inf", "wide", "3"})
+    EXPECT_EQ(message({.range = bad}), fmt::format("--range {}: expected run (the whole run's distances), frame (the frame's own) or "
+                                                   "LO:HI in millimetres with LO below HI", bad));
   EXPECT_FALSE(fs::exists(run.dir / "x.png"));
   fs::remove_all(run.dir);
   // A flesh run: --focus names a joint of its bones; --show difference needs a report with the distances.
@@ -713,6 +717,10 @@ TEST(Render, ChecksFrameFieldAndBrowserBeforeStartingIt) {
     }
     return std::string("no error");
   };
+  // A report whose viewer another build wrote is written again before the browser starts.
+  std::ofstream(f.dir / "report" / "snh-report.js") << "/* an older viewer */\n";
+  EXPECT_EQ(flesh_message({}), "the browser /nonexistent/chromium cannot be run (from SNH_CHROMIUM or --browser)");
+  EXPECT_EQ(file_text(f.dir / "report" / "snh-report.js"), std::string(report_bundle()));
   EXPECT_EQ(flesh_message({.focus = "knee"}), "--focus knee: no joint of that name (the run's joints: shoulder, elbow, wrist)");
   EXPECT_EQ(flesh_message({.show = "difference", .focus = "elbow"}), "the browser /nonexistent/chromium cannot be run (from SNH_CHROMIUM or --browser)");
   json old = read_report_data(f.dir);

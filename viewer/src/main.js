@@ -29,8 +29,7 @@ window.addEventListener('unhandledrejection', (e) => record(e.reason));
  * Settings from the location hash: #render&frame=5&field=psi&wireframe=1, or #frame=N&field=NAME; a flesh
  * run also show=flesh|lbs|difference|volume (render mode: up to four, comma-separated, side by side) and
  * bones=0|1 (on in the report, off in render mode); a run with muscles fibres=0. The framing: view= (camera.js
- * VIEWS), fit=frame|animation, focus=JOINT; render mode's video=1 waits for the frames the animation's
- * framing needs and then for setFrame() calls.
+ * VIEWS), fit=frame|animation, focus=JOINT; and the difference's colours range=run|frame|LO:HI (mm).
  */
 function hashSettings() {
   const h = location.hash.replace(/^#/, '');
@@ -49,6 +48,7 @@ function hashSettings() {
     view: q.get('view') || 'three-quarter',
     fit: q.get('fit') || (render ? 'frame' : 'animation'),
     focus: q.get('focus') || '',
+    range: q.get('range') || 'run',
   };
 }
 
@@ -137,6 +137,12 @@ async function renderMode(root, data, s) {
           return label;
         });
       }
+    }
+    // The difference's colour range: the run's, the frame's, or LO:HI millimetres.
+    if (render && s.range !== 'run') {
+      const m = /^(-?[\d.e+-]+):(-?[\d.e+-]+)$/.exec(s.range);
+      view.setDistanceRange(m ? [Number(m[1]), Number(m[2])] : s.range);
+      player.updateLegend();
     }
     // The framing: the frame's own shape, or the whole animation's (the decisive points of every frame).
     view.framing.view = s.view;

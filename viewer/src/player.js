@@ -74,6 +74,7 @@ export class Player {
     if (this.field) this.view.setColors(this.field, data.fields[this.field.name], this.colors);
     if (data.render) this.view.setRender(data.render);
     if (data.fibres) this.view.setFibres(data.fibres);
+    if (this.view.distanceRange === 'frame') this.updateLegend(); // the frame's own range
     this.view.refit();
     this.view.render();
     this.showMessage('');

@@ -22,7 +22,7 @@ export const FOV = 30; // degrees, vertical
 /** How much of the picture the framing leaves round the shape, in NDC (1 = the edge). */
 const FRAME_MARGIN = 0.92;
 /** A close-up on a joint takes in the surface within this many times its longest bone. */
-const FOCUS_REACH = 1.3;
+const FOCUS_REACH = 0.9;
 const CREASE_COS = Math.cos((35 * Math.PI) / 180); // feature edges: where the surface bends more
 /** What a flesh run's view can show, with the labels of its switch. */
 export const SHOWS = [['flesh', 'flesh'], ['lbs', 'skinning (LBS)'], ['difference', 'flesh − LBS distance'], ['volume', 'volume']];
@@ -208,6 +208,8 @@ export class MeshView {
       min: r.distance.min, max: r.distance.max, unit: r.distance.unit,
     } : null;
     this.distanceColors = this.distanceField ? fieldColors(this.distanceField) : null;
+    this.distanceRun = this.distanceField ? [this.distanceField.min, this.distanceField.max] : null;
+    this.distanceRange = 'run';
     this.skins = {};
     for (const name of ['flesh', 'lbs', 'difference']) {
       if (name === 'difference' && !this.distanceField) continue;
@@ -298,12 +300,36 @@ export class MeshView {
     if (!this.skins || !r) return;
     this.renderData = r;
     this.renderFrame++;
+    if (this.distanceRange === 'frame' && r.distance) this.setDistanceRange('frame');
     this.updateSkin();
     if (r.bones) {
       this.bonePositions.set(r.bones);
       this.boneEndGeometry.attributes.position.needsUpdate = true;
       if (this.bonePositions.length) this.boneGeometry.setPositions(this.bonePositions);
     }
+  }
+
+  /**
+   * The range of the difference's colours: 'run' (the whole run's, as data.js has it: the same colour means the
+   * same distance in every frame), 'frame' (the frame shown's own) or [lo, hi] in millimetres.
+   */
+  setDistanceRange(range) {
+    if (!this.distanceField) return;
+    let lo = this.distanceRun[0];
+    let hi = this.distanceRun[1];
+    if (Array.isArray(range)) [lo, hi] = range;
+    else if (range === 'frame' && this.renderData && this.renderData.distance) {
+      lo = Infinity;
+      hi = -Infinity;
+      for (const d of this.renderData.distance) if (Number.isFinite(d)) { lo = Math.min(lo, d); hi = Math.max(hi, d); }
+      if (!(lo <= hi)) [lo, hi] = [0, 0];
+    } else if (range !== 'run' && range !== 'frame') throw new Error(`range=${range}: expected run, frame or LO:HI`);
+    this.distanceRange = range;
+    this.distanceField.min = lo;
+    this.distanceField.max = hi;
+    this.distanceColors = fieldColors(this.distanceField);
+    if (this.skins && this.skins.difference) this.skins.difference.filled = -1; // its colours again
+    this.updateSkin();
   }
 
   /** Fills the skins shown (their positions, normals and, for the difference, colours) from the frame given. */

@@ -179,6 +179,17 @@ std::pair<int, int> png_header_size(std::string_view head) {
 /// The camera's named views (viewer/src/camera.js VIEWS).
 constexpr std::string_view kViews[] = {"three-quarter", "front", "back", "left", "right", "top"};
 
+/// Whether `script` holds this build's viewer (the report's page loads it).
+bool current_viewer(const fs::path& script) {
+  const std::string_view bundle = report_bundle();
+  std::error_code ec;
+  if (fs::file_size(script, ec) != bundle.size() || ec) return false;
+  std::ifstream in(script, std::ios::binary);
+  std::string text(bundle.size(), '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  return in.gcount() == static_cast<std::streamsize>(text.size()) && text == bundle;
+}
+
 /// --show's list: one to four of flesh, lbs, difference and volume, comma-separated ("" → none given).
 std::vector<std::string> split_show(const std::string& show) {
   std::vector<std::string> out;
@@ -256,9 +267,24 @@ Plan plan_render(const fs::path& dir, const RenderOptions& o, const fs::path& ou
   const std::vector<std::string> shows = split_show(o.show);
   if (!o.view.empty() && std::find(std::begin(kViews), std::end(kViews), o.view) == std::end(kViews))
     throw ReportError(fmt::format("--view {}: expected three-quarter, front, back, left, right or top", o.view));
+  if (!o.range.empty() && o.range != "run" && o.range != "frame") {
+    // LO:HI, two finite numbers, LO below HI.
+    const std::size_t colon = o.range.find(':');
+    double lo = NAN, hi = NAN;
+    const auto number = [](const std::string& t, double& v) {
+      const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+      return ec == std::errc() && end == t.data() + t.size() && std::isfinite(v);
+    };
+    if (colon == std::string::npos || !number(o.range.substr(0, colon), lo) || !number(o.range.substr(colon + 1), hi) || !(lo < hi))
+      throw ReportError(fmt::format("--range {}: expected run (the whole run's distances), frame (the frame's own) or LO:HI "
+                                    "in millimetres with LO below HI", o.range));
+  }
   if (!o.fit.empty() && o.fit != "frame" && o.fit != "animation")
     throw ReportError(fmt::format("--fit {}: expected frame (the frame shown fills the picture) or animation (every frame would fit)", o.fit));
-  if (!fs::exists(dir / "index.html") || !fs::exists(dir / "report" / "data.js")) (void)write_report(dir);
+  // A report written by another build of snh has another viewer, which may not know the options asked for
+  // (and data without what they need): such a report is written again first, as a missing one is.
+  if (!fs::exists(dir / "index.html") || !fs::exists(dir / "report" / "data.js") || !current_viewer(dir / "report" / "snh-report.js"))
+    (void)write_report(dir);
   // The frame and field are checked here, so that the page is only asked for what it has.
   const json data = read_report_data(dir);
   if (!data.contains("mesh") || data.at("mesh").is_null())
@@ -280,7 +306,7 @@ Plan plan_render(const fs::path& dir, const RenderOptions& o, const fs::path& ou
   if (!found) throw ReportError(fmt::format("unknown field '{}' (this run has: {})", field, known));
   const bool flesh = data.contains("render") && !data.at("render").is_null();
   if (!flesh) {
-    const char* given = !o.show.empty() ? "--show" : !o.focus.empty() ? "--focus" : o.bones ? "--bones" : nullptr;
+    const char* given = !o.show.empty() ? "--show" : !o.focus.empty() ? "--focus" : o.bones ? "--bones" : !o.range.empty() ? "--range" : nullptr;
     if (given) throw ReportError(fmt::format("{}: {} is not a flesh run (it has no render surface)", given, dir.string()));
   } else {
     const json& render = data.at("render");
@@ -303,6 +329,7 @@ Plan plan_render(const fs::path& dir, const RenderOptions& o, const fs::path& ou
   const std::string fit = !o.fit.empty() ? o.fit : video ? "animation" : "";  // a video's camera holds still
   if (!fit.empty()) plan.url += "&fit=" + fit;
   if (!o.focus.empty()) plan.url += "&focus=" + url_component(o.focus);
+  if (!o.range.empty()) plan.url += "&range=" + url_component(o.range);
   return plan;
 }
 

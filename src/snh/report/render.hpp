@@ -22,6 +22,8 @@ struct RenderOptions {
   std::string fit;
   std::string focus;         ///< a flesh run: a joint's name, for a close-up on the surface round it
   bool bones = false;        ///< a flesh run: draw the bones over the surface
+  /// --show difference: the colours' range, "run" (""), "frame" or "LO:HI" in millimetres
+  std::string range;
   int width = 1200, height = 900;  ///< picture size in pixels
   std::filesystem::path out;       ///< the PNG to write
   std::string browser;       ///< Chromium's path ("": $SNH_CHROMIUM, else chromium or google-chrome on PATH)
