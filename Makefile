@@ -3,11 +3,12 @@
 #               each with its browser report (index.html)
 #   make test   installs what is missing, builds, and runs every test
 #   make docs   installs what is missing and builds the documentation site (docs/, mkdocs.yml) into build/site
+#   make gallery  builds, then remakes docs/gallery.md and its pictures (scripts/gallery.sh: runs and renders)
 PRESET ?= release
 JOBS   ?= $(shell nproc)
 BUILD  := build/$(PRESET)
 
-.PHONY: all deps configure build demo test bench docs clean
+.PHONY: all deps configure build demo test bench docs gallery clean
 
 all: build
 
@@ -44,6 +45,9 @@ bench: build
 docs: deps
 	mkdocs build --strict --config-file mkdocs.yml --site-dir build/site
 	@echo "docs: open $(CURDIR)/build/site/index.html in a browser"
+
+gallery: build
+	bash scripts/gallery.sh
 
 clean:
 	rm -rf build
