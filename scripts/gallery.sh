@@ -60,6 +60,14 @@ surface around it, here the index finger's first knuckle, with the bones drawn o
 step render "$OUT/fist" --frame 24 --show difference --focus index-finger-phalanx-proximal --bones --width 800 --height 600 --out "$pics/fist_knuckle.png"
 end
 
+picture "Two runs: with and without contact" fist_contact_vs_none.png "\`--compare\` puts a second run of the \
+same model and frames in the place of the skinned surface: here \`scenes/hand_fist.json\`, the same fist \
+without the skin's self-contact. The colours are the distance of the contact run's skin from the other's: \
+contact holds the fingers up to 5 mm off where they would sink into each other and the palm."
+step run scenes/hand_fist.json --out "$OUT/fist_no_contact"
+step render "$OUT/fist" --compare "$OUT/fist_no_contact" --frame 24 --show difference --width 800 --height 600 --out "$pics/fist_contact_vs_none.png"
+end
+
 picture "The whole run, moving" fist.gif "\`--video\` makes an .mp4 (H.264) or, as here, a GIF for web pages, \
 at the run's frame rate (12 a second), the camera still: it fits every frame."
 step render "$OUT/fist" --show difference --width 480 --height 360 --video "$pics/fist.gif"

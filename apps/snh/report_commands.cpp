@@ -56,7 +56,7 @@ void add_report_commands(CLI::App& app, int& exit_code) {
   });
 
   struct RenderArgs {
-    std::string dir, out, field, browser, show, view, fit, focus, video, frames, range;
+    std::string dir, out, field, browser, show, view, fit, focus, video, frames, range, compare;
     int frame = -1, width = 1200, height = 900;
     double fps = 0.0;
     bool wireframe = false, bones = false;
@@ -97,6 +97,10 @@ void add_report_commands(CLI::App& app, int& exit_code) {
                      "A flesh run: a close-up on a joint by name (e.g. index-finger-phalanx-proximal): the surface "
                      "round it fills the picture");
   render->add_flag("--bones", r->bones, "A flesh run: draw the bones over the surface (off by default)");
+  render->add_option("--compare", r->compare,
+                     "A second flesh run of the same model and frames (with and without contact, or a muscle's "
+                     "activation): its skin takes the place of the skinned one (lbs, labelled with its directory) "
+                     "and difference measures this run's skin from it; --show defaults to flesh,lbs");
   render->add_option("--range", r->range,
                      "--show difference: the colours' range, run (default: the whole run's distances, the same "
                      "colour for the same distance in every frame), frame (the frame's own) or LO:HI in mm");
@@ -114,6 +118,7 @@ void add_report_commands(CLI::App& app, int& exit_code) {
     o.focus = r->focus;
     o.bones = r->bones;
     o.range = r->range;
+    o.compare = r->compare;
     o.width = r->width;
     o.height = r->height;
     o.out = r->out;

@@ -55,8 +55,17 @@ sys.exit(0 if len(p["x"]) == 7 and all(y is not None and 0 <= y < 1e-3 for y in 
 PY
 
 # The framing and the views in the browser, on this real character.
-if (cd "$VIEWER" && SNH_TEST_FLESH_DIR="$work/fist" node --test --test-name-pattern "render mode frames" test/report.test.mjs > "$work/node.log" 2>&1); then ok
+if (cd "$VIEWER" && SNH_TEST_FRAMING_DIR="$work/fist" node --test test/report.test.mjs > "$work/node.log" 2>&1) \
+  && grep -q "^# pass 1$" "$work/node.log"; then ok
 else bad "framing the hand:"; grep -E "not ok|Error|assert|expected|actual" "$work/node.log" | head -10; fi
+
+# Two runs of the hand compared: a picture; runs with other frame counts are refused.
+out="$("$SNH" render "$work/fist" --compare "$work/rigid" --show flesh,difference --width 320 --height 240 --out "$work/cmp.png" 2>&1)"; code=$?
+[ "$code" -eq 0 ] && [ "$out" = "$work/cmp.png (320x240)" ] && ok || bad "--compare (exit $code): $out"
+sed 's/"frames": 6/"frames": 4/; s#"dir": "[^"]*"#"dir": "'"$work"'/short"#' "$work/rigid.json" > "$work/short.json"
+"$SNH" run "$work/short.json" > /dev/null 2>&1 || bad "the short run"
+expect_error "--compare with other frames" "^snh: error: --compare: .*/short has 5 frames, .*/fist has 7: runs of one animation" -- \
+  "$SNH" render "$work/fist" --compare "$work/short" --out "$work/x.png"
 
 # Videos: every frame (or a range) at the size asked for, at the run's rate (6 frames a second here).
 out="$("$SNH" render "$work/fist" --video "$work/fist.mp4" --width 320 --height 240 --show flesh,lbs 2>&1)"; code=$?

@@ -732,6 +732,71 @@ TEST(Render, ChecksFrameFieldAndBrowserBeforeStartingIt) {
   fs::remove_all(f.dir);
 }
 
+// --compare: a run with another run's skin in place of the skinned one, its report measuring the distance of
+// the first run's skin from the second's (brute force here), both named by their directories; runs of other
+// skins or frame counts, and runs that are not flesh runs, are refused in one line.
+TEST(Render, ComparesTwoRunsOfOneSkin) {
+  const FleshRun a = flesh_run("cmp_a");
+  FleshRun b = flesh_run("cmp_b");
+  for (int i = 0; i < b.frames; ++i) {  // b's flesh grows twice as fast, and moves up
+    b.flesh[i] = (a.flesh[0] * (1.0 + 0.2 * i)).colwise() + Eigen::Vector3d(0.0, 0.0, 0.01 * i);
+    write_obj(b.dir / "surface" / fmt::format("{:03d}.obj", i), b.flesh[i], b.triangles);
+  }
+  const fs::path into = report_dir("cmp_pair");
+  fs::create_directories(into);
+  const fs::path run = comparison_run(a.dir, b.dir, into);
+  const json d = read_report_data(run);
+  EXPECT_EQ(d["render"]["labels"]["flesh"], a.dir.filename().string());
+  EXPECT_EQ(d["render"]["labels"]["lbs"], b.dir.filename().string());
+  EXPECT_EQ(d["title"], fmt::format("{} against {}", a.dir.filename().string(), b.dir.filename().string()));
+  for (int i = 0; i < a.frames; ++i) {
+    const json fd = js_payload(run / d["mesh"]["frames"][i]["src"].get<std::string>(), fmt::format("snhReportFrame({}, ", i), ");");
+    const auto dist = decode<float>(fd["render"]["distance"]);
+    ASSERT_EQ(dist.size(), 6u);
+    for (int v = 0; v < 6; ++v) {
+      double nearest = 1e300;
+      for (int t = 0; t < 8; ++t)
+        nearest = std::min(nearest, contact::point_triangle_distance(a.flesh[i].col(v), b.flesh[i].col(b.triangles(0, t)),
+                                                                      b.flesh[i].col(b.triangles(1, t)), b.flesh[i].col(b.triangles(2, t))));
+      const double expected = 1000.0 * std::sqrt(nearest);
+      EXPECT_NEAR(std::abs(dist[v]), expected, 1e-6 * (1.0 + expected)) << "frame " << i << " vertex " << v;
+      if (i > 1) EXPECT_LT(dist[v], 0.0f) << "a's skin lies inside b's: frame " << i << " vertex " << v;
+    }
+  }
+  // The runs' own directories are as they were: the pair links their files.
+  EXPECT_TRUE(fs::is_symlink(run / "lbs"));
+  EXPECT_EQ(fs::read_symlink(run / "lbs"), fs::absolute(b.dir / "surface"));
+  EXPECT_TRUE(fs::is_directory(a.dir / "lbs") && !fs::is_symlink(a.dir / "lbs"));
+
+  auto refused = [&](const fs::path& x, const fs::path& y) {
+    const fs::path to = report_dir("cmp_refused");
+    fs::remove_all(to);
+    fs::create_directories(to);
+    try {
+      (void)comparison_run(x, y, to);
+    } catch (const ReportError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  // Another skin: one triangle fewer.
+  FleshRun c = flesh_run("cmp_c");
+  write_obj(c.dir / "surface" / "000.obj", c.flesh[0], c.triangles.leftCols(7));
+  EXPECT_EQ(refused(a.dir, c.dir), fmt::format("--compare: the skin of {} has 6 vertices and 7 triangles, that of {} 6 and 8: runs of one "
+                                               "model are compared", c.dir.string(), a.dir.string()));
+  // Fewer frames.
+  FleshRun e = flesh_run("cmp_e");
+  std::string pvd = file_text(e.dir / "frames.pvd");
+  pvd.erase(pvd.rfind("<DataSet"), pvd.find('\n', pvd.rfind("<DataSet")) - pvd.rfind("<DataSet") + 1);
+  std::ofstream(e.dir / "frames.pvd") << pvd;
+  EXPECT_EQ(refused(a.dir, e.dir), fmt::format("--compare: {} has 4 frames, {} has 5: runs of one animation at one frame rate are compared",
+                                               e.dir.string(), a.dir.string()));
+  StretchRun plain = stretch_run(CellType::hex8, "cmp_plain");
+  EXPECT_EQ(refused(a.dir, plain.dir), fmt::format("--compare: {} is not a flesh run (it has no surface/000.obj or frames.pvd)", plain.dir.string()));
+  EXPECT_EQ(refused(a.dir, a.dir / "missing"), fmt::format("--compare: {}: not a run's directory", (a.dir / "missing").string()));
+  for (const fs::path& p : {a.dir, b.dir, c.dir, e.dir, plain.dir, into, report_dir("cmp_refused")}) fs::remove_all(p);
+}
+
 TEST(Render, ABrowserThatNeverAnswersIsKilledAtTheTimeoutAndLeavesNothing) {
   StretchRun run = stretch_run(CellType::hex8, "render_hang");
   const fs::path tmp = run.dir / "tmp", browser = run.dir / "silent-browser", pid_file = run.dir / "browser.pid";

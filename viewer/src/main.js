@@ -8,7 +8,7 @@ import { legendElement, Player } from './player.js';
 import { plotsSection } from './plots.js';
 import { el, message } from './util.js';
 import { decisivePoints, viewBasis } from './camera.js';
-import { BACKGROUND, FOV, MeshView, SHOWS } from './view3d.js';
+import { BACKGROUND, FOV, MeshView } from './view3d.js';
 
 const noMesh = () => Promise.reject(new Error('the report has no mesh'));
 const hooks = {
@@ -131,7 +131,7 @@ async function renderMode(root, data, s) {
       player.setPanels(panels);
       if (panels.length > 1) {
         parts.labels = panels.map((p, i) => {
-          const label = el('div', { class: 'snh-panel-label' }, SHOWS.find(([k]) => k === p)[1]);
+          const label = el('div', { class: 'snh-panel-label' }, view.showLabel(p));
           label.style.left = `${((i + 0.5) * 100) / panels.length}%`;
           box.append(label);
           return label;

@@ -89,8 +89,7 @@ export class Player {
   /** Render mode's caption: the frame, and for a flesh run what is shown. */
   updateCaption() {
     if (!this.parts.caption || this.frame < 0) return;
-    const label = (k) => SHOWS.find(([key]) => key === k)[1];
-    const shown = this.view.skins && this.view.panels.length === 1 ? ` · ${label(this.view.show)}` : '';
+    const shown = this.view.skins && this.view.panels.length === 1 ? ` · ${this.view.showLabel(this.view.show)}` : '';
     this.parts.caption.lastChild.textContent = this.frameLabel(this.frame) + shown;
   }
 
@@ -227,11 +226,11 @@ export class Player {
     // A flesh run: what is shown (a switch), and its bones.
     const flesh = !!this.view.skins;
     ui.shows = flesh
-      ? SHOWS.map(([key, label]) => el('button', {
+      ? SHOWS.filter(([key]) => key === 'volume' || this.view.skins[key]).map(([key]) => el('button', {
         type: 'button', class: 'snh-seg', id: `snh-show-${key}`, 'data-show': key,
         'aria-pressed': key === this.view.show ? 'true' : 'false',
         onclick: () => { try { this.setShow(key); } catch (e) { this.onError(e); } },
-      }, label))
+      }, this.view.showLabel(key)))
       : [];
     const boneCount = flesh ? this.view.boneNames.length : 0;
     ui.bones = flesh ? el('input', { type: 'checkbox', id: 'snh-bones', checked: initial.bones, disabled: !boneCount }) : null;

@@ -200,6 +200,7 @@ export class MeshView {
     if (tris.length !== 3 * r.triangle_count) throw new Error('render: the triangle count does not match');
     if (tris.some((v) => v >= n)) throw new Error('render: a triangle refers to a vertex past the surface');
     this.renderTris = tris;
+    this.labels = r.labels && typeof r.labels === 'object' ? r.labels : {}; // two runs compared: their names
     // Smooth shading: one normal per group of vertices (a seam's copies share one, a hard edge's do not).
     this.normalGroups = r.normal_groups ? decodeBase64(r.normal_groups, Uint32Array, 'render normal_groups') : null;
     if (this.normalGroups && this.normalGroups.length !== n) throw new Error('render: normal_groups does not have one group per vertex');
@@ -373,6 +374,11 @@ export class MeshView {
     this.updateSkin();
     this.applyVisibility();
     this.resize();
+  }
+
+  /** What a surface is called: its switch's label, or a compared run's name. */
+  showLabel(key) {
+    return (this.labels && this.labels[key]) || SHOWS.find(([k]) => k === key)[1];
   }
 
   /** Makes what panel `show` draws visible (and the rest not). */

@@ -8,6 +8,8 @@
 //   SNH_TEST_MUSCLE_DIR     a run with muscles (muscles.json): the fibres drawn, moved and coloured by each frame's
 //                           activation, and their switch
 //   SNH_TEST_RENDER_PNG     a PNG taken in render mode, with SNH_TEST_RENDER_SIZE=WxH: size, not blank
+//   SNH_TEST_FRAMING_DIR    a flesh run: render mode's framing in six views and layouts (tests/apps/test_pictures.sh
+//                           gives it the hand)
 // Chromium: /usr/bin/chromium, or SNH_TEST_CHROMIUM.
 import assert from 'node:assert/strict';
 import { existsSync, readFileSync } from 'node:fs';
@@ -23,11 +25,12 @@ const LAB = env.SNH_TEST_LAB_DIR;
 const FLESH = env.SNH_TEST_FLESH_DIR;
 const RENDER = env.SNH_TEST_RENDER_PNG;
 const MUSCLE = env.SNH_TEST_MUSCLE_DIR;
+const FRAMING = env.SNH_TEST_FRAMING_DIR;
 const TIMEOUT = 30000;
 let browser;
 
 before(async () => {
-  if (!RUN && !LAB && !FLESH && !MUSCLE) return;
+  if (!RUN && !LAB && !FLESH && !MUSCLE && !FRAMING) return;
   browser = await chromium.launch({
     executablePath: env.SNH_TEST_CHROMIUM || '/usr/bin/chromium',
     headless: true,
@@ -263,8 +266,8 @@ test('flesh run report', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', time
   await again.page.close();
 });
 
-test('render mode frames the surface it shows', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', timeout: 120000 }, async () => {
-  const report = readReport(FLESH);
+test('render mode frames the surface it shows', { skip: !FRAMING && 'SNH_TEST_FRAMING_DIR is not set', timeout: 120000 }, async () => {
+  const report = readReport(FRAMING);
   const last = report.mesh.frames.length - 1;
   // A joint in the middle of the skeleton's list (make-flesh-run.mjs's "middle"; a hand's finger joint).
   const joints = [...new Set(report.render.bones.flatMap((b) => b.split('>')))];
@@ -278,7 +281,7 @@ test('render mode frames the surface it shows', { skip: !FLESH && 'SNH_TEST_FLES
     const page = await browser.newPage({ viewport: { width, height } });
     const problems = [];
     page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
-    await page.goto(pathToFileURL(join(FLESH, 'index.html')).href + hash);
+    await page.goto(pathToFileURL(join(FRAMING, 'index.html')).href + hash);
     await page.waitForFunction(() => document.title.startsWith('snh-render'), null, { timeout: TIMEOUT });
     assert.equal(await page.title(), 'snh-render-ready', `${hash}: ${await page.title()}`);
     // Every point shown projects inside the box the framing fills, which leaves the caption and legend clear;

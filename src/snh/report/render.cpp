@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -23,6 +24,9 @@
 #include <nlohmann/json.hpp>
 
 #include "snh/io/atomic_file.hpp"
+#include "snh/io/mesh_read.hpp"
+#include "snh/io/surface_read.hpp"
+#include "snh/io/vtu.hpp"
 #include "snh/io/base64.hpp"
 #include "snh/report/browser.hpp"
 #include "snh/report/report.hpp"
@@ -322,8 +326,9 @@ Plan plan_render(const fs::path& dir, const RenderOptions& o, const fs::path& ou
                        "(apt-get install chromium), or set SNH_CHROMIUM to a Chromium or Chrome binary");
   if (::access(plan.browser.c_str(), X_OK) != 0)
     throw ReportError(fmt::format("the browser {} cannot be run (from SNH_CHROMIUM or --browser)", plan.browser));
+  const std::string show = o.show.empty() && !o.compare.empty() ? "flesh,lbs" : o.show;  // two runs: side by side
   plan.url = fmt::format("{}#render&frame={}&field={}{}{}", file_url(fs::absolute(dir / "index.html")), frame, field,
-                         o.wireframe ? "&wireframe=1" : "", o.show.empty() ? "" : "&show=" + o.show);
+                         o.wireframe ? "&wireframe=1" : "", show.empty() ? "" : "&show=" + show);
   if (flesh) plan.url += o.bones ? "&bones=1" : "&bones=0";
   if (!o.view.empty()) plan.url += "&view=" + o.view;
   const std::string fit = !o.fit.empty() ? o.fit : video ? "animation" : "";  // a video's camera holds still
@@ -384,10 +389,65 @@ std::string last_line(const fs::path& log) {
 
 }  // namespace
 
+fs::path comparison_run(const fs::path& dir, const fs::path& other, const fs::path& into) {
+  // Both flesh runs of one skin, with as many frames.
+  for (const fs::path& d : {dir, other}) {
+    if (!fs::is_directory(d)) throw ReportError(fmt::format("--compare: {}: not a run's directory", d.string()));
+    if (!fs::exists(d / "surface" / "000.obj") || !fs::exists(d / "frames.pvd"))
+      throw ReportError(fmt::format("--compare: {} is not a flesh run (it has no surface/000.obj or frames.pvd)", d.string()));
+  }
+  const auto skin = [](const fs::path& d) {
+    try {
+      return read_surface(d / "surface" / "000.obj");
+    } catch (const MeshError& e) {
+      throw ReportError(e.what());
+    }
+  };
+  const SurfaceMesh a = skin(dir), b = skin(other);
+  if (a.vertices.cols() != b.vertices.cols() || a.triangles.cols() != b.triangles.cols() || a.triangles != b.triangles)
+    throw ReportError(fmt::format("--compare: the skin of {} has {} vertices and {} triangles, that of {} {} and {}: runs of one "
+                                  "model are compared", other.string(), b.vertices.cols(), b.triangles.cols(), dir.string(),
+                                  a.vertices.cols(), a.triangles.cols()));
+  const auto frames = [](const fs::path& d) {
+    try {
+      return read_pvd(d / "frames.pvd").size();
+    } catch (const MeshError& e) {
+      throw ReportError(e.what());
+    }
+  };
+  if (frames(dir) != frames(other))
+    throw ReportError(fmt::format("--compare: {} has {} frames, {} has {}: runs of one animation at one frame rate are compared",
+                                  other.string(), frames(other), dir.string(), frames(dir)));
+  // The run's own files, linked, and the other run's skin in place of the skinned one.
+  const fs::path run = into / "comparison";
+  fs::create_directories(run);
+  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name == "lbs" || name == "report" || name == "index.html") continue;
+    fs::create_symlink(fs::absolute(e.path()), run / name);
+  }
+  fs::create_symlink(fs::absolute(other / "surface"), run / "lbs");
+  (void)write_report(run);
+  // Named by their directories (their whole paths where the names are alike).
+  std::string mine = fs::absolute(dir).lexically_normal().filename().string(), theirs = fs::absolute(other).lexically_normal().filename().string();
+  if (mine == theirs || mine.empty() || theirs.empty()) {
+    mine = fs::absolute(dir).lexically_normal().string();
+    theirs = fs::absolute(other).lexically_normal().string();
+  }
+  json data = read_report_data(run);
+  data["render"]["labels"] = {{"flesh", mine}, {"lbs", theirs}, {"difference", fmt::format("{} − {} distance", mine, theirs)}};
+  data["render"]["distance"]["label"] = fmt::format("distance from {}'s skin (mm)", theirs);
+  data["title"] = fmt::format("{} against {}", mine, theirs);
+  write_atomically(run / "report" / "data.js", [&](std::ostream& o) { o << "window.SNH_REPORT = " << data.dump() << ";\n"; });
+  return run;
+}
+
 void render_png(const fs::path& dir, const RenderOptions& o) {
   if (o.out.empty()) throw ReportError("no output file given");
   const fs::path out = fs::absolute(o.out);
-  const Plan plan = plan_render(dir, o, out, false);
+  std::optional<TempDir> pair;  // --compare: the two runs as one report
+  const fs::path source = o.compare.empty() ? dir : comparison_run(dir, o.compare, pair.emplace().path);
+  const Plan plan = plan_render(source, o, out, false);
   // The browser is driven over its DevTools pipe, in real time: the picture is taken once the page says
   // it drew the frame, however long that takes (within the timeout). Every wait in here is interrupted by
   // a stop signal, after which the browser is killed and its directory removed before this returns, so a
@@ -416,7 +476,9 @@ VideoSummary render_video(const fs::path& dir, const RenderOptions& o) {
   if (o.frame >= 0) throw ReportError("--frame picks a picture's frame; a video takes --frames FIRST:LAST");
   if (!(o.fps >= 0.0) || !std::isfinite(o.fps) || o.fps > 1000.0)
     throw ReportError(fmt::format("--fps must be a number from 0 (the run's own rate) to 1000, got {}", o.fps));
-  const Plan plan = plan_render(dir, o, out, true);
+  std::optional<TempDir> pair;  // --compare: the two runs as one report
+  const fs::path source = o.compare.empty() ? dir : comparison_run(dir, o.compare, pair.emplace().path);
+  const Plan plan = plan_render(source, o, out, true);
   const int count = static_cast<int>(plan.times.size());
   // The frames: FIRST:LAST (either may be left out), all by default.
   int first = 0, last = count - 1;

@@ -28,6 +28,9 @@ struct RenderOptions {
   std::filesystem::path out;       ///< the PNG to write
   std::string browser;       ///< Chromium's path ("": $SNH_CHROMIUM, else chromium or google-chrome on PATH)
   double timeout_seconds = 120.0;  ///< per browser run (a video: and 10 s a frame)
+  /// A second flesh run of the same skin and frames: shown as "lbs" (its skin) and measured against by
+  /// "difference" (the distance of this run's skin from its skin), labelled by the runs' directories.
+  std::filesystem::path compare;
   std::filesystem::path video;     ///< render_video: the .mp4 or .gif to write
   std::string frames;        ///< render_video: "FIRST:LAST" (either may be left out; "": every frame)
   double fps = 0.0;          ///< render_video: frames a second (0: the run's own rate, from the frames' times)
@@ -61,6 +64,13 @@ void render_png(const std::filesystem::path& dir, const RenderOptions& options);
 /// and ffmpeg (Debian package ffmpeg) making the video at the run's frame rate, written atomically. Throws
 /// as render_png, and EncoderError when ffmpeg is missing or fails. Returns the frames and the rate.
 VideoSummary render_video(const std::filesystem::path& dir, const RenderOptions& options);
+
+/// --compare: a run directory in `into` that holds the run in `dir` (its files linked) with the skin of the
+/// run in `other` as its "lbs" surface, and its report written with the runs' names as the surfaces' labels:
+/// the difference is the distance of dir's skin from other's. Throws ReportError (one line) unless both
+/// are flesh runs of one skin (vertex count and triangles) with as many frames.
+std::filesystem::path comparison_run(const std::filesystem::path& dir, const std::filesystem::path& other,
+                                     const std::filesystem::path& into);
 
 /// Width and height of a PNG file from its header; {0, 0} if it is not a PNG.
 [[nodiscard]] std::pair<int, int> png_size(const std::filesystem::path& png);
