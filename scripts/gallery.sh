@@ -70,7 +70,7 @@ end
 
 picture "The whole run, moving" fist.gif "\`--video\` makes an .mp4 (H.264) or, as here, a GIF for web pages, \
 at the run's frame rate (12 a second), the camera still: it fits every frame."
-step render "$OUT/fist" --show difference --width 480 --height 360 --video "$pics/fist.gif"
+step render "$OUT/fist" --show difference --width 640 --height 480 --video "$pics/fist.gif"
 end
 
 picture "A character nobody here made" huesitos.png "\`huesitos.fbx\`, an FBX arm of Debian's \

@@ -2,14 +2,14 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <functional>
-#include <optional>
-#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
+#include <optional>
 #include <sstream>
 #include <string_view>
 #include <vector>
@@ -24,10 +24,10 @@
 #include <nlohmann/json.hpp>
 
 #include "snh/io/atomic_file.hpp"
+#include "snh/io/base64.hpp"
 #include "snh/io/mesh_read.hpp"
 #include "snh/io/surface_read.hpp"
 #include "snh/io/vtu.hpp"
-#include "snh/io/base64.hpp"
 #include "snh/report/browser.hpp"
 #include "snh/report/report.hpp"
 #include "snh/run/interrupt.hpp"
