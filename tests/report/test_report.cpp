@@ -444,7 +444,9 @@ TEST(RunReport, FleshRunRenderSurfaceBonesAndSettings) {
                                                                       f.lbs[i].col(f.triangles(1, t)), f.lbs[i].col(f.triangles(2, t))));
       const double expected = 1000.0 * std::sqrt(nearest);
       EXPECT_NEAR(dist[v], expected, 1e-6 * (1.0 + expected)) << "frame " << i << " vertex " << v;
-      if (i == 0) EXPECT_EQ(dist[v], 0.0f) << "vertex " << v;
+      if (i == 0) {
+        EXPECT_EQ(dist[v], 0.0f) << "vertex " << v;
+      }
       largest = std::max(largest, expected);
       outside[i] = std::max(outside[i], expected);
     }
@@ -670,6 +672,16 @@ TEST(LabReport, TablesCurvesAndAReportPerSimulation) {
   }
   for (const char* id : {"rest_free_cube", "inversion_reflected", "degeneracy_point", "poisson", "stretch", "psi_sI"})
     EXPECT_TRUE(ids.count(id)) << id;
+  // A render of one of its simulations finds the lab's viewer current and leaves the page as it is (a stale
+  // viewer would have the simulation's report written again, with a copy of its own).
+  const fs::path sim = o.out / "rest" / "free_cube" / "neo_hookean";
+  const std::string page = file_text(sim / "index.html");
+  RenderOptions r;
+  r.out = sim / "x.png";
+  r.browser = "/nonexistent/chromium";
+  EXPECT_THROW(render_png(sim, r), ReportError);
+  EXPECT_EQ(file_text(sim / "index.html"), page);
+  EXPECT_FALSE(fs::exists(sim / "report" / "snh-report.js"));
   fs::remove_all(o.out);
 }
 
@@ -760,7 +772,9 @@ TEST(Render, ComparesTwoRunsOfOneSkin) {
                                                                       b.flesh[i].col(b.triangles(1, t)), b.flesh[i].col(b.triangles(2, t))));
       const double expected = 1000.0 * std::sqrt(nearest);
       EXPECT_NEAR(std::abs(dist[v]), expected, 1e-6 * (1.0 + expected)) << "frame " << i << " vertex " << v;
-      if (i > 1) EXPECT_LT(dist[v], 0.0f) << "a's skin lies inside b's: frame " << i << " vertex " << v;
+      if (i > 1) {
+        EXPECT_LT(dist[v], 0.0f) << "a's skin lies inside b's: frame " << i << " vertex " << v;
+      }
     }
   }
   // The runs' own directories are as they were: the pair links their files.

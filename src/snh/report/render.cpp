@@ -183,8 +183,17 @@ std::pair<int, int> png_header_size(std::string_view head) {
 /// The camera's named views (viewer/src/camera.js VIEWS).
 constexpr std::string_view kViews[] = {"three-quarter", "front", "back", "left", "right", "top"};
 
-/// Whether `script` holds this build's viewer (the report's page loads it).
-bool current_viewer(const fs::path& script) {
+/// Whether the viewer script that DIR/index.html loads (report/snh-report.js, or a lab's shared copy
+/// further up) is this build's.
+bool current_viewer(const fs::path& dir) {
+  std::ifstream page(dir / "index.html");
+  std::string html(4096, '\0');  // the script tags come first
+  page.read(html.data(), static_cast<std::streamsize>(html.size()));
+  html.resize(static_cast<std::size_t>(page.gcount()));
+  const std::size_t end = html.find("snh-report.js\"");
+  const std::size_t start = end == std::string::npos ? end : html.rfind('"', end);
+  if (start == std::string::npos) return false;
+  const fs::path script = dir / html.substr(start + 1, end + std::string_view("snh-report.js").size() - start - 1);
   const std::string_view bundle = report_bundle();
   std::error_code ec;
   if (fs::file_size(script, ec) != bundle.size() || ec) return false;
@@ -287,7 +296,7 @@ Plan plan_render(const fs::path& dir, const RenderOptions& o, const fs::path& ou
     throw ReportError(fmt::format("--fit {}: expected frame (the frame shown fills the picture) or animation (every frame would fit)", o.fit));
   // A report written by another build of snh has another viewer, which may not know the options asked for
   // (and data without what they need): such a report is written again first, as a missing one is.
-  if (!fs::exists(dir / "index.html") || !fs::exists(dir / "report" / "data.js") || !current_viewer(dir / "report" / "snh-report.js"))
+  if (!fs::exists(dir / "index.html") || !fs::exists(dir / "report" / "data.js") || !current_viewer(dir))
     (void)write_report(dir);
   // The frame and field are checked here, so that the page is only asked for what it has.
   const json data = read_report_data(dir);
