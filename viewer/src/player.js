@@ -158,8 +158,10 @@ export class Player {
     const inside = colors.name === 'diverging' && Number.isFinite(c) && c > f.min && c < f.max;
     mark.hidden = !inside;
     if (inside) {
-      mark.style.left = `${(100 * (c - f.min)) / (f.max - f.min)}%`;
-      mark.textContent = fmt4(c);
+      const at = (c - f.min) / (f.max - f.min);
+      mark.style.left = `${100 * at}%`;
+      // Its number would run into the min's or max's near an end: the tick alone says where it is.
+      mark.textContent = at > 0.15 && at < 0.85 ? fmt4(c) : '';
     }
   }
 
