@@ -375,6 +375,16 @@ FleshRun flesh_run(const std::string& name) {
   return f;
 }
 
+/// The distance in millimetres (a surface in metres) from p to the nearest triangle of a surface, by brute force
+/// with IPC's point–triangle distance: what the report's distances are checked against.
+double nearest_mm(const Eigen::Vector3d& p, const Eigen::Matrix3Xd& vertices, const Eigen::Matrix3Xi& triangles) {
+  double nearest = 1e300;
+  for (Eigen::Index t = 0; t < triangles.cols(); ++t)
+    nearest = std::min(nearest, contact::point_triangle_distance(p, vertices.col(triangles(0, t)), vertices.col(triangles(1, t)),
+                                                                 vertices.col(triangles(2, t))));
+  return 1000.0 * std::sqrt(nearest);
+}
+
 /// The value of the meta line `label` ("" when there is none).
 json meta_value(const json& d, const std::string& label) {
   for (const json& m : d["meta"])
@@ -438,11 +448,7 @@ TEST(RunReport, FleshRunRenderSurfaceBonesAndSettings) {
     const auto dist = decode<float>(fd["render"]["distance"]);
     ASSERT_EQ(dist.size(), 6u);
     for (int v = 0; v < 6; ++v) {
-      double nearest = 1e300;
-      for (int t = 0; t < 8; ++t)
-        nearest = std::min(nearest, contact::point_triangle_distance(f.flesh[i].col(v), f.lbs[i].col(f.triangles(0, t)),
-                                                                      f.lbs[i].col(f.triangles(1, t)), f.lbs[i].col(f.triangles(2, t))));
-      const double expected = 1000.0 * std::sqrt(nearest);
+      const double expected = nearest_mm(f.flesh[i].col(v), f.lbs[i], f.triangles);
       EXPECT_NEAR(dist[v], expected, 1e-6 * (1.0 + expected)) << "frame " << i << " vertex " << v;
       if (i == 0) {
         EXPECT_EQ(dist[v], 0.0f) << "vertex " << v;
@@ -766,11 +772,7 @@ TEST(Render, ComparesTwoRunsOfOneSkin) {
     const auto dist = decode<float>(fd["render"]["distance"]);
     ASSERT_EQ(dist.size(), 6u);
     for (int v = 0; v < 6; ++v) {
-      double nearest = 1e300;
-      for (int t = 0; t < 8; ++t)
-        nearest = std::min(nearest, contact::point_triangle_distance(a.flesh[i].col(v), b.flesh[i].col(b.triangles(0, t)),
-                                                                      b.flesh[i].col(b.triangles(1, t)), b.flesh[i].col(b.triangles(2, t))));
-      const double expected = 1000.0 * std::sqrt(nearest);
+      const double expected = nearest_mm(a.flesh[i].col(v), b.flesh[i], b.triangles);
       EXPECT_NEAR(std::abs(dist[v]), expected, 1e-6 * (1.0 + expected)) << "frame " << i << " vertex " << v;
       if (i > 1) {
         EXPECT_LT(dist[v], 0.0f) << "a's skin lies inside b's: frame " << i << " vertex " << v;

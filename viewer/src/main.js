@@ -168,7 +168,6 @@ async function renderMode(root, data, s) {
       await player.setFrame(i);
       await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
     };
-    hooks.camera = () => view.lastFit;
     hooks.framingBox = () => view.framing.box;
     hooks.projectedExtent = () => view.projectedExtent();
     await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));

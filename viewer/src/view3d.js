@@ -493,7 +493,6 @@ export class MeshView {
     this.controls.target.set(...cam.target);
     this.camera.lookAt(this.controls.target);
     this.controls.update();
-    this.lastFit = { ...cam, fov: FOV, aspect: w / h, points: points.length / 3 };
   }
 
   /** The NDC extent {left, right, bottom, top} of the shown points through the camera as drawn (for tests). */

@@ -264,11 +264,14 @@ std::pair<int, int> png_size(const fs::path& png) {
 
 namespace {
 
-/// What the checks of a render found: the browser, the page's address (with the frame to show first) and
-/// the run's frames (index and time).
+/// What the checks of a render found: the browser, the page's address (all but the frame), the frame a
+/// picture shows and the times of the run's frames.
 struct Plan {
   std::string browser, url;
+  int frame = 0;              ///< a picture's frame (a video's: 0)
   std::vector<double> times;  ///< of every frame of the run
+  /// The page's address showing frame `i` first.
+  [[nodiscard]] std::string at(int i) const { return fmt::format("{}&frame={}", url, i); }
 };
 
 /// Checks the options against the run in `dir` (writing its report first if it has none) and the browser,
@@ -336,7 +339,8 @@ Plan plan_render(const fs::path& dir, const RenderOptions& o, const fs::path& ou
   if (::access(plan.browser.c_str(), X_OK) != 0)
     throw ReportError(fmt::format("the browser {} cannot be run (from SNH_CHROMIUM or --browser)", plan.browser));
   const std::string show = o.show.empty() && !o.compare.empty() ? "flesh,lbs" : o.show;  // two runs: side by side
-  plan.url = fmt::format("{}#render&frame={}&field={}{}{}", file_url(fs::absolute(dir / "index.html")), frame, field,
+  plan.frame = frame;
+  plan.url = fmt::format("{}#render&field={}{}{}", file_url(fs::absolute(dir / "index.html")), field,
                          o.wireframe ? "&wireframe=1" : "", show.empty() ? "" : "&show=" + show);
   if (flesh) plan.url += o.bones ? "&bones=1" : "&bones=0";
   if (!o.view.empty()) plan.url += "&view=" + o.view;
@@ -466,7 +470,7 @@ void render_png(const fs::path& dir, const RenderOptions& o) {
     PromptStopScope prompt;
     if (stop_requested()) throw BrowserInterrupted(stop_signal());
     TempDir work;
-    session(plan.browser, plan.url, o, work.path, o.timeout_seconds,
+    session(plan.browser, plan.at(plan.frame), o, work.path, o.timeout_seconds,
             [&](HeadlessBrowser& chromium, const std::string& page) { png = capture(chromium, page); });
   }
   if (stop_requested()) throw BrowserInterrupted(stop_signal());
@@ -514,14 +518,12 @@ VideoSummary render_video(const fs::path& dir, const RenderOptions& o) {
     fps = count > 1 && span > 0.0 && std::isfinite(span) ? (count - 1) / span : 0.0;
     if (!(fps >= 0.1 && fps <= 1000.0)) fps = 10.0;  // steps without a time (snh stretch): ten a second
   }
-  std::string url = plan.url;
-  if (first != 0) url.replace(url.find("&frame=0&"), 9, fmt::format("&frame={}&", first));
   {
     PromptStopScope prompt;
     if (stop_requested()) throw BrowserInterrupted(stop_signal());
     TempDir work;
     // Each frame drawn and taken in one browser, into numbered PNG files; then ffmpeg makes the video of them.
-    session(plan.browser, url, o, work.path, o.timeout_seconds + 10.0 * (last - first + 1),
+    session(plan.browser, plan.at(first), o, work.path, o.timeout_seconds + 10.0 * (last - first + 1),
             [&](HeadlessBrowser& chromium, const std::string& page) {
               for (int i = first; i <= last; ++i) {
                 const json r = chromium.call(
