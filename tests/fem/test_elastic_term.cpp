@@ -178,6 +178,10 @@ TEST(Assembly, ScatterMapIsTheSameForOneAndTwoThreadsAndRefusesALayoutWithoutThe
   }
   omp_set_num_threads(threads);
   EXPECT_EQ(maps[0], maps[1]);
+  // Written over an old map (a rebuilt layout reuses the term's): every entry, the −1s too.
+  std::vector<int> over(maps[0].size(), 12345);
+  elastic.scatter_map(layout, over);
+  EXPECT_EQ(over, maps[0]);
   // Every entry mapped but the 3 · 8 · 7 / 2 upper halves of each cell's diagonal blocks (left at −1).
   EXPECT_EQ(std::count(maps[0].begin(), maps[0].end(), -1), 84 * m.cell_count());
 }

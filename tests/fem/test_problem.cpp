@@ -1,8 +1,12 @@
 // The problem layer: the DOF map, Hessian layouts (any numbering, covers, add_block), a sum of terms
 // checked against finite differences, and a layout that grows when a term's stencil moves.
 #include <gtest/gtest.h>
+#include <omp.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
+#include <set>
 #include <random>
 
 #include "snh/fem/attachment_term.hpp"
@@ -104,6 +108,82 @@ TEST(HessianLayout, AnyNumberingGivesSortedLowerColumnsStartingAtTheDiagonal) {
   EXPECT_THROW(HessianLayout(numbering, 9, {&pair}), std::invalid_argument) << "number 8 unused";
   numbering[1] = 4;
   EXPECT_THROW(HessianLayout(numbering, 8, {&pair}), std::invalid_argument) << "number 4 twice";
+}
+
+TEST(HessianLayout, ALargeLayoutIsEveryCoupledPairOnceForAnyThreadCountAndMovesWithoutCopying) {
+  // Enough vertices to build on all threads: random groups of 2 to 8 vertices, some vertices in none, a
+  // scrambled numbering with DOFs left out (its columns then need sorting). Against the pairs counted one by one.
+  std::mt19937 rng(7);
+  const int vertices = 6000;
+  std::vector<int> numbering(3 * vertices);
+  std::iota(numbering.begin(), numbering.end(), 0);
+  std::shuffle(numbering.begin(), numbering.end(), rng);
+  int size = 0;
+  std::vector<int> order(numbering.size());
+  for (std::size_t d = 0; d < numbering.size(); ++d) order[static_cast<std::size_t>(numbering[d])] = static_cast<int>(d);
+  std::fill(numbering.begin(), numbering.end(), -1);
+  for (int d : order)
+    if (d % 7 != 3) numbering[static_cast<std::size_t>(d)] = size++;
+  Stencil quads{.arity = 4, .vertices = {}}, octets{.arity = 8, .vertices = {}};
+  std::uniform_int_distribution<int> pick(0, vertices - 200);  // the last 200 vertices in no group
+  for (int g = 0; g < 3000; ++g)
+    for (int k = 0; k < 4; ++k) quads.vertices.push_back(pick(rng));
+  for (int g = 0; g < 2000; ++g) {
+    const int base = pick(rng);
+    for (int k = 0; k < 8; ++k) octets.vertices.push_back(std::min(vertices - 1, base + 3 * k));
+  }
+  std::set<std::pair<int, int>> expected;  // (row, column), row ≥ column: each vertex's own block, and the groups'
+  for (int v = 0; v < vertices; ++v)
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const int r = numbering[static_cast<std::size_t>(3 * v + i)], c = numbering[static_cast<std::size_t>(3 * v + k)];
+        if (r >= 0 && c >= 0 && r >= c) expected.emplace(r, c);
+      }
+  for (const Stencil* s : {&quads, &octets})
+    for (Eigen::Index g = 0; g < s->groups(); ++g)
+      for (int a = 0; a < s->arity; ++a)
+        for (int b = 0; b < s->arity; ++b)
+          for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) {
+              const int r = numbering[3 * static_cast<std::size_t>(s->vertices[g * s->arity + a]) + i];
+              const int c = numbering[3 * static_cast<std::size_t>(s->vertices[g * s->arity + b]) + k];
+              if (r >= 0 && c >= 0 && r >= c) expected.emplace(r, c);
+            }
+  std::vector<std::vector<int>> inner_by_threads;
+  const int max_threads = omp_get_max_threads();
+  for (const int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    HessianLayout L(numbering, size, {&quads, &octets});
+    const SparseLower& P = L.pattern();
+    ASSERT_EQ(P.nonZeros(), static_cast<Eigen::Index>(expected.size())) << threads << " threads";
+    std::set<std::pair<int, int>> got;
+    for (Eigen::Index c = 0; c < P.outerSize(); ++c) {
+      const int first = P.outerIndexPtr()[c], last = P.outerIndexPtr()[c + 1];
+      ASSERT_LT(first, last);
+      EXPECT_EQ(P.innerIndexPtr()[first], c) << "column " << c << " starts at its diagonal";
+      for (int k = first; k < last; ++k) {
+        if (k > first) ASSERT_LT(P.innerIndexPtr()[k - 1], P.innerIndexPtr()[k]) << "column " << c;
+        EXPECT_EQ(P.valuePtr()[k], 0.0);
+        got.emplace(P.innerIndexPtr()[k], static_cast<int>(c));
+      }
+    }
+    EXPECT_EQ(got, expected) << threads << " threads";
+    EXPECT_TRUE(L.covers(quads) && L.covers(octets));
+    inner_by_threads.emplace_back(P.innerIndexPtr(), P.innerIndexPtr() + P.nonZeros());
+    // A move hands the storage over (Eigen 3.4's SparseMatrix would copy it): the same arrays, the same id.
+    const int* storage = P.innerIndexPtr();
+    const std::uint64_t id = L.id();
+    HessianLayout moved(std::move(L));
+    EXPECT_EQ(moved.pattern().innerIndexPtr(), storage);
+    EXPECT_EQ(moved.id(), id);
+    HessianLayout assigned;
+    assigned = std::move(moved);
+    EXPECT_EQ(assigned.pattern().innerIndexPtr(), storage);
+    EXPECT_EQ(assigned.id(), id);
+    EXPECT_EQ(assigned.entry(size - 1, size - 1), static_cast<int>(expected.size()) - 1) << "the last diagonal ends it";
+  }
+  omp_set_num_threads(max_threads);
+  EXPECT_EQ(inner_by_threads[0], inner_by_threads[1]);
 }
 
 TEST(HessianLayout, AddBlockFillsTheLowerTriangleAndSkipsKinematicDofs) {

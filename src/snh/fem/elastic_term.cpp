@@ -400,15 +400,15 @@ void ElasticTerm::stencil(const Eigen::VectorXd&, Stencil& out) const {
   out.vertices.assign(mesh_.cells.data(), mesh_.cells.data() + mesh_.cells.size());
 }
 
-std::vector<int> ElasticTerm::scatter_map(const HessianLayout& layout) const {
+void ElasticTerm::scatter_map(const HessianLayout& layout, std::vector<int>& scatter) const {
   // For each element and packed entry K_ik(a, b) (the DOFs A = 3a+i and B = 3b+k, i >= k), the value index
   // of (max(num(A), num(B)), min(...)) when both are numbered; −1 otherwise, and for a < b in K_ii (the
   // same pair as K_ii(b, a)).
-  return std::visit(
+  std::visit(
       [&](const auto& rest) {
         constexpr int N = std::decay_t<decltype(rest)>::value_type::nodes;
         const std::vector<int>& num = layout.numbering();
-        std::vector<int> scatter(static_cast<std::size_t>(mesh_.cell_count()) * packed_size<N>, -1);
+        scatter.resize(static_cast<std::size_t>(mesh_.cell_count()) * packed_size<N>);
         // Cells in parallel (each fills its own part; a rebuilt layout pays this for every cell, 13.5 million
         // look-ups at Figure 1's size); a missing entry is reported after the loop, not thrown inside it.
         bool missing = false;
@@ -418,16 +418,18 @@ std::vector<int> ElasticTerm::scatter_map(const HessianLayout& layout) const {
           for (int i = 0; i < 3; ++i)
             for (int k = 0; k <= i; ++k)
               for (int b = 0; b < N; ++b)
-                for (int a = i == k ? b : 0; a < N; ++a) {
+                for (int a = 0; a < N; ++a) {
+                  int& to = map[N * N * packed_pair(i, k) + N * b + a];
                   const int rA = num[3 * mesh_.cells(a, c) + i], rB = num[3 * mesh_.cells(b, c) + k];
-                  if (rA < 0 || rB < 0) continue;
-                  const int e = layout.entry(std::max(rA, rB), std::min(rA, rB));
-                  missing = missing || e < 0;
-                  map[N * N * packed_pair(i, k) + N * b + a] = e;
+                  if ((i == k && a < b) || rA < 0 || rB < 0) {
+                    to = -1;
+                    continue;
+                  }
+                  to = layout.entry(std::max(rA, rB), std::min(rA, rB));
+                  missing = missing || to < 0;
                 }
         }
         if (missing) throw std::logic_error("elastic term: the layout does not hold an element's entries");
-        return scatter;
       },
       rest_);
 }

@@ -46,12 +46,20 @@ class ElasticTerm final : public Term {
                   PsdProjection projection) const override;
   /// The cells.
   void stencil(const Eigen::VectorXd& x, Stencil& out) const override;
-  void bind(const HessianLayout& layout) override { scatter_ = scatter_map(layout); }
+  /// The new map is written over the old one: a layout rebuilt for contact pairs then reuses its memory
+  /// instead of touching 70 MB of fresh pages at Figure 1's size (0.2 s here).
+  void bind(const HessianLayout& layout) override { scatter_map(layout, scatter_); }
 
   /// Per element, 6 N² value indices into `layout`'s values, one per entry of the element stiffness's N by N
   /// blocks K_ik (the DOFs 3a+i and 3b+k, i >= k); −1 to skip (a DOF the layout leaves out, or a pair that
   /// K_ii holds twice).
-  [[nodiscard]] std::vector<int> scatter_map(const HessianLayout& layout) const;
+  [[nodiscard]] std::vector<int> scatter_map(const HessianLayout& layout) const {
+    std::vector<int> scatter;
+    scatter_map(layout, scatter);
+    return scatter;
+  }
+  /// The same into `scatter` (resized; every entry written).
+  void scatter_map(const HessianLayout& layout, std::vector<int>& scatter) const;
   /// Adds the Hessian at x to `values` through a scatter map of scatter_map() (another layout than the
   /// bound one: a damping matrix over every DOF).
   void add_hessian(const Eigen::VectorXd& x, const std::vector<int>& scatter, double* values, PsdProjection projection) const;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
+#include <utility>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -13,60 +15,97 @@ namespace {
 
 std::atomic<std::uint64_t> next_layout_id{1};
 
+/// Layouts of this many vertices and more are built on all threads.
+constexpr int kParallelVertices = 4096;
+
 }  // namespace
 
 HessianLayout::HessianLayout(std::vector<int> numbering, int size, const std::vector<const Stencil*>& stencils)
     : numbering_(std::move(numbering)), id_(next_layout_id++) {
-  const Eigen::Index vertices = static_cast<Eigen::Index>(numbering_.size()) / 3;
+  const int vertices = static_cast<int>(numbering_.size() / 3);
   // Every group of every stencil, and vertex -> the groups it is in.
   std::vector<std::pair<const Stencil*, int>> groups;  // (stencil, index of the group's first vertex)
   for (const Stencil* s : stencils)
     for (Eigen::Index g = 0; g < s->groups(); ++g) groups.emplace_back(s, static_cast<int>(g * s->arity));
-  const Buckets vertex_groups = bucket(static_cast<int>(vertices), [&](auto&& emit) {
+  const Buckets vertex_groups = bucket(vertices, [&](auto&& emit) {
     for (std::size_t g = 0; g < groups.size(); ++g)
       for (int k = 0; k < groups[g].first->arity; ++k) emit(groups[g].first->vertices[groups[g].second + k], static_cast<int>(g));
   });
-  // Vertex neighbours: every vertex sharing a group with it, and itself; sorted.
-  neighbour_start_.assign(vertices + 1, 0);
-  std::vector<int> list;
-  for (Eigen::Index v = 0; v < vertices; ++v) {
-    list.clear();
-    list.push_back(static_cast<int>(v));
-    for (int i = vertex_groups.start[v]; i < vertex_groups.start[v + 1]; ++i) {
-      const auto& [s, first] = groups[vertex_groups.items[i]];
-      list.insert(list.end(), s->vertices.begin() + first, s->vertices.begin() + first + s->arity);
-    }
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-    neighbours_.insert(neighbours_.end(), list.begin(), list.end());
-    neighbour_start_[v + 1] = static_cast<int>(neighbours_.size());
-  }
-
-  // Columns in numbering order; column c (DOF d) holds the numbered DOFs of d's neighbours with number >= c.
-  std::vector<int> dof_of(size, -1);
+  // Columns in numbering order; column c (DOF d) will hold the numbered DOFs of d's neighbours with number >= c.
+  std::vector<int> dof_of(static_cast<std::size_t>(size), -1);
   for (std::size_t d = 0; d < numbering_.size(); ++d) {
     const int c = numbering_[d];
     if (c < 0) continue;
-    if (c >= size || dof_of[c] >= 0) throw std::invalid_argument(fmt::format("layout numbering: {} used twice or out of range", c));
-    dof_of[c] = static_cast<int>(d);
+    if (c >= size || dof_of[static_cast<std::size_t>(c)] >= 0)
+      throw std::invalid_argument(fmt::format("layout numbering: {} used twice or out of range", c));
+    dof_of[static_cast<std::size_t>(c)] = static_cast<int>(d);
   }
-  std::vector<int> outer(size + 1, 0), inner;
-  for (int c = 0; c < size; ++c) {
-    if (dof_of[c] < 0) throw std::invalid_argument(fmt::format("layout numbering: {} is not used", c));
-    const int v = dof_of[c] / 3;
-    const std::size_t first = inner.size();
+  for (int c = 0; c < size; ++c)
+    if (dof_of[static_cast<std::size_t>(c)] < 0) throw std::invalid_argument(fmt::format("layout numbering: {} is not used", c));
+
+  // Everything is allocated before the parallel loops below, whose bodies neither allocate nor throw; each
+  // vertex's and each column's entries are made by one thread, in the same order for any thread count.
+  const bool parallel = vertices >= kParallelVertices;
+  // Vertex neighbours: every vertex sharing a group with it, and itself; sorted. Each vertex's list is made
+  // in a slot as long as its groups' vertices together, then packed.
+  std::vector<std::int64_t> slot(static_cast<std::size_t>(vertices) + 1, 0);
+  for (int v = 0; v < vertices; ++v) {
+    std::int64_t length = 1;
+    for (int i = vertex_groups.start[v]; i < vertex_groups.start[v + 1]; ++i) length += groups[vertex_groups.items[i]].first->arity;
+    slot[v + 1] = slot[v] + length;
+  }
+  std::vector<int> scratch(static_cast<std::size_t>(slot[vertices]));
+  neighbour_start_.assign(static_cast<std::size_t>(vertices) + 1, 0);
+#pragma omp parallel for schedule(dynamic, 1024) if (parallel)
+  for (int v = 0; v < vertices; ++v) {
+    int* const first = scratch.data() + slot[v];
+    int* last = first;
+    *last++ = v;
+    for (int i = vertex_groups.start[v]; i < vertex_groups.start[v + 1]; ++i) {
+      const auto& [s, at] = groups[vertex_groups.items[i]];
+      last = std::copy(s->vertices.begin() + at, s->vertices.begin() + at + s->arity, last);
+    }
+    std::sort(first, last);
+    neighbour_start_[v + 1] = static_cast<int>(std::unique(first, last) - first);
+  }
+  for (int v = 0; v < vertices; ++v) neighbour_start_[v + 1] += neighbour_start_[v];
+  neighbours_.resize(static_cast<std::size_t>(neighbour_start_[vertices]));
+#pragma omp parallel for schedule(static) if (parallel)
+  for (int v = 0; v < vertices; ++v)
+    std::copy(scratch.begin() + slot[v], scratch.begin() + slot[v] + (neighbour_start_[v + 1] - neighbour_start_[v]),
+              neighbours_.begin() + neighbour_start_[v]);
+  scratch = {};
+
+  // The columns: their lengths, then their rows, written straight into the matrix (values zero).
+  const auto for_each_row = [&](int c, auto&& take) {
+    const int v = dof_of[static_cast<std::size_t>(c)] / 3;
     for (int i = neighbour_start_[v]; i < neighbour_start_[v + 1]; ++i)
       for (int l = 0; l < 3; ++l) {
         const int row = numbering_[3 * static_cast<std::size_t>(neighbours_[i]) + l];
-        if (row >= c) inner.push_back(row);
+        if (row >= c) take(row);
       }
-    std::sort(inner.begin() + static_cast<std::ptrdiff_t>(first), inner.end());  // already sorted for increasing numberings
-    outer[c + 1] = static_cast<int>(inner.size());
+  };
+  pattern_.resize(size, size);
+  int* const outer = pattern_.outerIndexPtr();
+  outer[0] = 0;
+#pragma omp parallel for schedule(static) if (parallel)
+  for (int c = 0; c < size; ++c) {
+    int n = 0;
+    for_each_row(c, [&n](int) { ++n; });
+    outer[c + 1] = n;
   }
-  std::vector<double> zeros(inner.size(), 0.0);
-  pattern_ = Eigen::Map<const SparseLower>(size, size, static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(),
-                                           zeros.data());
-  pattern_.makeCompressed();
+  for (int c = 0; c < size; ++c) outer[c + 1] += outer[c];
+  pattern_.resizeNonZeros(outer[size]);
+  int* const inner = pattern_.innerIndexPtr();
+  double* const values = pattern_.valuePtr();
+#pragma omp parallel for schedule(static) if (parallel)
+  for (int c = 0; c < size; ++c) {
+    int* const first = inner + outer[c];
+    int* next = first;
+    for_each_row(c, [&next](int row) { *next++ = row; });
+    if (!std::is_sorted(first, next)) std::sort(first, next);  // already sorted for increasing numberings
+    std::fill(values + outer[c], values + outer[c + 1], 0.0);
+  }
 }
 
 int HessianLayout::entry(int row, int col) const {

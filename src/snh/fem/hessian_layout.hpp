@@ -5,6 +5,7 @@
 // Energy terms add their Hessian entries into values laid out this way (HessianValues); a term with a
 // fixed stencil precomputes where each entry goes (a scatter map) whenever the layout is rebuilt.
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -32,6 +33,25 @@ class HessianLayout {
   /// size       rows (= columns) of the matrix
   /// stencils   the couplings; every numbered DOF also gets its diagonal entry
   HessianLayout(std::vector<int> numbering, int size, const std::vector<const Stencil*>& stencils);
+  // Moves swap the pattern: Eigen 3.4's SparseMatrix has no move operations of its own, so a defaulted move
+  // copied every entry (0.15 s for Figure 1's layout, at each rebuild).
+  HessianLayout(const HessianLayout&) = default;
+  HessianLayout& operator=(const HessianLayout&) = default;
+  HessianLayout(HessianLayout&& other) noexcept { swap(other); }
+  HessianLayout& operator=(HessianLayout&& other) noexcept {
+    HessianLayout taken;
+    taken.swap(other);
+    swap(taken);
+    return *this;
+  }
+  ~HessianLayout() = default;
+  void swap(HessianLayout& other) noexcept {
+    numbering_.swap(other.numbering_);
+    pattern_.swap(other.pattern_);
+    neighbour_start_.swap(other.neighbour_start_);
+    neighbours_.swap(other.neighbours_);
+    std::swap(id_, other.id_);
+  }
 
   /// The pattern, values zero.
   [[nodiscard]] const SparseLower& pattern() const { return pattern_; }

@@ -47,6 +47,11 @@ void Problem::update_layout(const Eigen::VectorXd& x) {
   for (const auto* list : {&fixed_, &varying_})
     for (const Stencil& s : *list)
       if (s.groups() > 0) all.push_back(&s);
+  // The old layout goes first, so that the new one takes its memory (kept in the process: keep_freed_memory)
+  // rather than fresh pages; it is not needed while the new one is built. Should building fail (memory), the
+  // next call builds it all again.
+  have_layout_ = false;
+  layout_ = HessianLayout();
   layout_ = HessianLayout(dofs_.free_index(), static_cast<int>(dofs_.free_count()), all);
   have_layout_ = true;
   ++layouts_built_;
