@@ -11,7 +11,7 @@
 #include <unistd.h>
 
 #include "../common/command_line.hpp"
-#include "../common/omp_env.hpp"
+#include "../common/process_env.hpp"
 #include "../common/run_report.hpp"
 #include "snh/io/atomic_file.hpp"
 #include "snh/math/keep_memory.hpp"
@@ -50,7 +50,7 @@ double parse_double(const std::string& program, const char* what, const char* te
 }  // namespace
 
 int main(int argc, char** argv) {
-  snh::cli::ensure_passive_omp_wait(argv);
+  snh::cli::ensure_process_settings(argv);
   snh::keep_freed_memory();
   std::string program = argv[0];
   if (const auto slash = program.find_last_of('/'); slash != std::string::npos) program = program.substr(slash + 1);

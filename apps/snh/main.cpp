@@ -6,7 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "../common/command_line.hpp"
-#include "../common/omp_env.hpp"
+#include "../common/process_env.hpp"
 #include "../common/out_option.hpp"
 #include "flesh_command.hpp"
 #include "lab_command.hpp"
@@ -31,7 +31,7 @@ std::string pcg_option_for(const CLI::App& app, std::string message) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  snh::cli::ensure_passive_omp_wait(argv);
+  snh::cli::ensure_process_settings(argv);
   snh::keep_freed_memory();
   snh::cli::invocation() = snh::cli::quoted_command_line(argc, argv);
   CLI::App app{"snh " SNH_VERSION ": Stable Neo-Hookean flesh simulation toolkit (Smith, de Goes & Kim 2018)"};

@@ -1,0 +1,35 @@
+#pragma once
+// Settings that glibc and libgomp read only when a process starts: the program sets those the user left
+// unset and re-executes itself once (same process id, same arguments). A user's own settings are kept.
+// - OMP_WAIT_POLICY=PASSIVE: idle OpenMP threads sleep instead of spinning. The assembly's parallel loops
+//   alternate with long serial phases (CHOLMOD factorizations, whose BLAS has threads of its own); spinning
+//   OpenMP threads then compete with them for the cores, which measured 1.5-2x slower whole runs on 2 cores.
+// - glibc.malloc.hugetlb=1 in GLIBC_TUNABLES: malloc asks for transparent huge pages (madvise) for the
+//   memory it takes from the kernel. A Newton iteration's matrices and vectors are tens of MiB each, and a
+//   first touch of 4 KiB pages cost a fault each (the first frame of Figure 1 at 45k hexes 1.8 s, 1.4 s with
+//   huge pages; whole runs 0.95 of the time: docs/results.md). Where the kernel gives none (transparent huge
+//   pages off), nothing changes. GLIBC_TUNABLES=glibc.malloc.hugetlb=0 turns it off.
+#include <cstdlib>
+#include <string>
+
+#include <unistd.h>
+
+namespace snh::cli {
+
+inline void ensure_process_settings(char** argv) {
+  bool changed = false;
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
+    ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+    changed = true;
+  }
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  const std::string given = tunables ? tunables : "";
+  if (given.find("glibc.malloc.hugetlb") == std::string::npos) {
+    const std::string with = given.empty() ? "glibc.malloc.hugetlb=1" : given + ":glibc.malloc.hugetlb=1";
+    ::setenv("GLIBC_TUNABLES", with.c_str(), 1);
+    changed = true;
+  }
+  if (changed) ::execv("/proc/self/exe", argv);  // returns only on failure: then run as we are
+}
+
+}  // namespace snh::cli
