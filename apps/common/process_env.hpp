@@ -17,19 +17,20 @@
 namespace snh::cli {
 
 inline void ensure_process_settings(char** argv) {
-  bool changed = false;
+  // Re-executed only where every setting it lacked could be set: after it, none is lacking (no loop).
+  bool changed = false, failed = false;
   if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
-    ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
     changed = true;
+    failed = ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0;
   }
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   const std::string given = tunables ? tunables : "";
-  if (given.find("glibc.malloc.hugetlb") == std::string::npos) {
+  if (!failed && given.find("glibc.malloc.hugetlb") == std::string::npos) {
     const std::string with = given.empty() ? "glibc.malloc.hugetlb=1" : given + ":glibc.malloc.hugetlb=1";
-    ::setenv("GLIBC_TUNABLES", with.c_str(), 1);
     changed = true;
+    failed = ::setenv("GLIBC_TUNABLES", with.c_str(), 1) != 0;
   }
-  if (changed) ::execv("/proc/self/exe", argv);  // returns only on failure: then run as we are
+  if (changed && !failed) ::execv("/proc/self/exe", argv);  // returns only on failure: then run as we are
 }
 
 }  // namespace snh::cli
