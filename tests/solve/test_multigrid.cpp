@@ -317,6 +317,71 @@ TEST(Multigrid, AContactCouplingMovesOnlyItsOwnNodeOutOfTheParityColours) {
   EXPECT_LE(with, without + 3);
 }
 
+TEST(Multigrid, SmallColoursOfContactCliquesRunInTurnAndKeepTheVCycleSymmetricAndThreadFree) {
+  // Three cliques of 5 nodes of one parity coupled all with all (what contact pairs add to the pattern): 4 of
+  // each leave the parity colours and take colours of their own, 4 small colours, which one thread relaxes in
+  // turn behind one barrier, forward and then backward. Every level in parallel: the V-cycle is the same for
+  // 1 and 2 threads, symmetric and positive, and CG converges in about the iterations of the plain box.
+  const int res = 16;
+  const VolumeMesh mesh = box_hexes(res);
+  System s(mesh, pins(mesh), 17);
+  const std::vector<int>& row = s.problem.dofs().free_index();
+  const SparseLower& A = s.H.matrix;
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index c = 0; c < A.outerSize(); ++c)
+    for (SparseLower::InnerIterator it(A, c); it; ++it) entries.emplace_back(it.row(), it.col(), it.value());
+  const double k = 0.2 * A.diagonal().mean();
+  std::vector<int> clique_nodes;
+  for (int clique = 0; clique < 3; ++clique) {
+    std::vector<int> nodes;
+    for (int m = 0; m < 5; ++m) nodes.push_back(lattice_index(res, 2 + 2 * m, 4 + 4 * clique, 6 + 2 * (m % 2)));
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      for (std::size_t j = 0; j < i; ++j)
+        for (int d = 0; d < 3; ++d) {
+          const int ra = row[3 * nodes[i] + d], rb = row[3 * nodes[j] + d];
+          ASSERT_GE(ra, 0);
+          ASSERT_GE(rb, 0);
+          entries.emplace_back(ra, ra, k);
+          entries.emplace_back(rb, rb, k);
+          entries.emplace_back(std::max(ra, rb), std::min(ra, rb), -k);
+        }
+    clique_nodes.insert(clique_nodes.end(), nodes.begin(), nodes.end());
+  }
+  SparseLower coupled(A.rows(), A.cols());
+  coupled.setFromTriplets(entries.begin(), entries.end());
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> n;
+  Eigen::VectorXd x(A.rows()), y(A.rows());
+  for (Eigen::Index i = 0; i < x.size(); ++i) x[i] = n(rng), y[i] = n(rng);
+  const int threads = omp_get_max_threads();
+  Eigen::VectorXd Mx[2], My[2];
+  for (int t : {1, 2}) {
+    omp_set_num_threads(t);
+    MultigridPreconditioner M(mesh, row);
+    M.set_parallel_nodes(1);
+    ASSERT_TRUE(M.compute(coupled));
+    const std::vector<int>& colour = M.colours(0);
+    EXPECT_EQ(*std::max_element(colour.begin(), colour.end()) + 1, 12) << "8 parities and 4 small colours";
+    int outside = 0;
+    for (int v : clique_nodes) outside += colour[static_cast<std::size_t>(v)] >= 8;
+    EXPECT_EQ(outside, 12) << "4 nodes of each clique";
+    M.apply(x, Mx[t - 1]);
+    M.apply(y, My[t - 1]);
+  }
+  omp_set_num_threads(threads);
+  EXPECT_EQ(std::memcmp(Mx[0].data(), Mx[1].data(), sizeof(double) * Mx[0].size()), 0) << "V-cycle, 1 and 2 threads";
+  EXPECT_NEAR(y.dot(Mx[1]), x.dot(My[1]), 1e-12 * Mx[1].norm() * y.norm()) << "symmetric";
+  EXPECT_GT(x.dot(Mx[1]), 0.0);
+  MultigridPreconditioner M(mesh, row), plain(mesh, row);
+  M.set_parallel_nodes(1);
+  ASSERT_TRUE(M.compute(coupled));
+  ASSERT_TRUE(plain.compute(A));
+  Eigen::VectorXd solution;
+  const int with = iterations_with(coupled, M, x, solution), without = iterations_with(A, plain, x, solution);
+  std::cout << "CG iterations: " << with << " with the cliques, " << without << " without\n";
+  EXPECT_LE(with, without + 3);
+}
+
 // Every coarse level's matrix is Pᵀ A P of the level above it on the coarse level's free DOFs (and zero on
 // the others: those with a zero diagonal, as many as the level has DOFs that are not free), by the serial and
 // the parallel product alike.

@@ -19,7 +19,7 @@
 // when A is. Colours come from the matrix, never from the thread count: lattice levels the parity of the
 // lattice coordinates (8 colours), except a node coupled to a lower node of its own parity (contact couples
 // nodes across the lattice), which takes a colour from 8 on greedily; aggregation levels a greedy colouring in
-// node order. The nodes of one colour, the rows of A x, of the restriction Pᵀ r
+// node order. The nodes of one colour (a run of colours of few nodes: one thread, in turn), the rows of A x, of the restriction Pᵀ r
 // and of the prolongation P e run in parallel (OpenMP; levels of at least set_parallel_nodes() nodes, smaller
 // ones on one thread with a lexicographic sweep), each row's sum in a fixed order: results are bit-identical
 // for any thread count.

@@ -79,6 +79,10 @@ struct Transfer {
   }
 };
 
+/// A colour of fewer nodes than this is relaxed by one thread, together with the small colours next to it
+/// (Level::colour_phase): a barrier costs more than sharing so few nodes saves.
+constexpr int kColourInParallel = 256;
+
 struct Level {
   int nodes = 0;
   std::vector<std::uint8_t> free;       ///< 3 per node
@@ -105,6 +109,13 @@ struct Level {
   bool lexicographic = false;
   std::vector<int> colour;              ///< per node
   std::vector<int> colour_start, by_colour;  ///< the nodes of each colour, ascending
+  /// The sweep's phases, colour_phase[p] .. colour_phase[p + 1] − 1 the colours of phase p: a colour of at
+  /// least kColourInParallel nodes is a phase of its own, its nodes shared among the threads; consecutive
+  /// smaller ones (a contact pair's few nodes, each clique of them in colours of their own) are one phase that
+  /// one thread relaxes colour after colour. Each phase ends at a barrier: one for the run of small colours
+  /// instead of one for each. The same updates in the same order either way (a colour's nodes are not coupled).
+  std::vector<int> colour_phase;
+  std::vector<std::uint8_t> phase_in_turn;  ///< per phase: 1 for a run of small colours (one thread)
   std::vector<int> row_start, row_end;   ///< per node, its blocks' range; rows lie in sweep order (by colour,
                                          ///< or by node on a lexicographic level) so that a sweep streams them
   std::vector<int> row_slot, row_node, before;
@@ -207,9 +218,9 @@ struct MultigridPreconditioner::Impl {
   /// level 1 in parallel took 0.90 of the wall time without contact and the same with it (docs/results.md).
   int parallel_nodes = 4096;
   [[nodiscard]] bool parallel(const Level& L) const { return L.nodes >= parallel_nodes; }
-  /// The sweeps: also at least parallel_nodes / 8 nodes per colour on average (a barrier after each colour).
+  /// The sweeps: also at least parallel_nodes / 8 nodes per phase on average (a barrier after each phase).
   [[nodiscard]] bool parallel_sweep(const Level& L) const {
-    return parallel(L) && L.nodes >= parallel_nodes / 8 * (static_cast<int>(L.colour_start.size()) - 1);
+    return parallel(L) && L.nodes >= parallel_nodes / 8 * (static_cast<int>(L.colour_phase.size()) - 1);
   }
 };
 

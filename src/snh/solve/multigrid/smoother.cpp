@@ -140,20 +140,36 @@ void backward_sweep_in_order(Level& L) {
   for (int i = L.nodes - 1; i >= 0; --i) relax_node(L, i, true);
 }
 
-/// A forward multi-colour nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0, colour by colour.
+/// A forward multi-colour nodal-block Gauss–Seidel sweep for L.A x = L.b from x = 0, colour by colour: phase
+/// by phase (Level::colour_phase), a large colour's nodes shared among the threads, a run of small colours
+/// relaxed by one of them in colour order.
 void forward_sweep(Level& L, bool parallel) {
   L.x.setZero();
-  const int colours = static_cast<int>(L.colour_start.size()) - 1;
+  const int phases = static_cast<int>(L.phase_in_turn.size());
 #pragma omp parallel if (parallel)
-  for (int c = 0; c < colours; ++c) relax_colour(L, c, false);
+  for (int p = 0; p < phases; ++p) {
+    if (!L.phase_in_turn[p]) {
+      relax_colour(L, L.colour_phase[p], false);
+      continue;
+    }
+#pragma omp single
+    for (int q = L.colour_start[L.colour_phase[p]]; q < L.colour_start[L.colour_phase[p + 1]]; ++q) relax_node(L, L.by_colour[q], false);
+  }
 }
 
 /// The backward sweep on L.x: the colours in reverse order (the forward sweep's adjoint, so that the
 /// V-cycle is symmetric).
 void backward_sweep(Level& L, bool parallel) {
-  const int colours = static_cast<int>(L.colour_start.size()) - 1;
+  const int phases = static_cast<int>(L.phase_in_turn.size());
 #pragma omp parallel if (parallel)
-  for (int c = colours - 1; c >= 0; --c) relax_colour(L, c, true);
+  for (int p = phases - 1; p >= 0; --p) {
+    if (!L.phase_in_turn[p]) {
+      relax_colour(L, L.colour_phase[p], true);
+      continue;
+    }
+#pragma omp single
+    for (int q = L.colour_start[L.colour_phase[p + 1]] - 1; q >= L.colour_start[L.colour_phase[p]]; --q) relax_node(L, L.by_colour[q], true);
+  }
 }
 
 /// L.r = (L.b − Â L.x) / σ right after forward_sweep() (or forward_sweep_in_order()), row by row in parallel:
