@@ -71,15 +71,9 @@ void sweep_rows(Level& L, bool lexicographic) {
   for (int i = 0; i < n; ++i) ++L.colour_start[L.colour[i] + 1];
   for (int c = 0; c < colours; ++c) L.colour_start[c + 1] += L.colour_start[c];
   L.colour_phase.assign(1, 0);
-  L.phase_in_turn.clear();
   for (int c = 0; c < colours; ++c) {
-    const bool small = L.colour_start[c + 1] - L.colour_start[c] < kColourInParallel;
-    if (small && !L.phase_in_turn.empty() && L.phase_in_turn.back()) {
-      L.colour_phase.back() = c + 1;  // the run of small colours goes on
-      continue;
-    }
-    L.colour_phase.push_back(c + 1);
-    L.phase_in_turn.push_back(small ? 1 : 0);
+    if (c > 0 && L.small_colour(c) && L.small_colour(c - 1)) L.colour_phase.back() = c + 1;  // the run of small colours goes on
+    else L.colour_phase.push_back(c + 1);
   }
   L.by_colour.resize(n);
   {

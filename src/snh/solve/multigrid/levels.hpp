@@ -115,7 +115,8 @@ struct Level {
   /// one thread relaxes colour after colour. Each phase ends at a barrier: one for the run of small colours
   /// instead of one for each. The same updates in the same order either way (a colour's nodes are not coupled).
   std::vector<int> colour_phase;
-  std::vector<std::uint8_t> phase_in_turn;  ///< per phase: 1 for a run of small colours (one thread)
+  /// Whether colour c has fewer than kColourInParallel nodes; a phase whose first colour is small is a run of them.
+  [[nodiscard]] bool small_colour(int c) const { return colour_start[c + 1] - colour_start[c] < kColourInParallel; }
   std::vector<int> row_start, row_end;   ///< per node, its blocks' range; rows lie in sweep order (by colour,
                                          ///< or by node on a lexicographic level) so that a sweep streams them
   std::vector<int> row_slot, row_node, before;

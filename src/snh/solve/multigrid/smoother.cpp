@@ -145,10 +145,10 @@ void backward_sweep_in_order(Level& L) {
 /// relaxed by one of them in colour order.
 void forward_sweep(Level& L, bool parallel) {
   L.x.setZero();
-  const int phases = static_cast<int>(L.phase_in_turn.size());
+  const int phases = static_cast<int>(L.colour_phase.size()) - 1;
 #pragma omp parallel if (parallel)
   for (int p = 0; p < phases; ++p) {
-    if (!L.phase_in_turn[p]) {
+    if (!L.small_colour(L.colour_phase[p])) {
       relax_colour(L, L.colour_phase[p], false);
       continue;
     }
@@ -160,10 +160,10 @@ void forward_sweep(Level& L, bool parallel) {
 /// The backward sweep on L.x: the colours in reverse order (the forward sweep's adjoint, so that the
 /// V-cycle is symmetric).
 void backward_sweep(Level& L, bool parallel) {
-  const int phases = static_cast<int>(L.phase_in_turn.size());
+  const int phases = static_cast<int>(L.colour_phase.size()) - 1;
 #pragma omp parallel if (parallel)
   for (int p = phases - 1; p >= 0; --p) {
-    if (!L.phase_in_turn[p]) {
+    if (!L.small_colour(L.colour_phase[p])) {
       relax_colour(L, L.colour_phase[p], true);
       continue;
     }
