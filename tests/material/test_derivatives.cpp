@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include "energies.hpp"
+#include <Eigen/Eigenvalues>
+
+#include "snh/material/eigensystem.hpp"
 #include "snh/math/finite_difference.hpp"
 
 namespace snh {
@@ -108,6 +111,49 @@ TYPED_TEST(Derivatives, HessianSlicesAreTheWeightedHessian) {
                     << TypeParam::name << " slice (" << a << ", " << k << ") at (" << j << ", " << l << "), F=\n" << F;
       }
     }
+  } else {
+    GTEST_SKIP() << "an energy of I1: its Hessian comes from the eigensystem";
+  }
+}
+
+/// The projected Hessian as the element loop makes it: the analytic slices plus the change the projection makes
+/// to the eigenvalues it alters (add_projection_change), against the 9x9 projected Hessian, and the number of
+/// eigenvalues changed against a brute-force eigendecomposition of the 9x9 analytic Hessian.
+TYPED_TEST(Derivatives, ProjectedSlicesAreTheProjectedHessian) {
+  if constexpr (!test::uses_trace_of_S<TypeParam>() && requires(const TypeParam& m, const Mat3& F) { m.weighted_hessian_slices(F, 1.0); }) {
+    std::mt19937_64 rng(404);
+    int changed_total = 0, unchanged_points = 0;
+    for (const Lame& p : test::parameter_sets()) {
+      const TypeParam m(p);
+      for (int i = 0; i < 60; ++i) {
+        const Mat3 F = i % 5 == 4 ? Mat3(Mat3::Identity() * (0.98 + 0.001 * i)) : test::sample_F(rng, 0.3, 1.7, i % 4);
+        if (!m.defined(F)) continue;
+        const double w = 0.37 + 0.01 * i;
+        const Svd3 svd = rotation_variant_svd(F);
+        const Eigen::SelfAdjointEigenSolver<Mat9> brute(m.hessian(F));
+        int negative = 0;
+        for (int e = 0; e < 9; ++e) negative += brute.eigenvalues()[e] < -1e-9 * brute.eigenvalues().cwiseAbs().maxCoeff();
+        for (const PsdProjection proj : {PsdProjection::clamp, PsdProjection::abs}) {
+          std::array<Mat3, 6> slices = m.weighted_hessian_slices(F, w);
+          const int changed = add_projection_change(svd, m.sigma_eigenvalues(svd.sigma), proj, w, slices);
+          EXPECT_EQ(changed, negative) << TypeParam::name << " " << to_string(proj) << ", F=\n" << F;
+          changed_total += changed;
+          unchanged_points += changed == 0;
+          const Mat9 H = projected_hessian(m, F, proj) * w;
+          const double scale = H.cwiseAbs().maxCoeff();
+          for (int a = 0; a < 3; ++a)
+            for (int k = 0; k <= a; ++k)
+              for (int j = 0; j < 3; ++j)
+                for (int l = 0; l < 3; ++l)
+                  ASSERT_NEAR(slices[a * (a + 1) / 2 + k](j, l), H(3 * j + a, 3 * l + k), 1e-11 * scale)
+                      << TypeParam::name << " " << to_string(proj) << " slice (" << a << ", " << k << ") at (" << j << ", " << l
+                      << "), F=\n" << F;
+        }
+      }
+    }
+    // Both kinds of point were met: some the projection changes, some it leaves alone.
+    EXPECT_GT(changed_total, 0) << TypeParam::name;
+    EXPECT_GT(unchanged_points, 0) << TypeParam::name;
   } else {
     GTEST_SKIP() << "an energy of I1: its Hessian comes from the eigensystem";
   }

@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "snh/fem/buckets.hpp"
+#include "snh/material/eigensystem.hpp"
 #include "snh/math/parallel.hpp"
 
 namespace snh {
@@ -82,7 +83,7 @@ inline Lanes8 load8(const double* p) {
 /// K_ik is Σ_{q,l} (G_q h_q,ik)_{·,l} G_q(b, l): eight sums in registers over the 3Q columns of the G_q h_q,ik,
 /// each made once and used for all eight, and K_ik stored once (not loaded, added and stored per point).
 template <int Q>
-void add_hex_stiffness(const ElementRest<8, Q>& r, const std::array<std::array<Mat3, 6>, Q>& h, double* K) {
+void add_hex_stiffness(const ElementRest<8, Q>& r, const std::array<HessianSlices, Q>& h, double* K) {
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k <= i; ++k) {
       const int pair = packed_pair(i, k);
@@ -142,10 +143,12 @@ double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix
   if (K) std::fill(K, K + packed_size<N>, 0.0);
   // The analytic Hessian of an energy of the invariants comes as its six slices straight from its formula,
   // the same values as the 9x9 matrix scaled by w (tested), without building it (cheaper: bench_assembly,
-  // docs/results.md). A muscle cell's Hessian is the whole 9x9 matrix, pulled back through its active strain.
+  // docs/results.md). A projected one is those slices plus the change of the eigenvalues the projection
+  // alters (add_projection_change: none where the point's Hessian is positive semi-definite), again without
+  // the 9x9 matrix. A muscle cell's Hessian is the whole 9x9 matrix, pulled back through its active strain.
   constexpr bool sliced = has_hessian_slices<M>;
-  const bool slices = sliced && K && p == PsdProjection::none && !fibre;
-  std::array<std::array<Mat3, 6>, Q> h;  // the points' slices (sliced Hessians)
+  const bool slices = sliced && K && !fibre;
+  std::array<HessianSlices, Q> h;  // the points' slices (sliced Hessians)
   for (int q = 0; q < Q; ++q) {
     const Eigen::Matrix<double, N, 3>& G = r.G[q];
     const double w = r.weight[q];
@@ -157,7 +160,13 @@ double element_terms(const M& m, const ElementRest<N, Q>& r, const Eigen::Matrix
     if (!K) continue;
     if constexpr (sliced) {
       if (slices) {
-        h[static_cast<std::size_t>(q)] = m.weighted_hessian_slices(F, w);
+        HessianSlices& hq = h[static_cast<std::size_t>(q)];
+        hq = m.weighted_hessian_slices(F, w);
+        if (p != PsdProjection::none) {
+          const Svd3 svd = rotation_variant_svd(F);
+          if (m.defined_sigma(svd.sigma)) (void)add_projection_change(svd, m.sigma_eigenvalues(svd.sigma), p, w, hq);
+          else for (Mat3& slice : hq) slice.setZero();
+        }
         continue;
       }
     }

@@ -76,4 +76,49 @@ Mat9 projected_from_sigma(const Svd3& svd, const SigmaEigenvalues& s, PsdProject
   return H;
 }
 
+namespace {
+
+/// slices += c vec(M) vec(M)ᵀ: slice (i, k) gains c (row i of M)ᵀ (row k of M).
+void add_outer(const Mat3& M, double c, HessianSlices& slices) {
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 ci = c * M.row(i).transpose();
+    for (int k = 0; k <= i; ++k) slices[static_cast<std::size_t>(i * (i + 1) / 2 + k)].noalias() += ci * M.row(k);
+  }
+}
+
+}  // namespace
+
+int add_projection_change(const Svd3& svd, const SigmaEigenvalues& s, PsdProjection p, double w, HessianSlices& slices) {
+  if (p == PsdProjection::none) return 0;
+  const Mat3& U = svd.U;
+  const Mat3& V = svd.V;
+  int changed = 0;
+  const double r = std::sqrt(0.5);
+  for (int k = 0; k < 3; ++k) {
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    const double dt = project_eigenvalue(s.twist[k], p) - s.twist[k], df = project_eigenvalue(s.flip[k], p) - s.flip[k];
+    if (dt == 0.0 && df == 0.0) continue;
+    const Mat3 ba = U.col(b) * V.col(a).transpose(), ab = U.col(a) * V.col(b).transpose();
+    if (dt != 0.0) {
+      add_outer(r * (ba - ab), w * dt, slices);
+      ++changed;
+    }
+    if (df != 0.0) {
+      add_outer(r * (ba + ab), w * df, slices);
+      ++changed;
+    }
+  }
+  const Mat3& A = s.A;
+  if (A(0, 0) > 0.0 && A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1) > 0.0 && A.determinant() > 0.0) return changed;
+  const SymEigen3 e = symmetric_eigen3(A);
+  for (int k = 0; k < 3; ++k) {
+    const double d = project_eigenvalue(e.values[k], p) - e.values[k];
+    if (d == 0.0) continue;
+    // The scaling eigenvector vec(U diag(q) Vᵀ), q the eigenvector of A.
+    add_outer(U * e.vectors.col(k).asDiagonal() * V.transpose(), w * d, slices);
+    ++changed;
+  }
+  return changed;
+}
+
 }  // namespace snh

@@ -42,4 +42,15 @@ inline constexpr std::array<std::string_view, 9> kEigenLabels = {
 /// (Sylvester's criterion), else Q diag(f(λ)) Qᵀ from symmetric_eigen3(A).
 [[nodiscard]] Mat9 projected_from_sigma(const Svd3& svd, const SigmaEigenvalues& s, PsdProjection p);
 
+/// ∂P/∂F kept as its six 3x3 slices: slices[i(i+1)/2 + k](j, l) = H(3j+i, 3l+k) for i ≥ k (vec is column-major,
+/// vec(F)_{3j+i} = F(i, j)), the form in which an invariant energy gives its Hessian (weighted_hessian_slices).
+using HessianSlices = std::array<Mat3, 6>;
+
+/// Adds w (f(H) − H) to the slices of w H, H the Hessian whose eigensystem the SVD of F and the σ-frame
+/// eigenvalues s give (f the projection): w (f(λ) − λ) q qᵀ for each eigenpair (λ, q) that f changes, that is
+/// each negative eigenvalue; a scaling block that is positive definite (Sylvester's criterion) has none and is
+/// not diagonalised. The projected Hessian is then the analytic one plus a correction of rank at most 9
+/// (usually none), without building the 9x9 matrix. Returns how many eigenvalues were changed.
+int add_projection_change(const Svd3& svd, const SigmaEigenvalues& s, PsdProjection p, double w, HessianSlices& slices);
+
 }  // namespace snh
