@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "snh/fem/problem.hpp"
 #include "snh/solve/linear_solver.hpp"
@@ -242,6 +244,62 @@ TEST(Newton, AFullStepWhoseSlopeStaysSteepIsDoubledWhereProjectionOverestimatesT
   const NewtonReport q = newton_solve(toy.problem, y, *solver, options(200, 1e-10));
   ASSERT_TRUE(q.converged);
   EXPECT_EQ(q.line_search_expansions, 0);
+}
+
+/// A direct solver that records, per factorization, whether it was a try of a matrix that may be indefinite
+/// (the true Hessian: 'T' where it factorized, 't' where it did not) or the projected Hessian's ('P'). A try
+/// followed by 'P' failed: not factorized, or its direction was no descent.
+class Tries final : public LinearSolver {
+ public:
+  Tries() : inner_(make_linear_solver({.name = "ldlt"})) {}
+  double factorize(const SparseLower& A) override {
+    calls += 'P';
+    return inner_->factorize(A);
+  }
+  bool try_factorize(const SparseLower& A) override {
+    const bool ok = inner_->try_factorize(A);
+    calls += ok ? 'T' : 't';
+    return ok;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b, double enough) override { return inner_->solve(b, enough); }
+  std::string_view name() const override { return "tries"; }
+  std::string calls;
+
+ private:
+  std::unique_ptr<LinearSolver> inner_;
+};
+
+TEST(Newton, AfterTheTrueHessianFailsTheNextIterationGoesStraightToTheProjectedOne) {
+  // The clamped term's true Hessian is indefinite for |x| < 0.058: from 0.001 it fails, and each failed try
+  // is followed by its projected Hessian ("tP", or "TP" where it factorized but gave no descent). The
+  // iteration after a failure does not try again ("P" alone), the one after that does; near the minimum the
+  // true Hessian serves ("T") to the end.
+  Clamped term(0.01, 1.0);
+  Problem problem{DofMap(std::vector<std::uint8_t>(3, 0))};
+  problem.add(term);
+  Eigen::VectorXd x = Eigen::Vector3d(0.001, -0.002, 0.003);
+  Tries solver;
+  const NewtonReport r = newton_solve(problem, x, solver, options(40, 1e-12));
+  ASSERT_TRUE(r.converged) << r.failure;
+  // One iteration per group: "T", "tP" or "TP" (a failed try, then the projected Hessian) or "P" (no try).
+  std::vector<std::string> iterations;
+  for (std::size_t k = 0; k < solver.calls.size();) {
+    const std::size_t n = solver.calls[k] != 'P' && k + 1 < solver.calls.size() && solver.calls[k + 1] == 'P' ? 2 : 1;
+    iterations.push_back(solver.calls.substr(k, n));
+    k += n;
+  }
+  ASSERT_EQ(static_cast<int>(iterations.size()), r.iterations) << solver.calls;
+  const auto failed = [](const std::string& it) { return it.size() == 2; };
+  EXPECT_TRUE(failed(iterations.front())) << solver.calls;
+  EXPECT_EQ(iterations.back(), "T") << solver.calls;
+  int skipped = 0;
+  for (std::size_t k = 0; k < iterations.size(); ++k) {
+    ASSERT_TRUE(iterations[k] == "T" || failed(iterations[k]) || iterations[k] == "P") << solver.calls;
+    if (k > 0) EXPECT_EQ(iterations[k] == "P", failed(iterations[k - 1])) << "iteration " << k + 1 << ": " << solver.calls;
+    skipped += iterations[k] == "P";
+  }
+  EXPECT_GT(skipped, 0) << solver.calls;
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(std::abs(x[i]), 0.1, 1e-9) << i;
 }
 
 /// A direct solver that says it may be inexact, and records the residual each solve was allowed.

@@ -44,11 +44,11 @@ constexpr double kChordSteps = 30.0;
 /// a descent direction, or when an inexact solver (mg, amg) met negative curvature late enough to return the
 /// iterate before it (truncated Newton, LinearSolver::solve); otherwise the projected Hessian. CG stops at
 /// a residual of `enough`, or of `projected_enough` on a projected Hessian that replaces a true one which
-/// failed (another model than the one whose predictions set `enough`).
-void newton_direction(Problem& problem, const Eigen::VectorXd& x, const Eigen::VectorXd& g, HessianMatrix& H,
-                      LinearSolver& solver, const NewtonOptions& options, double enough, double projected_enough,
-                      NewtonReport& report, Eigen::VectorXd& d) {
-  const bool try_true = options.try_true_hessian;
+/// failed (another model than the one whose predictions set `enough`). `try_true` false goes straight to the
+/// projected Hessian. Returns whether the true Hessian was tried and failed.
+bool newton_direction(Problem& problem, const Eigen::VectorXd& x, const Eigen::VectorXd& g, HessianMatrix& H,
+                      LinearSolver& solver, const NewtonOptions& options, bool try_true, double enough,
+                      double projected_enough, NewtonReport& report, Eigen::VectorXd& d) {
   auto t = Clock::now();
   problem.hessian(x, H, try_true ? PsdProjection::none : options.projection);
   report.assembly_seconds += seconds_since(t);
@@ -76,6 +76,7 @@ void newton_direction(Problem& problem, const Eigen::VectorXd& x, const Eigen::V
     report.linear_iterations += solver.last_iterations();
   }
   report.solve_seconds += seconds_since(t);
+  return try_true && !have_step;
 }
 
 /// A full step the line search accepted is doubled while the energy's slope along d at the accepted point is
@@ -190,6 +191,11 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
   double r0 = 0.0;
   // The last step taken was within kChordSteps of the step rule, and was not itself a chord step.
   bool chord_next = false;
+  // The true Hessian failed at the last iteration: this one goes straight to the projected Hessian (and the
+  // next tries the true one again). Where it fails (cells turned inside out, contact frames), it mostly fails
+  // again one step later, and a failed try costs an assembly, a preconditioner set-up and CG iterations up
+  // to the negative curvature before the projected Hessian's own (docs/solvers.md, "Projected Newton").
+  bool true_failed = false;
   // Eisenstat and Walker's first choice of forcing term: how far the last full step's linear model missed the
   // residual it reached, |‖g_k‖ − ‖g_{k−1} + H d_{k−1}‖| / ‖g_{k−1}‖ (the forcing's largest value where there is
   // no such step).
@@ -241,7 +247,9 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
       if (have_step) ++report.chord_steps;
     }
     const bool chord = have_step;
-    if (!have_step) newton_direction(problem, x, g, H, solver, options, enough, std::max(linear_enough, rule_eta * r), report, d);
+    if (!have_step)
+      true_failed = newton_direction(problem, x, g, H, solver, options, options.try_true_hessian && !true_failed, enough,
+                                     std::max(linear_enough, rule_eta * r), report, d);
     // Complete: solved afresh from this iterate's Hessian, neither truncated at negative curvature nor
     // replaced by steepest descent. Only such a direction's length says how far the answer is.
     bool complete = !chord && !solver.last_truncated();

@@ -6,7 +6,8 @@
 // Each iteration uses the true Hessian when the linear solver finds it positive definite (so Newton
 // converges quadratically near a stable equilibrium, where element-wise projection would make it
 // linear), and otherwise the Hessian assembled from PSD-projected element Hessians, which always
-// gives a descent direction. It steps along d = −H⁻¹g and halves the step
+// gives a descent direction; the iteration after one whose true Hessian failed goes straight to the
+// projected Hessian. It steps along d = −H⁻¹g and halves the step
 // until E(x + αd) ≤ E(x) + 1e-4 α gᵀd. A state where the energy is undefined (+∞) counts as a failed
 // trial, so the step gets shorter; no NaN enters x. The line search starts at α₀ = min(1, the problem's
 // step bound) (a term's max_step: continuous collision detection for contact), and every accepted
