@@ -169,7 +169,7 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
   NewtonReport report;
   const Eigen::VectorXd x0 = options.relative_step_tolerance > 0.0 ? x : Eigen::VectorXd();
   Eigen::VectorXd g;
-  HessianMatrix H;
+  HessianMatrix& H = problem.newton_matrix();
   // An iterative linear solve may stop at a residual that cannot decide convergence: a tenth of the tolerance.
   const double linear_enough = 0.1 * options.tolerance;
   // The energy and gradient come first (at the start, then from each accepted line-search trial); the
