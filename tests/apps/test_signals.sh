@@ -6,8 +6,9 @@
 #   2. SIGINT and SIGTERM both arriving before the run can look (sent while it is stopped with SIGSTOP,
 #      as while it is inside a factorization): exit 143 (or 130, by the order of delivery) at once, without the clean stop (stats.json still
 #      says "running"); every frame on disk is whole, and --resume finishes the run.
-# Both runs also show the settings the program makes for itself when it starts (OMP_WAIT_POLICY, huge pages
-# through GLIBC_TUNABLES), and that a user's own GLIBC_TUNABLES is kept.
+# Both runs also show the settings the program makes for itself when it starts (OMP_WAIT_POLICY with
+# GOMP_SPINCOUNT, huge pages through GLIBC_TUNABLES), and that a user's own GLIBC_TUNABLES and GOMP_SPINCOUNT
+# are kept.
 # Usage: test_signals.sh SNH
 set -u
 SNH="$1"
@@ -29,12 +30,12 @@ wait_exists() {
 }
 
 # 1. Two SIGINTs 50 ms apart, once the run has started its steps.
-env -u OMP_WAIT_POLICY -u GLIBC_TUNABLES "$SNH" stretch --element hex --res 20 --out "$work/two" > "$work/two.log" 2>&1 &
+env -u OMP_WAIT_POLICY -u GLIBC_TUNABLES -u GOMP_SPINCOUNT "$SNH" stretch --element hex --res 20 --out "$work/two" > "$work/two.log" 2>&1 &
 pid=$!
 if wait_for "$work/two.log" "^mesh: " 60; then
   # The settings the program made for itself at its start (apps/common/process_env.hpp), left unset here.
-  settings=$(tr '\0' '\n' < "/proc/$pid/environ" 2> /dev/null | grep -E '^(OMP_WAIT_POLICY|GLIBC_TUNABLES)=' | sort | tr '\n' ' ')
-  [ "$settings" = "GLIBC_TUNABLES=glibc.malloc.hugetlb=1 OMP_WAIT_POLICY=PASSIVE " ] && ok || bad "the run's own settings: '$settings'"
+  settings=$(tr '\0' '\n' < "/proc/$pid/environ" 2> /dev/null | grep -E '^(OMP_WAIT_POLICY|GLIBC_TUNABLES|GOMP_SPINCOUNT)=' | sort | tr '\n' ' ')
+  [ "$settings" = "GLIBC_TUNABLES=glibc.malloc.hugetlb=1 GOMP_SPINCOUNT=10000 OMP_WAIT_POLICY=PASSIVE " ] && ok || bad "the run's own settings: '$settings'"
   kill -INT "$pid"
   sleep 0.05
   kill -INT "$pid" 2> /dev/null  # (gone already if the first stop came that soon)
@@ -52,12 +53,12 @@ pid=""
 
 # 2. SIGINT and SIGTERM delivered together, before the run looks at the stop flag.
 args=(stretch --element hex --res 16 --steps 4 --out "$work/stuck")
-GLIBC_TUNABLES=glibc.malloc.hugetlb=0 "$SNH" "${args[@]}" > "$work/stuck.log" 2>&1 &
+env -u OMP_WAIT_POLICY GLIBC_TUNABLES=glibc.malloc.hugetlb=0 GOMP_SPINCOUNT=7 "$SNH" "${args[@]}" > "$work/stuck.log" 2>&1 &
 pid=$!
 if wait_for "$work/stuck.log" "^step   1/" 60 && wait_exists "$work/stuck/checkpoint.bin" 60; then
-  # A user's own choice of huge pages is kept as it is.
-  settings=$(tr '\0' '\n' < "/proc/$pid/environ" 2> /dev/null | grep -E '^GLIBC_TUNABLES=')
-  [ "$settings" = "GLIBC_TUNABLES=glibc.malloc.hugetlb=0" ] && ok || bad "a user's GLIBC_TUNABLES became '$settings'"
+  # A user's own choices of huge pages and of the threads' spin are kept as they are.
+  settings=$(tr '\0' '\n' < "/proc/$pid/environ" 2> /dev/null | grep -E '^(GLIBC_TUNABLES|GOMP_SPINCOUNT)=' | sort | tr '\n' ' ')
+  [ "$settings" = "GLIBC_TUNABLES=glibc.malloc.hugetlb=0 GOMP_SPINCOUNT=7 " ] && ok || bad "a user's GLIBC_TUNABLES and GOMP_SPINCOUNT became '$settings'"
   kill -STOP "$pid"
   kill -INT "$pid"
   kill -TERM "$pid"
