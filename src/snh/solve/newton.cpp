@@ -191,10 +191,8 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
   double r0 = 0.0;
   // The last step taken was within kChordSteps of the step rule, and was not itself a chord step.
   bool chord_next = false;
-  // The true Hessian failed at the last iteration: this one goes straight to the projected Hessian (and the
-  // next tries the true one again). Where it fails (cells turned inside out, contact frames), it mostly fails
-  // again one step later, and a failed try costs an assembly, a preconditioner set-up and CG iterations up
-  // to the negative curvature before the projected Hessian's own (docs/solvers.md, "Projected Newton").
+  // The true Hessian failed at the last iteration: with skip_true_after_failure this one goes straight to the
+  // projected Hessian (NewtonOptions), and the next tries the true one again.
   bool true_failed = false;
   // Eisenstat and Walker's first choice of forcing term: how far the last full step's linear model missed the
   // residual it reached, |‖g_k‖ − ‖g_{k−1} + H d_{k−1}‖| / ‖g_{k−1}‖ (the forcing's largest value where there is
@@ -248,7 +246,8 @@ NewtonReport newton_iterations(Problem& problem, Eigen::VectorXd& x, LinearSolve
     }
     const bool chord = have_step;
     if (!have_step)
-      true_failed = newton_direction(problem, x, g, H, solver, options, options.try_true_hessian && !true_failed, enough,
+      true_failed = newton_direction(problem, x, g, H, solver, options,
+                                     options.try_true_hessian && !(true_failed && options.skip_true_after_failure), enough,
                                      std::max(linear_enough, rule_eta * r), report, d);
     // Complete: solved afresh from this iterate's Hessian, neither truncated at negative curvature nor
     // replaced by steepest descent. Only such a direction's length says how far the answer is.
