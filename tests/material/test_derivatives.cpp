@@ -134,7 +134,7 @@ TYPED_TEST(Derivatives, ProjectedSlicesAreTheProjectedHessian) {
         int negative = 0;
         for (int e = 0; e < 9; ++e) negative += brute.eigenvalues()[e] < -1e-9 * brute.eigenvalues().cwiseAbs().maxCoeff();
         for (const PsdProjection proj : {PsdProjection::clamp, PsdProjection::abs}) {
-          std::array<Mat3, 6> slices = m.weighted_hessian_slices(F, w);
+          HessianSlices slices = m.weighted_hessian_slices(F, w);
           const int changed = add_projection_change(svd, m.sigma_eigenvalues(svd.sigma), proj, w, slices);
           EXPECT_EQ(changed, negative) << TypeParam::name << " " << to_string(proj) << ", F=\n" << F;
           changed_total += changed;

@@ -515,8 +515,9 @@ TEST_P(TruncatedNewton, UnfoldsAnInvertedBoxToTheDirectSolversAnswer) {
   EXPECT_LT((x[2] - x[0]).cwiseAbs().maxCoeff(), 1e-6);
   EXPECT_EQ(report[0].truncated_steps, 0) << "a direct solver never truncates";
   EXPECT_GT(report[1].truncated_steps, 0) << name << " met no negative curvature: the box is not inverted enough to test";
-  std::cout << name << " (default: " << report[2].iterations << " iterations, " << report[2].truncated_steps << " truncated): " << report[1].iterations << " Newton iterations (" << report[1].truncated_steps << " truncated, "
-            << report[1].true_hessian_steps << " on the true Hessian); cholmod " << report[0].iterations << "\n";
+  std::cout << name << ": " << report[1].iterations << " Newton iterations (" << report[1].truncated_steps << " truncated, "
+            << report[1].true_hessian_steps << " on the true Hessian); with the default " << report[2].iterations << " ("
+            << report[2].truncated_steps << " truncated); cholmod " << report[0].iterations << "\n";
   EXPECT_NEAR(report[1].energy, report[0].energy, 1e-10);
   EXPECT_LT((x[1] - x[0]).cwiseAbs().maxCoeff(), 1e-6);
 }

@@ -6,22 +6,41 @@ namespace snh {
 
 namespace {
 
-/// The SVD frame's basis of 9-vectors: columns 0..2 twist k = (u_b v_aᵀ − u_a v_bᵀ)/√2, 3..5 flip k
-/// (the same with +), 6..8 vec(u_k v_kᵀ), with (a, b) the two axes other than k (docs/math.md §4).
-Mat9 frame_basis(const Svd3& svd) {
-  const Mat3& U = svd.U;
-  const Mat3& V = svd.V;
+/// Twist k and flip k as 3x3 matrices, (u_b v_aᵀ ∓ u_a v_bᵀ)/√2 with (a, b) the two axes other than k.
+struct TwistFlip {
+  Mat3 twist, flip;
+};
+TwistFlip twist_flip(const Svd3& svd, int k) {
   const double r = std::sqrt(0.5);
+  const int a = (k + 1) % 3, b = (k + 2) % 3;
+  const Mat3 ba = svd.U.col(b) * svd.V.col(a).transpose();
+  const Mat3 ab = svd.U.col(a) * svd.V.col(b).transpose();
+  return {r * (ba - ab), r * (ba + ab)};
+}
+
+/// Whether the symmetric A is positive definite (Sylvester's criterion: its leading minors are positive).
+bool positive_definite(const Mat3& A) {
+  return A(0, 0) > 0.0 && A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1) > 0.0 && A.determinant() > 0.0;
+}
+
+/// The SVD frame's basis of 9-vectors: columns 0..2 twist k, 3..5 flip k, 6..8 vec(u_k v_kᵀ) (docs/math.md §4).
+Mat9 frame_basis(const Svd3& svd) {
   Mat9 basis;
   for (int k = 0; k < 3; ++k) {
-    const int a = (k + 1) % 3, b = (k + 2) % 3;
-    const Mat3 ba = U.col(b) * V.col(a).transpose();
-    const Mat3 ab = U.col(a) * V.col(b).transpose();
-    basis.col(k) = vec(r * (ba - ab));
-    basis.col(3 + k) = vec(r * (ba + ab));
-    basis.col(6 + k) = vec(U.col(k) * V.col(k).transpose());
+    const TwistFlip tf = twist_flip(svd, k);
+    basis.col(k) = vec(tf.twist);
+    basis.col(3 + k) = vec(tf.flip);
+    basis.col(6 + k) = vec(svd.U.col(k) * svd.V.col(k).transpose());
   }
   return basis;
+}
+
+/// slices += c vec(M) vec(M)ᵀ: slice (i, k) gains c (row i of M)ᵀ (row k of M).
+void add_outer(const Mat3& M, double c, HessianSlices& slices) {
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 ci = c * M.row(i).transpose();
+    for (int k = 0; k <= i; ++k) slices[static_cast<std::size_t>(i * (i + 1) / 2 + k)].noalias() += ci * M.row(k);
+  }
 }
 
 }  // namespace
@@ -58,8 +77,7 @@ Mat9 projected_from_sigma(const Svd3& svd, const SigmaEigenvalues& s, PsdProject
   }
   const Mat3& A = s.A;
   Mat3 Ap;
-  const bool positive_definite = A(0, 0) > 0.0 && A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1) > 0.0 && A.determinant() > 0.0;
-  if (p == PsdProjection::none || positive_definite) {
+  if (p == PsdProjection::none || positive_definite(A)) {
     Ap = A;
   } else {
     const SymEigen3 e = symmetric_eigen3(A);
@@ -76,46 +94,29 @@ Mat9 projected_from_sigma(const Svd3& svd, const SigmaEigenvalues& s, PsdProject
   return H;
 }
 
-namespace {
-
-/// slices += c vec(M) vec(M)ᵀ: slice (i, k) gains c (row i of M)ᵀ (row k of M).
-void add_outer(const Mat3& M, double c, HessianSlices& slices) {
-  for (int i = 0; i < 3; ++i) {
-    const Vec3 ci = c * M.row(i).transpose();
-    for (int k = 0; k <= i; ++k) slices[static_cast<std::size_t>(i * (i + 1) / 2 + k)].noalias() += ci * M.row(k);
-  }
-}
-
-}  // namespace
-
 int add_projection_change(const Svd3& svd, const SigmaEigenvalues& s, PsdProjection p, double w, HessianSlices& slices) {
   if (p == PsdProjection::none) return 0;
-  const Mat3& U = svd.U;
-  const Mat3& V = svd.V;
   int changed = 0;
-  const double r = std::sqrt(0.5);
   for (int k = 0; k < 3; ++k) {
-    const int a = (k + 1) % 3, b = (k + 2) % 3;
     const double dt = project_eigenvalue(s.twist[k], p) - s.twist[k], df = project_eigenvalue(s.flip[k], p) - s.flip[k];
     if (dt == 0.0 && df == 0.0) continue;
-    const Mat3 ba = U.col(b) * V.col(a).transpose(), ab = U.col(a) * V.col(b).transpose();
+    const TwistFlip tf = twist_flip(svd, k);
     if (dt != 0.0) {
-      add_outer(r * (ba - ab), w * dt, slices);
+      add_outer(tf.twist, w * dt, slices);
       ++changed;
     }
     if (df != 0.0) {
-      add_outer(r * (ba + ab), w * df, slices);
+      add_outer(tf.flip, w * df, slices);
       ++changed;
     }
   }
-  const Mat3& A = s.A;
-  if (A(0, 0) > 0.0 && A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1) > 0.0 && A.determinant() > 0.0) return changed;
-  const SymEigen3 e = symmetric_eigen3(A);
+  if (positive_definite(s.A)) return changed;
+  const SymEigen3 e = symmetric_eigen3(s.A);
   for (int k = 0; k < 3; ++k) {
     const double d = project_eigenvalue(e.values[k], p) - e.values[k];
     if (d == 0.0) continue;
     // The scaling eigenvector vec(U diag(q) Vᵀ), q the eigenvector of A.
-    add_outer(U * e.vectors.col(k).asDiagonal() * V.transpose(), w * d, slices);
+    add_outer(svd.U * e.vectors.col(k).asDiagonal() * svd.V.transpose(), w * d, slices);
     ++changed;
   }
   return changed;
