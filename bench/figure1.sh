@@ -14,8 +14,13 @@
 # Environment: SNH (default build/release/apps/snh), FRAMES (20), END_TIME (1.6667, seconds of the clip),
 #   SOLVER (mg; any --solver name), THREADS (0: all cores), JOINT_CELLS (free: see `snh flesh --help`),
 #   OUT (default /tmp/snh-figure1/E-SOLVER), COMPARE (a second solver, e.g. cholmod: runs it too and prints
-#   the largest distance between the two runs' render surfaces, to show the same answer), CONTACT (1: self-contact
-#   of the skin, as scenes/hand_fist_contact.json, so that the closing fingers do not squeeze flesh through itself).
+#   the largest distance between the two runs' render surfaces, to show the same answer), REFERENCE (the run
+#   directory of an earlier benchmark, e.g. a copy of OUT/run: prints how far this run's render surfaces and
+#   energies are from it, frame by frame, to show that a change of the code kept the answers; exit code 1
+#   when a frame's surface moved by more than 1e-6), CONTACT (1:
+#   self-contact of the skin, as scenes/hand_fist_contact.json, so that the closing fingers do not squeeze
+#   flesh through itself).
+# Before the figure1: line, the slowest step: `figure1.sh: slowest step K: S s (N Newton, C CG)`.
 set -euo pipefail
 ELEMENTS="${1:-45809}"
 case "$ELEMENTS" in '' | *[!0-9]*) echo "figure1.sh: ELEMENTS must be a positive whole number, got '$ELEMENTS'" >&2; exit 2 ;; esac
@@ -27,6 +32,16 @@ PY=/usr/bin/python3
 [ -x "$PY" ] || PY=python3
 [ -x "$SNH" ] || { echo "figure1.sh: no snh binary at $SNH (build first, or set SNH)" >&2; exit 2; }
 mkdir -p "$OUT"
+# REFERENCE is checked before the run: it must be an earlier run's directory, and not one this run replaces.
+if [ -n "${REFERENCE:-}" ]; then
+  [ -d "$REFERENCE" ] || { echo "figure1.sh: REFERENCE=$REFERENCE is not a directory (an earlier run's, e.g. a copy of OUT/run)" >&2; exit 2; }
+  for replaced in "$OUT/run" "$OUT/compare"; do
+    if [ -e "$replaced" ] && [ "$(realpath "$REFERENCE")" = "$(realpath "$replaced")" ]; then
+      echo "figure1.sh: REFERENCE=$REFERENCE is the directory this run replaces ($replaced): copy it elsewhere first" >&2
+      exit 2
+    fi
+  done
+fi
 
 # scene RES SOLVER DIR FILE: the fist scene at lattice resolution RES.
 scene() {
@@ -85,20 +100,54 @@ k = len(steps)
 newton = sum(f["newton_iterations"] for f in steps) / k
 cg = sum(f["linear_iterations"] for f in steps) / k
 sec = sum(f["wall_seconds"] for f in steps) / k
+slow = max(steps, key=lambda f: f["wall_seconds"])
+print(f"figure1.sh: slowest step {slow['frame']}: {slow['wall_seconds']:.2f} s ({slow['newton_iterations']} Newton, "
+      f"{slow['linear_iterations']} CG)")
 print(f"figure1: {d['cells']} elements, {3 * d['vertices']} dofs, {newton:.1f} newton/step, {cg:.0f} cg/step, "
       f"{sec:.2f} s/step, {d['peak_memory_mib']:.0f} MiB")
 EOF
-if [ -n "${COMPARE:-}" ]; then
-  run "$COMPARE" "$OUT/compare"
-  "$PY" - "$OUT/run" "$OUT/compare" "$FRAMES" "$SOLVER" "$COMPARE" <<'EOF' >&2
-import sys
-a, b, frames, sa, sb = sys.argv[1:6]
+# same_answers A B LABEL_A LABEL_B STRICT: how far run B's render surfaces (and, where both runs have them,
+# energies) are from run A's, frame by frame; the frames whose surfaces differ by more than 1e-6 model units
+# (far above the OBJ files' rounding, far below a contact's d-hat) are named, and with STRICT 1 the script
+# then exits 1.
+same_answers() {
+  "$PY" - "$1" "$2" "$FRAMES" "$3" "$4" "$5" <<'EOF' >&2
+import json, os, sys
+a, b, frames, la, lb, strict = sys.argv[1:7]
 def verts(path):
     return [tuple(map(float, l.split()[1:4])) for l in open(path) if l.startswith("v ")]
-worst = 0.0
+def energies(run):
+    path = f"{run}/stats.json"
+    return {f["frame"]: f["total_energy"] for f in json.load(open(path))["frames"]} if os.path.isfile(path) else {}
+ea, eb = energies(a), energies(b)
+worst, worst_frame, apart, de = 0.0, 0, [], 0.0
 for f in range(1, int(frames) + 1):
-    p, q = verts(f"{a}/surface/{f:03d}.obj"), verts(f"{b}/surface/{f:03d}.obj")
-    worst = max(worst, max(abs(x - y) for u, v in zip(p, q) for x, y in zip(u, v)))
-print(f"figure1.sh: render surfaces of {sa} and {sb}: largest distance over {frames} frames {worst:.3g} (model units)")
+    pa, pb = f"{a}/surface/{f:03d}.obj", f"{b}/surface/{f:03d}.obj"
+    if not (os.path.isfile(pa) and os.path.isfile(pb)):
+        print(f"figure1.sh: frame {f} is missing: no {pa if not os.path.isfile(pa) else pb}")
+        sys.exit(1)
+    p, q = verts(pa), verts(pb)
+    if len(p) != len(q):
+        print(f"figure1.sh: frame {f}: {len(p)} surface vertices in {la}, {len(q)} in {lb}: not the same surface")
+        sys.exit(1)
+    d = max(abs(x - y) for u, v in zip(p, q) for x, y in zip(u, v))
+    if d > worst:
+        worst, worst_frame = d, f
+    if d > 1e-6:
+        apart.append(f)
+    if f in ea and f in eb:
+        de = max(de, abs(ea[f] - eb[f]) / max(1e-300, abs(ea[f])))
+print(f"figure1.sh: render surfaces of {la} and {lb}: largest distance over {frames} frames {worst:.3g} (model units)"
+      + (f", at frame {worst_frame}" if worst_frame else "") + (f"; energies within {de:.2g} (relative)" if ea and eb else ""))
+if apart:
+    print(f"figure1.sh: frames farther apart than 1e-6: {', '.join(map(str, apart))}")
+    sys.exit(1 if strict == "1" else 0)
 EOF
+}
+if [ -n "${COMPARE:-}" ]; then
+  run "$COMPARE" "$OUT/compare"
+  same_answers "$OUT/run" "$OUT/compare" "$SOLVER" "$COMPARE" 0
+fi
+if [ -n "${REFERENCE:-}" ]; then
+  same_answers "$REFERENCE" "$OUT/run" "the reference $REFERENCE" "this run" 1
 fi

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# bench/figure1.sh on a small lattice (about 2 000 hexes, two frames): the per-step table ends with the
+# slowest step and the figure1: line, and REFERENCE compares a run with an earlier one:
+#   1. against a copy of its own last run: exit 0, distance 0 at every frame;
+#   2. against a copy with one surface vertex moved: exit 1, that frame named;
+#   3. REFERENCE not a directory: exit 2 before anything runs;
+#   4. REFERENCE the very directory the run would replace: exit 2, and the directory is left as it was.
+# Usage: test_bench_figure1.sh SNH REPOSITORY
+set -u
+SNH="$1"
+root="$2"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+pass=0 fail=0
+# shellcheck source=lib.sh
+. "$(dirname "$0")/lib.sh"  # ok, bad, expect_exit
+
+bench() { SNH="$SNH" FRAMES=2 END_TIME=0.1667 OUT="$work/out" bash "$root/bench/figure1.sh" 2000; }
+
+out="$(bench 2>&1)"
+code=$?
+if [ "$code" -eq 0 ] && printf '%s\n' "$out" | tail -1 | grep -Eq '^figure1: [0-9]+ elements, [0-9]+ dofs, [0-9.]+ newton/step, [0-9]+ cg/step, [0-9.]+ s/step, [0-9]+ MiB$' &&
+  printf '%s\n' "$out" | tail -2 | head -1 | grep -Eq '^figure1.sh: slowest step [12]: [0-9.]+ s \([0-9]+ Newton, [0-9]+ CG\)$'; then ok
+else bad "the run's last lines (exit $code): $(printf '%s\n' "$out" | tail -3)"; fi
+
+cp -r "$work/out/run" "$work/same"
+expect_exit 0 "a reference equal to the run" 'largest distance over 2 frames 0 \(model units\); energies within 0' -- \
+  env REFERENCE="$work/same" SNH="$SNH" FRAMES=2 END_TIME=0.1667 OUT="$work/out" bash "$root/bench/figure1.sh" 2000
+
+cp -r "$work/out/run" "$work/moved"
+# The first vertex of frame 2's render surface moved by a millimetre in x.
+awk 'BEGIN { done = 0 } /^v / && !done { $2 = $2 + 0.001; done = 1 } { print }' "$work/out/run/surface/002.obj" > "$work/moved/surface/002.obj"
+expect_exit 1 "a reference whose frame 2 differs" 'frames farther apart than 1e-6: 2$' -- \
+  env REFERENCE="$work/moved" SNH="$SNH" FRAMES=2 END_TIME=0.1667 OUT="$work/out" bash "$root/bench/figure1.sh" 2000
+
+expect_exit 2 "a reference that is not a directory" '^figure1.sh: REFERENCE=.*/none is not a directory' -- \
+  env REFERENCE="$work/none" SNH="$SNH" OUT="$work/out" bash "$root/bench/figure1.sh" 2000
+
+before="$(stat -c %Y "$work/out/run/stats.json")"
+expect_exit 2 "a reference the run would replace" 'is the directory this run replaces' -- \
+  env REFERENCE="$work/out/run" SNH="$SNH" OUT="$work/out" bash "$root/bench/figure1.sh" 2000
+if [ -f "$work/out/run/stats.json" ] && [ "$(stat -c %Y "$work/out/run/stats.json")" = "$before" ]; then ok
+else bad "the refused reference $work/out/run was changed"; fi
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
