@@ -4,10 +4,16 @@
 # motion per frame as figure1.sh's default 24 frames over 2 s), and writes figure1_growth.csv and
 # figure1_growth.png (seconds per step against elements, log-log, with the line of linear growth) in OUT.
 # Usage: bench/figure1_growth.sh [ELEMENTS ...]
-# Environment: as figure1.sh (SNH, SOLVER, THREADS, JOINT_CELLS, CONTACT), OUT (default /tmp/snh-figure1-growth).
+# Environment: as figure1.sh (SNH, SOLVER, THREADS, JOINT_CELLS, CONTACT; not REFERENCE, which is refused),
+# OUT (default /tmp/snh-figure1-growth).
 # With contact, run the frames where the fingers meet too: CONTACT=1 FRAMES=20 END_TIME=1.6667.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
+# figure1.sh's REFERENCE names one earlier run, of one size: it cannot serve every size here.
+if [ -n "${REFERENCE:-}" ]; then
+  echo "figure1_growth.sh: REFERENCE compares one run with an earlier run of the same size: use it with bench/figure1.sh" >&2
+  exit 2
+fi
 sizes=("$@")
 [ ${#sizes[@]} -gt 0 ] || sizes=(25000 50000 100000 200000)
 OUT="${OUT:-/tmp/snh-figure1-growth}"

@@ -4,7 +4,8 @@
 #   1. against a copy of its own last run: exit 0, distance 0 at every frame;
 #   2. against a copy with one surface vertex moved: exit 1, that frame named;
 #   3. REFERENCE not a directory: exit 2 before anything runs;
-#   4. REFERENCE the very directory the run would replace: exit 2, and the directory is left as it was.
+#   4. REFERENCE the very directory the run would replace: exit 2, and the directory is left as it was;
+#   5. bench/figure1_growth.sh (runs of several sizes) refuses REFERENCE: exit 2, before anything runs.
 # Usage: test_bench_figure1.sh SNH REPOSITORY
 set -u
 SNH="$1"
@@ -41,6 +42,10 @@ expect_exit 2 "a reference the run would replace" 'is the directory this run rep
   env REFERENCE="$work/out/run" SNH="$SNH" OUT="$work/out" bash "$root/bench/figure1.sh" 2000
 if [ -f "$work/out/run/stats.json" ] && [ "$(stat -c %Y "$work/out/run/stats.json")" = "$before" ]; then ok
 else bad "the refused reference $work/out/run was changed"; fi
+
+expect_exit 2 "figure1_growth.sh with REFERENCE" '^figure1_growth.sh: REFERENCE compares one run' -- \
+  env REFERENCE="$work/same" SNH="$SNH" OUT="$work/growth" bash "$root/bench/figure1_growth.sh" 2000
+if [ ! -e "$work/growth" ]; then ok; else bad "figure1_growth.sh wrote $work/growth before refusing REFERENCE"; fi
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
