@@ -35,6 +35,8 @@ mkdir -p "$OUT"
 # REFERENCE is checked before the run: it must be an earlier run's directory, and not one this run replaces.
 if [ -n "${REFERENCE:-}" ]; then
   [ -d "$REFERENCE" ] || { echo "figure1.sh: REFERENCE=$REFERENCE is not a directory (an earlier run's, e.g. a copy of OUT/run)" >&2; exit 2; }
+  last="$(printf '%s/surface/%03d.obj' "$REFERENCE" "$FRAMES")"
+  [ -f "$last" ] || { echo "figure1.sh: REFERENCE=$REFERENCE has no $last: not an earlier run of $FRAMES frames" >&2; exit 2; }
   for replaced in "$OUT/run" "$OUT/compare"; do
     if [ -e "$replaced" ] && [ "$(realpath "$REFERENCE")" = "$(realpath "$replaced")" ]; then
       echo "figure1.sh: REFERENCE=$REFERENCE is the directory this run replaces ($replaced): copy it elsewhere first" >&2

@@ -3,7 +3,7 @@
 # slowest step and the figure1: line, and REFERENCE compares a run with an earlier one:
 #   1. against a copy of its own last run: exit 0, distance 0 at every frame;
 #   2. against a copy with one surface vertex moved: exit 1, that frame named;
-#   3. REFERENCE not a directory: exit 2 before anything runs;
+#   3. REFERENCE not a directory, or without the frames this run makes: exit 2 before anything runs;
 #   4. REFERENCE the very directory the run would replace: exit 2, and the directory is left as it was;
 #   5. bench/figure1_growth.sh (runs of several sizes) refuses REFERENCE: exit 2, before anything runs.
 # Usage: test_bench_figure1.sh SNH REPOSITORY
@@ -37,9 +37,13 @@ expect_exit 1 "a reference whose frame 2 differs" 'frames farther apart than 1e-
 expect_exit 2 "a reference that is not a directory" '^figure1.sh: REFERENCE=.*/none is not a directory' -- \
   env REFERENCE="$work/none" SNH="$SNH" OUT="$work/out" bash "$root/bench/figure1.sh" 2000
 
+expect_exit 2 "a reference of fewer frames" 'has no .*/same/surface/003.obj: not an earlier run of 3 frames' -- \
+  env REFERENCE="$work/same" SNH="$SNH" FRAMES=3 OUT="$work/out3" bash "$root/bench/figure1.sh" 2000
+if [ ! -e "$work/out3/run" ]; then ok; else bad "figure1.sh ran before refusing a reference of fewer frames"; fi
+
 before="$(stat -c %Y "$work/out/run/stats.json")"
 expect_exit 2 "a reference the run would replace" 'is the directory this run replaces' -- \
-  env REFERENCE="$work/out/run" SNH="$SNH" OUT="$work/out" bash "$root/bench/figure1.sh" 2000
+  env REFERENCE="$work/out/run" SNH="$SNH" FRAMES=2 OUT="$work/out" bash "$root/bench/figure1.sh" 2000
 if [ -f "$work/out/run/stats.json" ] && [ "$(stat -c %Y "$work/out/run/stats.json")" = "$before" ]; then ok
 else bad "the refused reference $work/out/run was changed"; fi
 
