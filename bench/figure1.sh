@@ -17,9 +17,8 @@
 #   the largest distance between the two runs' render surfaces, to show the same answer), REFERENCE (the run
 #   directory of an earlier benchmark, e.g. a copy of OUT/run: prints how far this run's render surfaces and
 #   energies are from it, frame by frame, to show that a change of the code kept the answers; exit code 1
-#   when a frame's surface moved by more than 1e-6), CONTACT (1:
-#   self-contact of the skin, as scenes/hand_fist_contact.json, so that the closing fingers do not squeeze
-#   flesh through itself).
+#   when a frame's surface moved by more than 1e-6), CONTACT (1: self-contact of the skin, as
+#   scenes/hand_fist_contact.json, so that the closing fingers do not squeeze flesh through itself).
 # Before the figure1: line, the slowest step: `figure1.sh: slowest step K: S s (N Newton, C CG)`.
 set -euo pipefail
 ELEMENTS="${1:-45809}"
