@@ -11,6 +11,7 @@
 #include <limits>
 #include <map>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "snh/io/lexer.hpp"
@@ -24,6 +25,12 @@ namespace fs = std::filesystem;
 using detail::Lexer;
 using detail::read_all;
 
+/// Index i (0-based) as the messages number vertices, i + 1, without overflow where a file holds the largest
+/// index there is (fuzzing found an OFF face with 9223372036854775807).
+std::string one_based(long long i) {
+  return i >= 0 ? fmt::format("{}", static_cast<unsigned long long>(i) + 1u) : fmt::format("{}", i + 1);
+}
+
 struct Collect {
   std::vector<double> xyz;
   std::vector<int> tri;
@@ -32,7 +39,7 @@ struct Collect {
     if (v.size() < 3) lx.fail(fmt::format("a face needs at least 3 vertices, got {}", v.size()), line);
     const long long n = static_cast<long long>(xyz.size() / 3);
     for (long long i : v)
-      if (i < 0 || i >= n) lx.fail(fmt::format("face refers to vertex {}, but there are {}", i + 1, n), line);
+      if (i < 0 || i >= n) lx.fail(fmt::format("face refers to vertex {}, but there are {}", one_based(i), n), line);
     for (std::size_t k = 1; k + 1 < v.size(); ++k)
       tri.insert(tri.end(), {static_cast<int>(v[0]), static_cast<int>(v[k]), static_cast<int>(v[k + 1])});
   }
