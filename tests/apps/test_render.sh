@@ -45,12 +45,15 @@ interrupt() {
   mkdir -p "$tmp"
   TMPDIR="$tmp" "$SNH" render "$work/run" --width 160 --height 120 --out "$work/$name.png" > "$work/$name.log" 2>&1 &
   pid=$!
-  local i
+  # Seen once is enough: asking again can miss it (a process in the middle of exec, as Debian's chromium
+  # script is when it hands over to the browser, shows no command line for a moment).
+  local i seen=""
   for ((i = 0; i < 1500; i++)); do
-    [ -n "$(browser_of "$tmp/")" ] && break
+    seen="$(browser_of "$tmp/")"
+    [ -n "$seen" ] && break
     sleep 0.02
   done
-  [ -n "$(browser_of "$tmp/")" ] || { bad "$name: the browser did not start: $(cat "$work/$name.log")"; kill -9 "$pid"; wait "$pid"; return; }
+  [ -n "$seen" ] || { bad "$name: the browser did not start: $(cat "$work/$name.log")"; kill -9 "$pid"; wait "$pid"; return; }
   sleep 0.2
   local s
   for s in "$@"; do
