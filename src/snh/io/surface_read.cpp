@@ -102,7 +102,7 @@ SurfaceMesh read_obj_surface(const fs::path& path) {
         if (second != std::string_view::npos) {
           const long long normals = static_cast<long long>(vn.size() / 3);
           n = index(t.substr(second + 1), t, normals);
-          if (n < 0 || n >= normals) err.fail(fmt::format("face refers to normal {}, but there are {}", n + 1, normals), line_no);
+          if (n < 0 || n >= normals) err.fail(fmt::format("face refers to normal {}, but there are {}", one_based(n), normals), line_no);
         }
         normal_of.insert(normal_of.end(), {v.back(), n});
       }
