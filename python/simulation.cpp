@@ -86,7 +86,7 @@ class PySimulation {
 
     SimulationSetup setup;
     const std::optional<Integrator> chosen = integrator_named(integrator);
-    require(chosen.has_value(), fmt::format("integrator must be quasi_static, backward_euler or bdf2, got '{}'", integrator));
+    require(chosen.has_value(), fmt::format("integrator must be quasi_static, backward_euler, bdf2 or tr_bdf2, got '{}'", integrator));
     setup.integrator = *chosen;
     setup.dt = checked(dt, "dt", 0.0, true);
     setup.density = checked(density, "density", 0.0, true);
@@ -96,7 +96,7 @@ class PySimulation {
     setup.stiffness_damping = checked(stiffness_damping, "stiffness_damping", 0.0, false);
     if (!initial.is_none()) setup.initial = positions_vector(initial, "initial", n);
     if (!initial_velocity.is_none()) {
-      require(is_dynamic(setup.integrator), "initial_velocity needs a dynamic integrator (backward_euler or bdf2)");
+      require(is_dynamic(setup.integrator), "initial_velocity needs a dynamic integrator (backward_euler, bdf2 or tr_bdf2)");
       setup.initial_velocity = positions_vector(initial_velocity, "initial_velocity", n);
     }
     setup.linear.name = solver;
@@ -384,7 +384,7 @@ pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesyst
 void add_simulation(pyb::module_& m) {
   using namespace pyb::literals;
   pyb::class_<PySimulation>(m, "Simulation",
-                            "A mesh of one material stepped quasi-statically, by backward Euler or by BDF2 (projected Newton); the "
+                            "A mesh of one material stepped quasi-statically, by backward Euler, BDF2 or TR-BDF2 (projected Newton); the "
                             "pinned vertices follow targets set from Python before each step.")
       .def(pyb::init<const pyb::handle&, const pyb::handle&, const pyb::handle&, const pyb::handle&, const std::string&,
                      double, double, const pyb::handle&, double, double, const pyb::handle&, const pyb::handle&, const std::string&, bool, double,
@@ -395,8 +395,8 @@ void add_simulation(pyb::module_& m) {
            "tolerance"_a = 1e-3, "step_tolerance"_a = 0.0, "relative_step_tolerance"_a = 0.0, "max_iterations"_a = 50,
            "step_halvings"_a = 4, "projection"_a = "clamp", "first_guess"_a = pyb::none(),
            "vertices (n, 3), cells (m, 4) tets or (m, 8) hexes (checked as a mesh file is), an snh.Material, pinned "
-           "vertex indices (k,). integrator quasi_static, backward_euler or bdf2 (time step dt; BDF2 keeps the motion "
-           "backward Euler damps, its first step is backward Euler); density, gravity (3,), "
+           "vertex indices (k,). integrator quasi_static, backward_euler, bdf2 or tr_bdf2 (time step dt; BDF2 and TR-BDF2 keep the motion "
+           "backward Euler damps; BDF2's first step is backward Euler, TR-BDF2 makes two solves a step); density, gravity (3,), "
            "Rayleigh mass/stiffness damping; initial positions (n, 3) and velocities (n, 3; dynamic only); the linear solver (auto: by size, as scenes; cholmod, "
            "ldlt, pcg, mg for hex lattices, amg); Newton's "
            "stopping rule: ||g|| < tolerance (the paper programs' 1e-3), or the Newton step below step_tolerance (a "

@@ -133,9 +133,9 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
                 "the material's Pa taken to the model's units where it states them, as an FBX in centimetres does)")
       ->excludes(qs);
   cmd->add_option("--integrator", o->integrator,
-                  "With --dynamic: backward_euler (the default; damps the motion strongly) or bdf2 (second order: "
-                  "flesh that keeps jiggling)")
-      ->check(CLI::IsMember({"backward_euler", "bdf2"}))
+                  "With --dynamic: backward_euler (the default; damps the motion strongly), bdf2 (second order: "
+                  "flesh that keeps jiggling) or tr_bdf2 (second order from the first step, two solves a step)")
+      ->check(CLI::IsMember({"backward_euler", "bdf2", "tr_bdf2"}))
       ->needs(dyn);
   cmd->add_option("--fps", o->fps, "Frames per second of animation (default 24)")->check(finite_number(Sign::positive));
   cmd->add_option("--out", o->out, "Output directory (default output/<model name>)")->check(non_empty_path());

@@ -28,7 +28,7 @@ void add_run_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
       "run",
-      "Runs a scene file (JSON; the keys in docs/scenes.md): backward Euler, BDF2 or quasi-static steps of a mesh (a box, a mesh "
+      "Runs a scene file (JSON; the keys in docs/scenes.md): backward Euler, BDF2, TR-BDF2 or quasi-static steps of a mesh (a box, a mesh "
       "file, or a rigged model's flesh) with pins, scripted motion, gravity, an initial deformation, contact and colliders, "
       "tissues and muscles (docs/muscles.md). Writes NNN.obj and NNN.vtu frames, frames.pvd, stats.json, stats.csv and the "
       "report (a flesh scene also its surface/, lbs/ and flesh.usda; a scene with muscles muscles.json). Exit code 0 when every step converged, 1 when a step did not converge (the run "

@@ -210,7 +210,7 @@ def test_bad_input():
         (dict(pinned=[0, 27]), r"pinned\[1\] = 27 is not a vertex index \(0 to 26\)"),
         (dict(pinned=[3, 3]), r"pinned\[1\] = 3: vertex 3 is pinned twice"),
         (dict(pinned=[0.5]), "pinned must be an array of integer vertex indices"),
-        (dict(integrator="rk4"), "integrator must be quasi_static, backward_euler or bdf2, got 'rk4'"),
+        (dict(integrator="rk4"), "integrator must be quasi_static, backward_euler, bdf2 or tr_bdf2, got 'rk4'"),
         (dict(dt=0.0), "dt must be a finite number > 0, got 0"),
         (dict(density=math.nan), "density must be a finite number > 0, got nan"),
         (dict(gravity=[0, 1]), r"gravity must have shape \(3,\), got \(2,\)"),
@@ -402,11 +402,12 @@ def test_run_scene_takes_numpy_values_and_names_what_it_cannot_take(tmp_path):
         snh.run_scene({"mesh": {"box": {"element": "hex", "res": 2}}, "frames": {1}}, out=tmp_path / "set", quiet=True)
 
 
-def test_bdf2_carries_a_free_body_at_its_velocity():
-    # No force: BDF2 (and its first, backward Euler step) moves every vertex by u t exactly.
+@pytest.mark.parametrize("integrator", ["bdf2", "tr_bdf2"])
+def test_bdf2_carries_a_free_body_at_its_velocity(integrator):
+    # No force: BDF2 (and its first, backward Euler step) and TR-BDF2 move every vertex by u t exactly.
     V, C, _ = snh.box("hex", 2)
     u = np.array([0.5, -2.0, 1.0])
-    sim = snh.Simulation(V, C, SNH, integrator="bdf2", dt=0.05, initial_velocity=np.tile(u, (len(V), 1)),
+    sim = snh.Simulation(V, C, SNH, integrator=integrator, dt=0.05, initial_velocity=np.tile(u, (len(V), 1)),
                          tolerance=1e-10)
     for k in range(1, 11):
         sim.step()
@@ -416,12 +417,12 @@ def test_bdf2_carries_a_free_body_at_its_velocity():
 
 
 def test_bdf2_keeps_the_vibration_backward_euler_damps():
-    # A cube stretched and let go: over 8 s at dt 0.2 BDF2 keeps most of its swing, backward Euler a tenth
-    # of it (docs/math.md section 7.5).
+    # A cube stretched and let go: over 8 s at dt 0.2 BDF2 keeps most of its swing, TR-BDF2 more, backward
+    # Euler a tenth of it (docs/math.md sections 7.5 and 7.7).
     V, C, _ = snh.box("hex", 2)
     stretched = V * [1.3, 0.9, 1.1]
     kept = {}
-    for integrator in ("backward_euler", "bdf2"):
+    for integrator in ("backward_euler", "bdf2", "tr_bdf2"):
         sim = snh.Simulation(V, C, SNH, integrator=integrator, dt=0.2, initial=stretched, tolerance=1e-10)
         e0 = sim.energy()
         swing = 0.0
@@ -432,4 +433,5 @@ def test_bdf2_keeps_the_vibration_backward_euler_damps():
         kept[integrator] = swing / np.abs(stretched - V).max()
         assert sim.energy() < e0
     assert kept["bdf2"] > 0.55
+    assert kept["tr_bdf2"] > kept["bdf2"]
     assert kept["backward_euler"] < 0.15

@@ -1,6 +1,6 @@
 // Impacts: a rubber cube thrown at the ground at 20, 50 and 100 m/s (a step of 4 ms carries it up to twice
-// its own size) lands, never passes through, never inverts, and bounces, by backward Euler and by BDF2, BDF2
-// keeping more of its speed; a flesh cube at 100 m/s (five times its compression wave speed) lands with
+// its own size) lands, never passes through, never inverts, and bounces, by backward Euler and by BDF2 (and
+// at 20 and 50 m/s by TR-BDF2), BDF2 and TR-BDF2 keeping more of its speed; a flesh cube at 100 m/s (five times its compression wave speed) lands with
 // every whole step converged, and where Newton is allowed fewer iterations, steps retried in halves get it
 // through, and only they.
 #include <gtest/gtest.h>
@@ -85,9 +85,11 @@ void expect_pairs_apart(const SceneResult& result) {
 
 TEST(Impact, ARubberCubeThrownAtTheGroundBouncesWithoutPassingThrough) {
   for (const double speed : {20.0, 50.0, 100.0}) {
-    double rebound[2];
-    for (int i = 0; i < 2; ++i) {
-      const char* integrator = i == 0 ? "backward_euler" : "bdf2";
+    // TR-BDF2 at 20 and 50 m/s only: at 100 m/s (a step carries the cube twice its size) its trapezoidal stage
+    // reflects the bottom's velocity within the stage and crushes the cube inside out (docs/math.md §7.7).
+    double rebound[3] = {0.0, 0.0, 0.0};
+    for (int i = 0; i < (speed < 100.0 ? 3 : 2); ++i) {
+      const char* integrator = i == 0 ? "backward_euler" : i == 1 ? "bdf2" : "tr_bdf2";
       SCOPED_TRACE(fmt::format("{} m/s, {}", speed, integrator));
       const Landing l = land(thrown_cube(1e6, speed, integrator), fmt::format("rubber_{}_{}", speed, integrator));
       ASSERT_TRUE(l.result.all_converged) << l.result.failure;
@@ -101,7 +103,12 @@ TEST(Impact, ARubberCubeThrownAtTheGroundBouncesWithoutPassingThrough) {
       rebound[i] = l.final_centre;
       EXPECT_GT(l.final_centre, 0.3) << "it bounced back up past where it started";
     }
+    std::cout << speed << " m/s: the centre ends at " << rebound[0] << ", " << rebound[1] << " and " << rebound[2]
+              << " (backward Euler, BDF2, TR-BDF2; 0: not run)\n";
     EXPECT_GT(rebound[1], 2.0 * rebound[0]) << "BDF2 keeps more of the rebound's speed";
+    if (speed < 100.0) {
+      EXPECT_GT(rebound[2], 2.0 * rebound[0]) << "TR-BDF2 keeps more of the rebound's speed";
+    }
   }
 }
 

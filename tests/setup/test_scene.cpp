@@ -123,7 +123,7 @@ TEST(SceneFile, ErrorsNameTheKey) {
   EXPECT_EQ(error_of(json::parse(R"({"frames": 2.5})")), "s.json: frames: expected an integer, got 2.5");
   EXPECT_EQ(error_of(json::parse(R"({"gravity": [0, 1]})")), "s.json: gravity: expected 3 numbers, got [0,1]");
   EXPECT_EQ(error_of(json::parse(R"({"integrator": "rk4"})")),
-            "s.json: integrator: expected one of backward_euler, bdf2, quasi_static, got \"rk4\"");
+            "s.json: integrator: expected one of backward_euler, bdf2, tr_bdf2, quasi_static, got \"rk4\"");
   EXPECT_NE(error_of(json::parse(R"({"material": {"name": "stable_neohookean"}})")).find("s.json: material: unknown material"),
             std::string::npos);
   EXPECT_NE(error_of(json::parse(R"({"material": {"name": "snh\u0000x"}})"))
@@ -507,8 +507,8 @@ std::pair<SceneResult, SceneResult> interrupt_and_resume(Scene s, int stop_at, s
 }
 
 TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
-  // Backward Euler, and BDF2 (whose checkpoint holds the step before) with a starting velocity.
-  for (const char* integrator : {"backward_euler", "bdf2"}) {
+  // Backward Euler, BDF2 (whose checkpoint holds the step before) and TR-BDF2, with a starting velocity.
+  for (const char* integrator : {"backward_euler", "bdf2", "tr_bdf2"}) {
   SCOPED_TRACE(integrator);
   json j = json::parse(R"({"mesh": {"box": {"res": 2}}, "gravity": [0, -9.8, 0], "frames": 12, "end_time": 1.2,
                            "damping": {"mass": 0.5}, "pins": [{"region": {"min": [-1, 1, -1], "max": [1, 1, 1]}}],

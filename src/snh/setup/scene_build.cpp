@@ -306,7 +306,7 @@ Eigen::VectorXd initial_velocities(const Scene& s, const VolumeMesh& mesh) {
     if (!op) continue;
     const std::string where = fmt::format("{}: initial[{}]", s.source.string(), i);
     if (!is_dynamic(s.time.integrator))
-      throw SceneError(fmt::format("{}: a velocity needs a dynamic integrator (backward_euler or bdf2), not {}", where,
+      throw SceneError(fmt::format("{}: a velocity needs a dynamic integrator (backward_euler, bdf2 or tr_bdf2), not {}", where,
                                    integrator_name(s.time.integrator)));
     if (!op->select) V.colwise() += op->value;
     else

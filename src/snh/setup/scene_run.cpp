@@ -88,7 +88,7 @@ void write_header(const BuiltScene& b, const Simulation& sim, std::ostream& o) {
                    s.source.string(), mesh.cell_count(), cells_name(mesh), mesh.vertex_count(), s.material.name, s.material.params.mu,
                    s.material.params.lambda, s.material.reparametrize ? " (linear, reparametrized)" : "", s.material.density);
   o << fmt::format("{}, {} frames to t = {:g}{}, gravity ({:g}, {:g}, {:g}), solver {} ({}), output {}\n",
-                   s.time.integrator == Integrator::bdf2 ? "BDF2" : dynamic ? "backward Euler" : "quasi-static", b.frames, b.end_time,
+                   s.time.integrator == Integrator::bdf2 ? "BDF2" : s.time.integrator == Integrator::tr_bdf2 ? "TR-BDF2" : dynamic ? "backward Euler" : "quasi-static", b.frames, b.end_time,
                    dynamic ? fmt::format(" ({} substeps of {:g} per frame)", b.substeps, b.substep) : "", s.forces.gravity[0],
                    s.forces.gravity[1], s.forces.gravity[2],
                    s.solver.linear == "auto" ? fmt::format("{} (auto)", sim.solver().name()) : s.solver.linear,

@@ -65,6 +65,31 @@ void TimeStepTerm::begin_step(const Eigen::VectorXd& x_n, const Eigen::VectorXd&
   }
 }
 
+void TimeStepTerm::begin_trapezoid(const Eigen::VectorXd& x_n, const Eigen::VectorXd& v_n, const Eigen::VectorXd& force) {
+  if (v_n.size() != x_n.size() || force.size() != x_n.size()) throw std::invalid_argument("time-step term: sizes differ");
+  const double eta = terms_.dt;
+  begin_step(x_n, x_n + eta * v_n, x_n + 2.0 * eta * v_n);
+  Eigen::VectorXd Kv, numbered;
+  if (damps_stiffness()) Kv = stiffness_times(v_n, numbered);
+  const std::vector<int>& num = damping_layout_.numbering();
+  const std::vector<int>& free = dofs_.free_index();
+  for (std::size_t d = 0; d < free.size(); ++d) {
+    const Eigen::Index i = static_cast<Eigen::Index>(d);
+    const double m = mass_[i];
+    if (free[d] < 0 || !(m > 0.0)) continue;
+    double f = force[i] + m * (gravity_[i] - terms_.mass_damping * v_n[i]);
+    if (damps_stiffness()) f -= terms_.stiffness_damping * Kv[num[d]];
+    predicted_[i] += eta * eta * f / m;
+  }
+}
+
+Eigen::VectorXd TimeStepTerm::stiffness_times(const Eigen::VectorXd& u, Eigen::VectorXd& numbered) const {
+  const std::vector<int>& num = damping_layout_.numbering();
+  numbered.resize(u.size());
+  for (std::size_t d = 0; d < num.size(); ++d) numbered[num[d]] = u[static_cast<Eigen::Index>(d)];
+  return K_n_.selfadjointView<Eigen::Lower>() * numbered;
+}
+
 double TimeStepTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                               PsdProjection) const {
   const std::vector<int>& free = dofs_.free_index();
@@ -88,10 +113,8 @@ double TimeStepTerm::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradien
     // Δ = x − x_n over every DOF in the damping numbering (free DOFs first), K_n Δ, and
     // ½ β/h Δᵀ K_n Δ summed as its free part plus its kinematic part.
     const std::vector<int>& num = damping_layout_.numbering();
-    Eigen::VectorXd delta(x.size());
-    for (std::size_t d = 0; d < num.size(); ++d)
-      delta[num[d]] = x[static_cast<Eigen::Index>(d)] - anchor_[static_cast<Eigen::Index>(d)];
-    const Eigen::VectorXd Kd = K_n_.selfadjointView<Eigen::Lower>() * delta;
+    Eigen::VectorXd delta;
+    const Eigen::VectorXd Kd = stiffness_times(x - anchor_, delta);
     const Eigen::Index nf = dofs_.free_count(), nk = x.size() - nf;
     const double beta_h = terms_.stiffness_damping / h;
     value += 0.5 * beta_h * (delta.head(nf).dot(Kd.head(nf)) + delta.tail(nk).dot(Kd.tail(nk)));

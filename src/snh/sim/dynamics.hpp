@@ -16,6 +16,11 @@
 // a₂ x_{n−1})/a₀, v̂ = −(a₁ v_n + a₂ v_{n−1})/a₀ and ĥ = h/a₀, the step is x̃ = x̂ + ĥ v̂, Δ = x − x̂,
 // v_{n+1} = (x_{n+1} − x̂)/ĥ, and K_n is still taken at x_n (docs/math.md §7.5). The inertia, mass-damping and gravity sums run over the free DOFs (on kinematic DOFs they
 // are constants of the step); kinematic DOFs are set before each step.
+//
+// TR-BDF2's first stage (docs/math.md §7.7) is the trapezoidal rule over γh, x_γ = x_n + η(v_n + v_γ),
+// M(v_γ − v_n) = η(f_n + f_γ) with η = γh/2: the same minimisation over η with the inertia's target
+// x̃ = x_n + 2η v_n + η² M⁻¹ f_n (f_n the whole force at x_n, damping at v_n included) and the damping of
+// the motion from x_n + η v_n (its force is then −D v_γ). Its second stage is BDF2 through x_n and x_γ.
 #include <Eigen/Core>
 
 #include "snh/fem/dof_map.hpp"
@@ -50,6 +55,10 @@ class TimeStepTerm final : public Term {
   /// The general form (BDF2): K_n at x_n, inertia towards `predicted`, damping of the motion from `anchor`
   /// over the current dt (set_dt: ĥ). begin_step(x_n, v_n) is begin_step(x_n, x_n, x_n + dt v_n).
   void begin_step(const Eigen::VectorXd& x_n, const Eigen::VectorXd& anchor, const Eigen::VectorXd& predicted);
+  /// TR-BDF2's trapezoidal stage over 2η (set_dt(η) first): K_n at x_n, inertia towards x_n + 2η v_n + η² M⁻¹ f,
+  /// damping of the motion from x_n + η v_n. `force` is the force at x_n of every other term (−their gradient,
+  /// every DOF); gravity and the damping force at v_n are added here. A free DOF without mass keeps x_n + 2η v_n.
+  void begin_trapezoid(const Eigen::VectorXd& x_n, const Eigen::VectorXd& v_n, const Eigen::VectorXd& force);
 
   [[nodiscard]] std::string_view name() const override { return "inertia"; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
@@ -69,6 +78,8 @@ class TimeStepTerm final : public Term {
 
  private:
   [[nodiscard]] bool damps_stiffness() const { return terms_.dt > 0.0 && terms_.stiffness_damping > 0.0; }
+  /// K_n u for u on every DOF, in the damping numbering (free DOFs first); `numbered` receives u so numbered.
+  [[nodiscard]] Eigen::VectorXd stiffness_times(const Eigen::VectorXd& u, Eigen::VectorXd& numbered) const;
   const ElasticTerm& elastic_;
   const DofMap& dofs_;
   Eigen::VectorXd mass_;        ///< per DOF

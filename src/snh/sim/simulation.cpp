@@ -26,13 +26,14 @@ const char* integrator_name(Integrator i) {
   switch (i) {
     case Integrator::backward_euler: return "backward_euler";
     case Integrator::bdf2: return "bdf2";
+    case Integrator::tr_bdf2: return "tr_bdf2";
     case Integrator::quasi_static: return "quasi_static";
   }
   return "?";
 }
 
 std::optional<Integrator> integrator_named(std::string_view name) {
-  for (Integrator i : {Integrator::backward_euler, Integrator::bdf2, Integrator::quasi_static})
+  for (Integrator i : {Integrator::backward_euler, Integrator::bdf2, Integrator::tr_bdf2, Integrator::quasi_static})
     if (name == integrator_name(i)) return i;
   return std::nullopt;
 }
@@ -325,13 +326,20 @@ StepReport Simulation::step_split(double t, double h, const NewtonOptions* newto
   return total;
 }
 
-Simulation::Stepper Simulation::stepper(double h) const {
+Simulation::Stepper Simulation::stepper(double h, Stage stage) const {
   Stepper s;
+  if (stage == Stage::trapezoid) {  // TR-BDF2's first stage over h = γ dt: η = h/2 (dynamics.hpp)
+    s.anchor = x_ + 0.5 * h * v_;
+    s.h_eff = 0.5 * h;
+    s.predicted = x_ + h * v_;
+    return s;
+  }
   // Variable-step BDF2 with ω = h / h_{n−1}: a₀ = (1 + 2ω)/(1 + ω), a₁ = −(1 + ω), a₂ = ω²/(1 + ω). It is
   // zero-stable for ω < 1 + √2; a step more than twice the last (after a step split for contact) is made
   // by backward Euler instead.
   const double omega = h_previous_ > 0.0 ? h / h_previous_ : 0.0;
-  if (setup_.integrator == Integrator::bdf2 && h_previous_ > 0.0 && omega <= 2.0) {
+  // TR-BDF2's second stage is BDF2 through x_n (h_{n−1} = γ dt) and x_γ: ω = (1 − γ)/γ.
+  if ((setup_.integrator == Integrator::bdf2 || stage == Stage::second) && h_previous_ > 0.0 && omega <= 2.0) {
     const double a0 = (1.0 + 2.0 * omega) / (1.0 + omega), a1 = -(1.0 + omega), a2 = omega * omega / (1.0 + omega);
     s.anchor = -(a1 * x_ + a2 * previous_) / a0;
     s.h_eff = h / a0;
@@ -377,7 +385,48 @@ Eigen::VectorXd Simulation::carried_guesses(double t, const Eigen::VectorXd& x_n
   return x_n_carried;
 }
 
+Eigen::VectorXd Simulation::force_at(const Eigen::VectorXd& x, double t) {
+  activate(t);
+  problem_.at_time(t);
+  Eigen::VectorXd gradient = Eigen::VectorXd::Zero(x.size());
+  elastic_.evaluate(x, &gradient, nullptr, PsdProjection::none);
+  for (const std::shared_ptr<Term>& term : setup_.terms) term->evaluate(x, &gradient, nullptr, PsdProjection::none);
+  return -gradient;
+}
+
 StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
+  if (setup_.integrator != Integrator::tr_bdf2) return solve_stage(t, h, newton, Stage::whole);
+  // TR-BDF2 with γ = 2 − √2 (docs/math.md §7.7): the trapezoidal rule to t_n + γ(t − t_n), then BDF2 through
+  // x_n and x_γ to t. Each stage is a solve of its own; the step is one step to the caller.
+  constexpr double gamma = 0.58578643762690495;  // 2 − √2
+  const SimulationState start = state();
+  const double t_n = time_;
+  trapezoid_force_ = force_at(x_, t_n);
+  if (!trapezoid_force_.allFinite()) {
+    StepReport failed;
+    failed.converged = false;
+    failed.substeps = failed.failed_substep = 1;
+    failed.failed_time = time_ = t;  // on the clock of the whole step, as below
+    failed.failure = "TR-BDF2: the force at the step's start is not finite" + worst_element(elastic_.deformation(x_).min_J);
+    return failed;
+  }
+  StepReport first = solve_stage(t_n + gamma * (t - t_n), gamma * h, newton, Stage::trapezoid);
+  if (first.interrupted) return first;  // back at the start already
+  if (!first.converged) {  // the failing stage's last iterate, on the clock of the whole step
+    time_ = first.failed_time = t;
+    h_previous_ = 0.0;
+    first.failure = "TR-BDF2's first stage: " + first.failure;
+    return first;
+  }
+  StepReport second = solve_stage(t, (1.0 - gamma) * h, newton, Stage::second);
+  h_previous_ = 0.0;  // the next step starts from x and v alone
+  accumulate(first.newton, second.newton);
+  second.newton = std::move(first.newton);
+  if (second.interrupted) restore(start);
+  return second;
+}
+
+StepReport Simulation::solve_stage(double t, double h, const NewtonOptions* newton, Stage stage) {
   StepReport report;
   report.substeps = 1;
   const Eigen::VectorXd x_n = x_, v_n = v_, previous_n = previous_, previous2_n = previous2_;
@@ -386,7 +435,7 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
   Stepper stepping;
   Eigen::VectorXd guess;
   if (dynamic()) {
-    stepping = stepper(h);
+    stepping = stepper(h, stage);
     guess = stepping.predicted;
   }
   else if (steps_ >= 1) guess = 2.0 * x_ - previous_;
@@ -401,7 +450,10 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
     double dt;
     ~RestoreDt() { term.set_dt(dt); }
   } restore_dt{inertia_, inertia_.terms().dt};
-  if (dynamic()) {
+  if (stage == Stage::trapezoid) {
+    inertia_.set_dt(stepping.h_eff);
+    inertia_.begin_trapezoid(x_n, v_n, trapezoid_force_);
+  } else if (dynamic()) {
     inertia_.set_dt(stepping.h_eff);
     inertia_.begin_step(x_n, stepping.anchor, stepping.predicted);
   } else {

@@ -25,12 +25,14 @@
 
 namespace snh {
 
-/// backward_euler and bdf2 are dynamic (inertia over a time step dt); quasi_static solves for equilibrium.
+/// backward_euler, bdf2 and tr_bdf2 are dynamic (inertia over a time step dt); quasi_static solves for equilibrium.
 /// BDF2 (docs/math.md §7.5) is second order: it keeps the motion that backward Euler damps. Its first step, and
 /// any step more than twice the one before (after a step split for contact), is a backward Euler step.
-enum class Integrator { backward_euler, bdf2, quasi_static };
+/// TR-BDF2 (§7.7) is second order from the first step and needs no history: each step is a trapezoidal stage
+/// to t_n + γh (γ = 2 − √2), then a BDF2 stage through x_n and that stage's state; two solves a step.
+enum class Integrator { backward_euler, bdf2, quasi_static, tr_bdf2 };
 
-/// The integrator's name in scenes, the command line and Python ("backward_euler", "bdf2", "quasi_static").
+/// The integrator's name in scenes, the command line and Python ("backward_euler", "bdf2", "tr_bdf2", "quasi_static").
 [[nodiscard]] const char* integrator_name(Integrator i);
 /// The integrator of that name; std::nullopt for another word.
 [[nodiscard]] std::optional<Integrator> integrator_named(std::string_view name);
@@ -110,7 +112,7 @@ struct StepReport {
 /// The state a checkpoint holds.
 struct SimulationState {
   Eigen::VectorXd x;    ///< positions (3 #V)
-  /// Backward Euler: the velocity (3 #V numbers). BDF2: the velocity, then once a step is made the previous
+  /// Backward Euler and TR-BDF2: the velocity (3 #V numbers). BDF2: the velocity, then once a step is made the previous
   /// positions, the previous velocity and the last step's length (9 #V + 1). Quasi-static: the previous
   /// solution (extrapolation), followed by the one before it where the setup's extrapolation is 2 and there
   /// is one (3 #V or 6 #V numbers).
@@ -127,7 +129,7 @@ class Simulation {
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 
-  /// One solve to time t: backward Euler or BDF2 over dt from the current state, or a quasi-static solve with the
+  /// One step to time t: backward Euler, BDF2 or TR-BDF2 (two solves) over dt from the current state, or a quasi-static solve with the
   /// kinematic targets at t. Newton's on_iteration/should_stop come from `newton` (else the setup's).
   /// With contact terms, the step from time() to t is first checked: each term's sweep (a moving collider
   /// from its pose at time() to its pose at t) and the scripted pins' jump to their targets at t (the
@@ -173,15 +175,22 @@ class Simulation {
   StepReport step_halving(double t, double h, const NewtonOptions* newton, int level);
   /// step(t) over a time step h, split where a collider's sweep is not clear.
   StepReport step_split(double t, double h, const NewtonOptions* newton);
-  /// One solve to time t over a time step h (dynamic; ignored quasi-statically).
+  /// One step to time t over a time step h (dynamic; ignored quasi-statically): one solve, or TR-BDF2's two.
   StepReport solve(double t, double h, const NewtonOptions* newton);
+  /// What a solve is: a whole step of the integrator, or one of TR-BDF2's stages.
+  enum class Stage { whole, trapezoid, second };
+  /// One solve to time t over h as `stage` says.
+  StepReport solve_stage(double t, double h, const NewtonOptions* newton, Stage stage);
+  /// The force at x of every term but inertia (−their gradient, every DOF), the terms at time t.
+  [[nodiscard]] Eigen::VectorXd force_at(const Eigen::VectorXd& x, double t);
   /// A dynamic step of length h from the current state as an incremental potential (dynamics.hpp): the
-  /// velocity after it is (x − anchor)/h_eff, and predicted = anchor + h_eff v̂ is its inertial target.
+  /// velocity after it is (x − anchor)/h_eff, and predicted = anchor + h_eff v̂ is its inertial target and
+  /// the solve's guess (TR-BDF2's trapezoidal stage: the guess x_n + h v_n; its target needs the forces).
   struct Stepper {
     Eigen::VectorXd anchor, predicted;
     double h_eff = 0.0;
   };
-  [[nodiscard]] Stepper stepper(double h) const;
+  [[nodiscard]] Stepper stepper(double h, Stage stage = Stage::whole) const;
   /// The smallest fraction of the step from `from` to `to` (over h, dynamic) that the moving terms'
   /// sweeps (against the pins' jump and the inertial prediction) and the other terms' bounds on the pins'
   /// jump keep clear.
@@ -207,6 +216,7 @@ class Simulation {
   // BDF2's history: previous_ is x_{n−1}; v_previous_ is v_{n−1}; h_previous_ the last step's length (0: none).
   Eigen::VectorXd v_previous_;
   double h_previous_ = 0.0;
+  Eigen::VectorXd trapezoid_force_;  ///< TR-BDF2: force_at(x_n) of the step being made
   double time_ = 0.0;
   int steps_ = 0;
   double rest_volume_ = 0.0;

@@ -4,7 +4,7 @@ namespace snh::scene {
 
 TimeSpec parse_time(Keys& top) {
   TimeSpec s;
-  s.integrator = *integrator_named(top.choice("integrator", "backward_euler", {"backward_euler", "bdf2", "quasi_static"}));
+  s.integrator = *integrator_named(top.choice("integrator", "backward_euler", {"backward_euler", "bdf2", "tr_bdf2", "quasi_static"}));
   s.dt = top.positive("dt", s.dt);
   // Asked for either way (so that an unknown key's message lists them), kept where given.
   const double end_time = top.positive("end_time", TimeSpec::default_end_time);
