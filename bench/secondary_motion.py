@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Secondary motion: the arm's elbow flexes 90 degrees in 0.15 s and stops (scenes/arm_flick.json); how far the
-skin is from where skinning puts it, frame by frame, by backward Euler and by BDF2 (the same scene, the same
-dt and damping), and by BDF2 without the scene's damping. Backward Euler's flesh comes to rest at once;
-BDF2's swings about its offset and settles; undamped it keeps swinging.
+skin is from where skinning puts it, frame by frame, by backward Euler, BDF2 and TR-BDF2 (the same scene,
+the same dt and damping), and by BDF2 without the scene's damping. Backward Euler's flesh comes to rest at
+once; BDF2's and TR-BDF2's swing about their offset and settle; undamped it keeps swinging.
 
   python3 bench/secondary_motion.py [--snh build/release/apps/snh] [--plot docs/arm_flick.png]
 """
@@ -27,7 +27,7 @@ def main():
     with tempfile.TemporaryDirectory() as work:
         damping = scene["damping"]
         for label, integrator, damped in (("backward Euler", "backward_euler", True), ("BDF2", "bdf2", True),
-                                          ("BDF2, undamped", "bdf2", False)):
+                                          ("TR-BDF2", "tr_bdf2", True), ("BDF2, undamped", "bdf2", False)):
             scene["integrator"] = integrator
             if damped:
                 scene["damping"] = damping
