@@ -1,6 +1,7 @@
 // Impacts: a rubber cube thrown at the ground at 20, 50 and 100 m/s (a step of 4 ms carries it up to twice
 // its own size) lands, never passes through, never inverts, and bounces, by backward Euler and by BDF2 (and
-// at 20 and 50 m/s by TR-BDF2), BDF2 and TR-BDF2 keeping more of its speed; a flesh cube at 100 m/s (five times its compression wave speed) lands with
+// at 20 and 50 m/s by TR-BDF2, which at 100 m/s converges and crushes it as short steps do), BDF2 and TR-BDF2
+// keeping more of its speed; a flesh cube at 100 m/s (five times its compression wave speed) lands with
 // every whole step converged, and where Newton is allowed fewer iterations, steps retried in halves get it
 // through, and only they.
 #include <gtest/gtest.h>
@@ -85,26 +86,29 @@ void expect_pairs_apart(const SceneResult& result) {
 
 TEST(Impact, ARubberCubeThrownAtTheGroundBouncesWithoutPassingThrough) {
   for (const double speed : {20.0, 50.0, 100.0}) {
-    // TR-BDF2 at 20 and 50 m/s only: at 100 m/s (a step carries the cube twice its size) its trapezoidal stage
-    // reflects the bottom's velocity within the stage and crushes the cube inside out (docs/math.md §7.7).
+    // At 100 m/s (1.7 times the rubber's compression wave speed) the model crushes the cube: every integrator
+    // does at steps of 2 ms and below (docs/results.md). At 4 ms backward Euler and BDF2 land it clean, their
+    // damping taking up the impact; TR-BDF2, which damps little, crushes it as the short steps do. It still
+    // converges at every frame (one step retried in halves) and keeps the surface above the ground.
     double rebound[3] = {0.0, 0.0, 0.0};
-    for (int i = 0; i < (speed < 100.0 ? 3 : 2); ++i) {
+    for (int i = 0; i < 3; ++i) {
       const char* integrator = i == 0 ? "backward_euler" : i == 1 ? "bdf2" : "tr_bdf2";
       SCOPED_TRACE(fmt::format("{} m/s, {}", speed, integrator));
       const Landing l = land(thrown_cube(1e6, speed, integrator), fmt::format("rubber_{}_{}", speed, integrator));
       ASSERT_TRUE(l.result.all_converged) << l.result.failure;
       ASSERT_EQ(l.result.frames.size(), 51u);
+      expect_pairs_apart(l.result);
+      rebound[i] = l.final_centre;
+      EXPECT_GT(l.final_centre, 0.3) << "it bounced back up past where it started";
+      if (i == 2 && speed == 100.0) continue;
       EXPECT_GT(l.lowest, 0.0) << "no vertex reaches the ground";
       for (const StepRecord& f : l.result.frames) {
         EXPECT_EQ(f.inverted, 0) << "frame " << f.index;
         EXPECT_EQ(f.substeps, f.index == 0 ? 0 : 1) << "frame " << f.index << ": no step needed halving";
       }
-      expect_pairs_apart(l.result);
-      rebound[i] = l.final_centre;
-      EXPECT_GT(l.final_centre, 0.3) << "it bounced back up past where it started";
     }
     std::cout << speed << " m/s: the centre ends at " << rebound[0] << ", " << rebound[1] << " and " << rebound[2]
-              << " (backward Euler, BDF2, TR-BDF2; 0: not run)\n";
+              << " (backward Euler, BDF2, TR-BDF2)\n";
     EXPECT_GT(rebound[1], 2.0 * rebound[0]) << "BDF2 keeps more of the rebound's speed";
     if (speed < 100.0) {
       EXPECT_GT(rebound[2], 2.0 * rebound[0]) << "TR-BDF2 keeps more of the rebound's speed";
