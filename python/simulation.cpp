@@ -32,12 +32,28 @@
 namespace snh::py {
 namespace {
 
-/// The pinned vertices' targets, as Python last set them (the same at every t).
+/// The pinned vertices' targets, as Python last set them for the end t1 of a step: between the step's start t0
+/// and t1 (a stage of TR-BDF2, a step split or halved) the pins move on the straight line from where the step
+/// found them, so that they reach the targets at t1 and not before; at and after t1, and for a step that
+/// does not go forward in time (quasi-static runs may set any t), the targets themselves.
 class PythonTargets final : public KinematicProvider {
  public:
   explicit PythonTargets(Eigen::Matrix3Xd initial) : targets_(std::move(initial)) {}
-  void targets(double /*t*/, Eigen::Matrix3Xd& out) const override { out = targets_; }
+  void targets(double t, Eigen::Matrix3Xd& out) const override {
+    if (t0_ < t && t < t1_ && start_.cols() == targets_.cols()) out = start_ + ((t - t0_) / (t1_ - t0_)) * (targets_ - start_);
+    else out = targets_;
+  }
+  /// A step from t0, the pins at `start`, to t1.
+  void begin(double t0, Eigen::Matrix3Xd start, double t1) {
+    t0_ = t0;
+    t1_ = t1;
+    start_ = std::move(start);
+  }
   Eigen::Matrix3Xd targets_;
+
+ private:
+  Eigen::Matrix3Xd start_;
+  double t0_ = 0.0, t1_ = 0.0;
 };
 
 void require(bool ok, const std::string& message) {
@@ -162,6 +178,11 @@ class PySimulation {
     // Ctrl-C: Python's handler only records the signal; Newton asks between iterations.
     NewtonOptions options = sim_->setup().newton;
     options.should_stop = [] { return PyErr_CheckSignals() != 0; };
+    if (targets_) {
+      Eigen::Matrix3Xd start(3, static_cast<Eigen::Index>(pinned_.size()));
+      for (std::size_t k = 0; k < pinned_.size(); ++k) start.col(static_cast<Eigen::Index>(k)) = sim_->x().segment<3>(3 * pinned_[k]);
+      targets_->begin(sim_->time(), std::move(start), t);
+    }
     const StepReport r = sim_->step(t, &options);
     if (r.interrupted) throw pyb::error_already_set();
     if (!r.converged && check) throw std::runtime_error(fmt::format("step to t = {:g}: {}", t, r.failure));
@@ -407,7 +428,7 @@ void add_simulation(pyb::module_& m) {
                              "The current positions (n, 3), a copy.")
       .def_property_readonly("velocities", [](const PySimulation& s) { return positions_array(s.sim_->v()); })
       .def_property_readonly("time", [](const PySimulation& s) { return s.sim_->time(); })
-      .def_property_readonly("steps", [](const PySimulation& s) { return s.sim_->steps(); }, "Solves completed.")
+      .def_property_readonly("steps", [](const PySimulation& s) { return s.sim_->steps(); }, "Solves completed (a TR-BDF2 step, of two solves, counts once).")
       .def_property_readonly("pinned", [](const PySimulation& s) { return pyb::array_t<int>(static_cast<pyb::ssize_t>(s.pinned_.size()), s.pinned_.data()); })
       .def_property_readonly("reoriented", [](const PySimulation& s) { return s.reoriented_; },
                              "Cells given with negative rest volume, turned round.")

@@ -538,6 +538,32 @@ TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
   }
 }
 
+TEST(SceneRun, ATrBdf2RunWithFrictionResumesAsItRan) {
+  // TR-BDF2's first stage needs the friction force at the step's start: it is taken from the step's own
+  // state (x_n and v_n), not from the friction data of the solve before, which a resumed run does not have.
+  const json j = json::parse(R"({"mesh": {"box": {"res": 2, "min": [-0.1, 0.001, -0.1], "max": [0.1, 0.201, 0.1]}},
+      "material": {"youngs": 1e5, "poisson": 0.45}, "density": 1000, "integrator": "tr_bdf2", "gravity": [0, -9.81, 0],
+      "frames": 10, "end_time": 0.2, "contact": {"dhat": 0.002, "friction": 0.5},
+      "colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0]}],
+      "initial": [{"type": "velocity", "value": [2, 0, 0]}], "output": {"vtu": false}})");
+  const auto base = std::filesystem::temp_directory_path() / ("snh_test_scene_resume_friction_" + std::to_string(::getpid()));
+  Scene full = parse_scene(j, "slide.json"), cut = full;
+  full.output.dir = base / "full";
+  cut.output.dir = base / "cut";
+  std::ostringstream log;
+  const SceneResult a = run_scene(full, log);
+  ASSERT_TRUE(a.all_converged) << a.failure;
+  EXPECT_LT(a.frames.back().kinetic_energy, 0.6 * a.frames[1].kinetic_energy) << "friction slows the sliding box";
+  const auto [b, c] = interrupt_and_resume(cut, 120, log);
+  ASSERT_EQ(b.interrupted_by, SIGINT);
+  ASSERT_LT(b.frames.size(), 11u);
+  ASSERT_GT(b.frames.size(), 2u) << "the run stopped after a frame or two, so the resumed run has a friction state to lack";
+  ASSERT_TRUE(c.all_converged) << c.failure;
+  ASSERT_EQ(c.frames.size(), 11u);
+  EXPECT_LT((c.final_positions - a.final_positions).cwiseAbs().maxCoeff(), 1e-6) << "the uninterrupted run's answer";
+  std::filesystem::remove_all(base);
+}
+
 TEST(SceneRun, KeepGoingWritesFramesThatDoNotConvergeMarkedAndGoesOn) {
   // One Newton iteration a frame (and no step retried in halves) is not enough for a box falling from its pins' hold: every frame fails.
   const json j = json::parse(R"({"mesh": {"box": {"res": 2}}, "gravity": [0, -9.8, 0], "frames": 6, "end_time": 0.6,

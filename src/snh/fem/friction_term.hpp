@@ -44,6 +44,7 @@ struct LaggedSlip {
 class LaggedFrictionTerm : public Term {
  public:
   [[nodiscard]] std::string_view name() const override { return "friction"; }
+  [[nodiscard]] bool lagged() const override { return true; }
   [[nodiscard]] double energy(const Eigen::VectorXd& x) const override;
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient, const HessianValues* hessian,
                   PsdProjection projection) const override;

@@ -66,6 +66,9 @@ class Term {
   /// at time t0; kinematic DOFs where they were then) and the time it solves for: a term with lagged data
   /// (friction: the normal forces and tangents of the step's start) takes them here.
   virtual void begin_step(const Eigen::VectorXd& /*x*/, double /*t0*/, double /*t1*/) {}
+  /// True for a term whose energy is a function of the slip from where begin_step() found the state
+  /// (friction): its force at that state is zero, and its force at a velocity v is the one at x + (t1 − t0) v.
+  [[nodiscard]] virtual bool lagged() const { return false; }
   /// True for a contact term (self-contact, a collider): it has statistics to report.
   [[nodiscard]] virtual bool reports_contact() const { return false; }
   /// A contact term adds its statistics at x to `into` and starts counting anew; others add nothing.

@@ -385,12 +385,27 @@ Eigen::VectorXd Simulation::carried_guesses(double t, const Eigen::VectorXd& x_n
   return x_n_carried;
 }
 
-Eigen::VectorXd Simulation::force_at(const Eigen::VectorXd& x, double t) {
-  activate(t);
-  problem_.at_time(t);
-  Eigen::VectorXd gradient = Eigen::VectorXd::Zero(x.size());
-  elastic_.evaluate(x, &gradient, nullptr, PsdProjection::none);
-  for (const std::shared_ptr<Term>& term : setup_.terms) term->evaluate(x, &gradient, nullptr, PsdProjection::none);
+Eigen::VectorXd Simulation::start_force(double t_stage) {
+  activate(time_);
+  problem_.at_time(time_);
+  Eigen::VectorXd gradient = Eigen::VectorXd::Zero(x_.size());
+  elastic_.evaluate(x_, &gradient, nullptr, PsdProjection::none);
+  bool lagged = false;
+  for (const std::shared_ptr<Term>& term : setup_.terms) {
+    if (term->lagged()) lagged = true;
+    else term->evaluate(x_, &gradient, nullptr, PsdProjection::none);
+  }
+  if (!lagged) return -gradient;
+  // Friction: its data taken at x_n as the stage's solve takes them (after at_time of the stage's end), its
+  // force at x_n + (t_stage − t_n) v_n: what sliding at v_n meets. A function of x_n and v_n alone, so that a
+  // resumed run or a retried step computes the same.
+  problem_.at_time(t_stage);
+  const Eigen::VectorXd slid = x_ + (t_stage - time_) * v_;
+  for (const std::shared_ptr<Term>& term : setup_.terms)
+    if (term->lagged()) {
+      term->begin_step(x_, time_, t_stage);
+      term->evaluate(slid, &gradient, nullptr, PsdProjection::none);
+    }
   return -gradient;
 }
 
@@ -401,7 +416,7 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
   constexpr double gamma = 0.58578643762690495;  // 2 − √2
   const SimulationState start = state();
   const double t_n = time_;
-  trapezoid_force_ = force_at(x_, t_n);
+  trapezoid_force_ = start_force(t_n + gamma * (t - t_n));
   if (!trapezoid_force_.allFinite()) {
     StepReport failed;
     failed.converged = false;
@@ -420,6 +435,7 @@ StepReport Simulation::solve(double t, double h, const NewtonOptions* newton) {
   }
   StepReport second = solve_stage(t, (1.0 - gamma) * h, newton, Stage::second);
   h_previous_ = 0.0;  // the next step starts from x and v alone
+  if (!second.converged && !second.interrupted) second.failure = "TR-BDF2's second stage: " + second.failure;
   accumulate(first.newton, second.newton);
   second.newton = std::move(first.newton);
   if (second.interrupted) restore(start);
@@ -527,7 +543,7 @@ StepReport Simulation::solve_stage(double t, double h, const NewtonOptions* newt
     if (!x_.allFinite()) x_ = x_n;  // never keep a non-finite state
     return report;
   }
-  ++steps_;
+  if (stage != Stage::trapezoid) ++steps_;  // a TR-BDF2 step counts once
   return report;
 }
 

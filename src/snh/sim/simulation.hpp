@@ -181,8 +181,10 @@ class Simulation {
   enum class Stage { whole, trapezoid, second };
   /// One solve to time t over h as `stage` says.
   StepReport solve_stage(double t, double h, const NewtonOptions* newton, Stage stage);
-  /// The force at x of every term but inertia (−their gradient, every DOF), the terms at time t.
-  [[nodiscard]] Eigen::VectorXd force_at(const Eigen::VectorXd& x, double t);
+  /// TR-BDF2's f_n: the force at the current state of every term but inertia (−their gradient, every DOF),
+  /// the terms at the current time; a lagged term's (friction) taken for the stage ending at t_stage, at the
+  /// slip that the current velocity makes over that stage.
+  [[nodiscard]] Eigen::VectorXd start_force(double t_stage);
   /// A dynamic step of length h from the current state as an incremental potential (dynamics.hpp): the
   /// velocity after it is (x − anchor)/h_eff, and predicted = anchor + h_eff v̂ is its inertial target and
   /// the solve's guess (TR-BDF2's trapezoidal stage: the guess x_n + h v_n; its target needs the forces).
@@ -216,9 +218,9 @@ class Simulation {
   // BDF2's history: previous_ is x_{n−1}; v_previous_ is v_{n−1}; h_previous_ the last step's length (0: none).
   Eigen::VectorXd v_previous_;
   double h_previous_ = 0.0;
-  Eigen::VectorXd trapezoid_force_;  ///< TR-BDF2: force_at(x_n) of the step being made
+  Eigen::VectorXd trapezoid_force_;  ///< TR-BDF2: start_force() of the step being made
   double time_ = 0.0;
-  int steps_ = 0;
+  int steps_ = 0;  ///< solves completed (a TR-BDF2 step, of two solves, counts once)
   double rest_volume_ = 0.0;
   std::vector<double> alpha_;  ///< per fibres entry, the active strain's α set last (fibre_strain)
 };
