@@ -540,7 +540,10 @@ StepReport Simulation::solve_stage(double t, double h, const NewtonOptions* newt
     report.failed_substep = 1;
     report.failed_time = t;
     report.failure = r.failure + worst_element(elastic_.deformation(x_.allFinite() ? x_ : x_n).min_J);
-    if (!x_.allFinite()) x_ = x_n;  // never keep a non-finite state
+    if (!x_.allFinite()) {  // never keep a non-finite state (nor the velocity made from it)
+      x_ = x_n;
+      v_ = v_n;
+    }
     return report;
   }
   if (stage != Stage::trapezoid) ++steps_;  // a TR-BDF2 step counts once
