@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 #include <utility>
 
 #include <fmt/format.h>
@@ -506,6 +507,23 @@ std::pair<SceneResult, SceneResult> interrupt_and_resume(Scene s, int stop_at, s
   return {std::move(cut), run_scene(again, log)};
 }
 
+struct ResumeRuns {
+  SceneResult whole, cut, resumed;
+};
+
+/// Scene j (named `name`) run whole into base/full, and into base/cut interrupted at Newton iteration `stop_at`
+/// and resumed there (interrupt_and_resume).
+ResumeRuns whole_and_resumed(const json& j, const std::string& name, const std::filesystem::path& base, int stop_at,
+                             std::ostream& log) {
+  Scene full = parse_scene(j, name), cut = full;
+  full.output.dir = base / "full";
+  cut.output.dir = base / "cut";
+  ResumeRuns r;
+  r.whole = run_scene(full, log);
+  std::tie(r.cut, r.resumed) = interrupt_and_resume(cut, stop_at, log);
+  return r;
+}
+
 TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
   // Backward Euler, BDF2 (whose checkpoint holds the step before) and TR-BDF2, with a starting velocity.
   for (const char* integrator : {"backward_euler", "bdf2", "tr_bdf2"}) {
@@ -515,13 +533,9 @@ TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
                            "initial": [{"type": "velocity", "value": [0.5, 0, 0], "region": {"min": [-1, -1, -1], "max": [1, 0, 1]}}]})");
   j["integrator"] = integrator;
   const auto base = std::filesystem::temp_directory_path() / ("snh_test_scene_resume_" + std::to_string(::getpid()));
-  Scene full = parse_scene(j, "resume.json"), cut = full;
-  full.output.dir = base / "full";
-  cut.output.dir = base / "cut";
   std::ostringstream log;
-  const SceneResult a = run_scene(full, log);
+  const auto [a, b, c] = whole_and_resumed(j, "resume.json", base, 50, log);
   ASSERT_TRUE(a.all_converged);
-  const auto [b, c] = interrupt_and_resume(cut, 50, log);
   ASSERT_EQ(b.interrupted_by, SIGINT);
   ASSERT_LT(b.frames.size(), 13u);
   ASSERT_TRUE(c.all_converged) << c.failure;
@@ -531,7 +545,7 @@ TEST(SceneRun, ResumeContinuesFromTheLastCompletedFrame) {
   EXPECT_NEAR(c.frames.back().kinetic_energy, a.frames.back().kinetic_energy, 1e-6);
   // Another scene in the same directory cannot resume there.
   Scene other = parse_scene(json::parse(R"({"mesh": {"box": {"res": 2}}, "frames": 12})"), "resume.json");
-  other.output.dir = cut.output.dir;
+  other.output.dir = base / "cut";
   other.run.resume = true;
   EXPECT_THROW((void)run_scene(other, log), std::invalid_argument);
   std::filesystem::remove_all(base);
@@ -547,14 +561,10 @@ TEST(SceneRun, ATrBdf2RunWithFrictionResumesAsItRan) {
       "colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0]}],
       "initial": [{"type": "velocity", "value": [2, 0, 0]}], "output": {"vtu": false}})");
   const auto base = std::filesystem::temp_directory_path() / ("snh_test_scene_resume_friction_" + std::to_string(::getpid()));
-  Scene full = parse_scene(j, "slide.json"), cut = full;
-  full.output.dir = base / "full";
-  cut.output.dir = base / "cut";
   std::ostringstream log;
-  const SceneResult a = run_scene(full, log);
+  const auto [a, b, c] = whole_and_resumed(j, "slide.json", base, 120, log);
   ASSERT_TRUE(a.all_converged) << a.failure;
   EXPECT_LT(a.frames.back().kinetic_energy, 0.6 * a.frames[1].kinetic_energy) << "friction slows the sliding box";
-  const auto [b, c] = interrupt_and_resume(cut, 120, log);
   ASSERT_EQ(b.interrupted_by, SIGINT);
   ASSERT_LT(b.frames.size(), 11u);
   ASSERT_GT(b.frames.size(), 2u) << "the run stopped after a frame or two, so the resumed run has a friction state to lack";

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <functional>
+#include <initializer_list>
 #include <iostream>
 
 #include "snh/mesh/box.hpp"
@@ -67,43 +68,58 @@ TEST(Bdf2, IsSecondOrderWhereBackwardEulerIsFirst) {
   }
 }
 
+/// A box in free fall: X + t u + t² g/2, at velocity u + t g.
+struct FreeFall {
+  Eigen::Vector3d g{0.5, -9.81, 0.2}, u{1.0, 2.0, -0.5};
+  Eigen::VectorXd X = flatten(box_hexes(2).vertices);
+  [[nodiscard]] Eigen::VectorXd exact(double t) const {
+    Eigen::VectorXd x = X;
+    for (Eigen::Index v = 0; v < X.size() / 3; ++v) x.segment<3>(3 * v) += t * u + 0.5 * t * t * g;
+    return x;
+  }
+  [[nodiscard]] Eigen::VectorXd velocity(double t) const {
+    Eigen::VectorXd v(X.size());
+    for (Eigen::Index i = 0; i < X.size() / 3; ++i) v.segment<3>(3 * i) = u + t * g;
+    return v;
+  }
+};
+
+/// Steps of the lengths `steps` from `state` under the fall's gravity, each in a simulation of its own (a
+/// simulation's steps are its dt; the state carried on, as a split step's parts do). `worst` becomes the
+/// largest error of the positions and velocities after any step; where aux_size ≥ 0, every state must hold
+/// that many numbers beside x.
+void fall(Integrator integrator, const FreeFall& f, SimulationState& state, std::initializer_list<double> steps, double& worst,
+          Eigen::Index aux_size = -1) {
+  worst = 0.0;
+  for (const double h : steps) {
+    SimulationSetup s = free_cube(integrator, h);
+    s.initial.resize(0);
+    s.gravity = f.g;
+    Simulation sim(std::move(s));
+    sim.restore(state);
+    const StepReport r = sim.step(state.time + h);
+    ASSERT_TRUE(r.converged) << r.failure;
+    worst = std::max(worst, (sim.x() - f.exact(sim.time())).cwiseAbs().maxCoeff());
+    worst = std::max(worst, (sim.v() - f.velocity(sim.time())).cwiseAbs().maxCoeff());
+    state = sim.state();
+    if (aux_size >= 0) ASSERT_EQ(state.aux.size(), aux_size);
+  }
+}
+
 TEST(Bdf2, VariableStepsIntegrateAFreeFallExactly) {
   // A body in free fall moves along a parabola, which BDF2's variable-step formula reproduces exactly once
-  // its history is exact; backward Euler's is off by h²g/2 a step. A simulation's steps are its dt, so each
-  // step length is a simulation of its own, carrying the state on (as a split step's parts do).
-  const Eigen::Vector3d g(0.5, -9.81, 0.2), u(1.0, 2.0, -0.5);
-  const Eigen::VectorXd X = flatten(box_hexes(2).vertices);
-  const Eigen::Index n = X.size();
-  const auto exact = [&](double t) {
-    Eigen::VectorXd x = X;
-    for (Eigen::Index v = 0; v < n / 3; ++v) x.segment<3>(3 * v) += t * u + 0.5 * t * t * g;
-    return x;
-  };
-  const auto velocity = [&](double t) {
-    Eigen::VectorXd v(n);
-    for (Eigen::Index i = 0; i < n / 3; ++i) v.segment<3>(3 * i) = u + t * g;
-    return v;
-  };
+  // its history is exact; backward Euler's is off by h²g/2 a step.
+  const FreeFall f;
+  const Eigen::Index n = f.X.size();
   for (const Integrator integrator : {Integrator::bdf2, Integrator::backward_euler}) {
     // At t = 0 after a step of 0.01 from t = −0.01: positions, velocity, and the history before.
-    SimulationState state{.x = exact(0.0), .aux = velocity(0.0), .time = 0.0, .steps = 1};
+    SimulationState state{.x = f.exact(0.0), .aux = f.velocity(0.0), .time = 0.0, .steps = 1};
     if (integrator == Integrator::bdf2) {
       state.aux.resize(3 * n + 1);
-      state.aux << velocity(0.0), exact(-0.01), velocity(-0.01), 0.01;
+      state.aux << f.velocity(0.0), f.exact(-0.01), f.velocity(-0.01), 0.01;
     }
     double worst = 0.0;
-    for (const double h : {0.01, 0.015, 0.02, 0.01, 0.005, 0.01, 0.01}) {  // ratios ½ to 2
-      SimulationSetup s = free_cube(integrator, h);
-      s.initial.resize(0);
-      s.gravity = g;
-      Simulation sim(std::move(s));
-      sim.restore(state);
-      const StepReport r = sim.step(state.time + h);
-      ASSERT_TRUE(r.converged) << r.failure;
-      worst = std::max(worst, (sim.x() - exact(sim.time())).cwiseAbs().maxCoeff());
-      worst = std::max(worst, (sim.v() - velocity(sim.time())).cwiseAbs().maxCoeff());
-      state = sim.state();
-    }
+    fall(integrator, f, state, {0.01, 0.015, 0.02, 0.01, 0.005, 0.01, 0.01}, worst);  // ratios ½ to 2
     if (integrator == Integrator::bdf2) {
       EXPECT_LT(worst, 1e-11) << "BDF2 is exact on a parabola";
     }
@@ -272,28 +288,10 @@ TEST(TrBdf2, IsSecondOrderWithDampingAndGravity) {
 TEST(TrBdf2, IntegratesAFreeFallExactlyFromRest) {
   // The trapezoidal rule and BDF2 are both exact on a parabola, and TR-BDF2 needs no history: from a state of
   // positions and velocity alone, through steps of any length, a free fall stays on its parabola.
-  const Eigen::Vector3d g(0.5, -9.81, 0.2), u(1.0, 2.0, -0.5);
-  const Eigen::VectorXd X = flatten(box_hexes(2).vertices);
-  const Eigen::Index n = X.size();
-  SimulationState state{.x = X, .aux = Eigen::VectorXd(n), .time = 0.0, .steps = 0};
-  for (Eigen::Index v = 0; v < n / 3; ++v) state.aux.segment<3>(3 * v) = u;
+  const FreeFall f;
+  SimulationState state{.x = f.exact(0.0), .aux = f.velocity(0.0), .time = 0.0, .steps = 0};
   double worst = 0.0;
-  for (const double h : {0.01, 0.015, 0.04, 0.01, 0.005, 0.02}) {
-    SimulationSetup s = free_cube(Integrator::tr_bdf2, h);
-    s.initial.resize(0);
-    s.gravity = g;
-    Simulation sim(std::move(s));
-    sim.restore(state);
-    const StepReport r = sim.step(state.time + h);
-    ASSERT_TRUE(r.converged) << r.failure;
-    const double t = sim.time();
-    for (Eigen::Index v = 0; v < n / 3; ++v) {
-      worst = std::max(worst, (sim.x().segment<3>(3 * v) - (X.segment<3>(3 * v) + t * u + 0.5 * t * t * g)).cwiseAbs().maxCoeff());
-      worst = std::max(worst, (sim.v().segment<3>(3 * v) - (u + t * g)).cwiseAbs().maxCoeff());
-    }
-    state = sim.state();
-    ASSERT_EQ(state.aux.size(), n) << "TR-BDF2's state is positions and velocity";
-  }
+  fall(Integrator::tr_bdf2, f, state, {0.01, 0.015, 0.04, 0.01, 0.005, 0.02}, worst, f.X.size());  // x and v alone
   EXPECT_LT(worst, 1e-11);
 }
 
