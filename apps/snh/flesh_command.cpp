@@ -60,7 +60,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     ParameterOptions params;
     bool quasi_static = false, dynamic = false, resume = false, keep_going = false, no_report = false, force = false;
     double fps = FleshSpec{}.fps;
-    double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness;
+    double soft_shell = 0.0, soft_stiffness = FleshSpec{}.soft_stiffness, radius_scale = FleshSpec{}.radius_scale;
     std::string joint_cells = to_string(FleshSpec{}.joint_cells);
     std::string integrator = "backward_euler";
     int threads = 0;
@@ -91,6 +91,11 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--cell-size", o->cell_size, "The cubes' edge in model units, instead of --resolution")
       ->check(finite_number(Sign::positive))
       ->excludes(res);
+  cmd->add_option("--radius-scale", o->radius_scale,
+                  "Scale every bone's capsule radius (default 1: half the mean distance from the bone to the skin nearest "
+                  "it). Below 1 where neighbouring capsules press flesh inside out as a joint bends: the run warns, naming "
+                  "the bones")
+      ->check(finite_number(Sign::positive));
   cmd->add_option("--soft-shell", o->soft_shell,
                                 "Bind softly the flesh within this distance outside the bones' capsules (model units): springs "
                                 "pull it toward where its bone carries it (default: none, only the capsules' hard binding)");
@@ -172,6 +177,7 @@ void add_flesh_command(CLI::App& app, int& exit_code) {
     if (cmd->count("--resolution")) j["flesh"]["resolution"] = o->resolution;
     if (cmd->count("--cell-size")) j["flesh"]["cell_size"] = o->cell_size;
     if (!o->animation.empty()) j["flesh"]["animation"] = o->animation;
+    if (cmd->count("--radius-scale")) j["flesh"]["radius_scale"] = o->radius_scale;
     if (cmd->count("--soft-shell")) j["flesh"]["soft_binding"]["shell"] = o->soft_shell;
     if (cmd->count("--soft-stiffness")) j["flesh"]["soft_binding"]["stiffness"] = o->soft_stiffness;
     j["flesh"]["joint_cells"] = o->joint_cells;

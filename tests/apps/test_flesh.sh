@@ -44,6 +44,15 @@ python3 "$HERE/check_usda.py" "$work/broken.usda" > /dev/null 2>&1 && bad "check
   && grep -q '^soft binding: [1-9][0-9]* more volume vertices within 0.15 of the capsules, pulled by springs of 5 x E x h' "$work/soft.log" \
   && grep -q '"stiffness": 5' "$work/soft/stats.json" && grep -q '"all_converged": true' "$work/soft/stats.json" \
   && ok || bad "soft binding: $(tail -2 "$work/soft.log")"
+# At resolution 24 the limb's default capsules press the flesh at the bent elbow inside out: the header names the
+# two bones; at --radius-scale 0.4 they leave it room, and the header says the radii were scaled.
+"$SNH" flesh "$limb" --resolution 24 --out "$work/pressed" --no-report > "$work/pressed.log" 2>&1 \
+  && grep -q '^warning: the bones press flesh inside out in [0-9]* frames: in frame 24 (t = 1) \(shoulder>elbow and elbow>tip\|elbow>tip and shoulder>elbow\) carry' "$work/pressed.log" \
+  && ok || bad "pressed flesh: $(grep -c 'press flesh' "$work/pressed.log") warnings; $(tail -1 "$work/pressed.log")"
+"$SNH" flesh "$limb" --resolution 24 --radius-scale 0.4 --out "$work/roomy" --no-report > "$work/roomy.log" 2>&1 \
+  && grep -q '^bones: 3 binding [0-9]* volume vertices, capsule radii 0.4 x the default (shoulder>elbow' "$work/roomy.log" \
+  && ! grep -q 'press flesh' "$work/roomy.log" && grep -q '"radius_scale": 0.4' "$work/roomy/stats.json" \
+  && ok || bad "--radius-scale 0.4: $(grep -E '^bones|press' "$work/roomy.log" | cut -c1-200)"
 
 # A ground plane the bending limb would pass below (its skin reaches y = -0.35 at the end without it): with
 # --ground -0.33 every frame's render surface stays above it, with contact pairs reported; self-contact on.
@@ -161,6 +170,7 @@ flesh_error clip_name 'no animation clip "wave"' "$limb" --animation wave
 flesh_error lame "go together" "$limb" --mu 1
 flesh_error soft_stiffness "flesh.soft_binding.stiffness: must be > 0, got 0" "$limb" --soft-stiffness 0
 flesh_error joint_cells "joint-cells: loose not in" "$limb" --joint-cells loose
+flesh_error radius_scale "radius-scale" "$limb" --radius-scale 0
 flesh_error soft_shell "flesh.soft_binding.shell: must be > 0, got -1" "$limb" --soft-shell -1
 flesh_error integrator_alone "--integrator requires --dynamic" "$limb" --integrator bdf2
 flesh_error integrator_unknown "--integrator: rk4 not in" "$limb" --dynamic --integrator rk4

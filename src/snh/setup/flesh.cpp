@@ -423,7 +423,7 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where, std::string_v
   f.bones = bones_of(m.skeleton, f.bind_world);
   const BoneReach reach = bone_reach(f.bones, m.surface_vertices);
   const std::vector<double> radii = default_radii(reach);
-  for (std::size_t b = 0; b < f.bones.size(); ++b) f.bones[b].radius = radii[b];
+  for (std::size_t b = 0; b < f.bones.size(); ++b) f.bones[b].radius = spec.radius_scale * radii[b];
   const double longest = (m.surface_vertices.rowwise().maxCoeff() - m.surface_vertices.rowwise().minCoeff()).maxCoeff();
   if (spec.cell_size > 0.0 && spec.resolution > 0)
     throw std::invalid_argument(fmt::format("{}: give a resolution or a cell size, not both", where));
@@ -511,6 +511,71 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where, std::string_v
                                               where));
   }
   return f;
+}
+
+PressedFlesh pressed_flesh(const std::shared_ptr<const Flesh>& flesh, const std::vector<double>& times) {
+  PressedFlesh out;
+  const double h = flesh->cell_size, near = 0.5 * h, apart = 2.0 * h * (1.0 - 1e-9);  // two lattice cells apart count, to rounding
+  const Eigen::MatrixXi& cells = flesh->volume.cells;
+  // The bound vertices at the border of their joint's bound flesh (sharing a cell with a vertex that joint does
+  // not hold): where two joints' bound flesh overlaps, such vertices of each lie inside the other's, so the
+  // closest pairs are among them.
+  std::vector<int> joint_of(static_cast<std::size_t>(flesh->volume.vertex_count()), -1);
+  for (std::size_t i = 0; i < flesh->binding.vertex.size(); ++i)
+    joint_of[static_cast<std::size_t>(flesh->binding.vertex[i])] = flesh->bones[static_cast<std::size_t>(flesh->binding.bone[i])].joint;
+  std::vector<char> border(joint_of.size(), 0);
+  for (Eigen::Index c = 0; c < cells.cols(); ++c)
+    for (Eigen::Index a = 0; a < cells.rows(); ++a)
+      for (Eigen::Index b = 0; b < cells.rows(); ++b)
+        if (const int j = joint_of[static_cast<std::size_t>(cells(a, c))]; j >= 0 && joint_of[static_cast<std::size_t>(cells(b, c))] != j)
+          border[static_cast<std::size_t>(cells(a, c))] = 1;
+  Binding bound;
+  for (std::size_t i = 0; i < flesh->binding.vertex.size(); ++i)
+    if (border[static_cast<std::size_t>(flesh->binding.vertex[i])]) {
+      bound.vertex.push_back(flesh->binding.vertex[i]);
+      bound.bone.push_back(flesh->binding.bone[i]);
+    }
+  if (bound.vertex.empty() || !(h > 0.0)) return out;
+  const BoneCarried carried(flesh, bound);
+  const auto n = static_cast<Eigen::Index>(bound.vertex.size());
+  Eigen::Matrix3Xd at;
+  Eigen::Matrix<std::int64_t, 3, Eigen::Dynamic> cell(3, n);
+  std::vector<std::pair<std::int64_t, int>> grid(bound.vertex.size());  // (cube of side `near`, vertex), sorted
+  auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) { return (x << 42) | (y << 21) | z; };
+  double worst = 1.0;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    carried.at(times[k], at);
+    const Eigen::Vector3d lo = at.rowwise().minCoeff().array() - near;  // every cube index >= 1
+    for (Eigen::Index i = 0; i < n; ++i) {
+      for (int d = 0; d < 3; ++d) cell(d, i) = static_cast<std::int64_t>(std::floor((at(d, i) - lo(d)) / near));
+      grid[static_cast<std::size_t>(i)] = {key(cell(0, i), cell(1, i), cell(2, i)), static_cast<int>(i)};
+    }
+    std::sort(grid.begin(), grid.end());
+    bool pressed = false;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const int ji = joint_of[static_cast<std::size_t>(bound.vertex[static_cast<std::size_t>(i)])];
+      for (std::int64_t dx = -1; dx <= 1; ++dx)
+        for (std::int64_t dy = -1; dy <= 1; ++dy) {  // the three cubes along z have consecutive keys
+          const std::int64_t first = key(cell(0, i) + dx, cell(1, i) + dy, cell(2, i) - 1), last = first + 2;
+          for (auto it = std::lower_bound(grid.begin(), grid.end(), std::pair<std::int64_t, int>{first, 0});
+               it != grid.end() && it->first <= last; ++it) {
+            const int j = it->second;
+            if (j <= i || joint_of[static_cast<std::size_t>(bound.vertex[static_cast<std::size_t>(j)])] == ji) continue;
+            const double d = (at.col(i) - at.col(j)).norm();
+            const double rest = (flesh->volume.vertices.col(bound.vertex[static_cast<std::size_t>(i)]) -
+                                 flesh->volume.vertices.col(bound.vertex[static_cast<std::size_t>(j)]))
+                                    .norm();
+            if (d >= near || rest < apart) continue;
+            pressed = true;
+            if (d / rest < worst)
+              worst = d / rest, out = {.frame = static_cast<int>(k), .time = times[k], .bone_a = bound.bone[static_cast<std::size_t>(i)],
+                                       .bone_b = bound.bone[static_cast<std::size_t>(j)], .rest = rest, .closest = d, .frames = out.frames};
+          }
+        }
+    }
+    out.frames += pressed ? 1 : 0;
+  }
+  return out;
 }
 
 KinematicSet bone_kinematics(std::shared_ptr<const Flesh> flesh) {

@@ -62,6 +62,10 @@ struct FleshSpec {
   int resolution = 0;
   double cell_size = 0.0;                    ///< > 0: the cubes' edge in model units instead of a resolution
   std::vector<BoneRadius> radii;
+  /// Scales every default capsule radius (half the mean distance from the bone to its nearest skin); radii
+  /// given per joint in `radii` are taken as given. Below 1 where the capsules of neighbouring bones would
+  /// press their bound flesh into each other as a joint bends (a fist's knuckles, at fine resolutions).
+  double radius_scale = 1.0;
   /// Soft binding: the volume vertices within `soft_shell` (model units; 0: none) outside a capsule are
   /// pulled toward where their bone carries them by springs of stiffness soft_stiffness × E × h × weight
   /// (E Young's modulus, h the cell size: 1 is about as stiff as one cell of flesh; weight fading from 1 at
@@ -140,6 +144,21 @@ struct Flesh {
 
 /// The bones' kinematic set: the bound vertices, moved rigidly with their bones' joints by the clip.
 [[nodiscard]] KinematicSet bone_kinematics(std::shared_ptr<const Flesh> flesh);
+
+/// Where the bones press their bound flesh into each other: two volume vertices bound to bones of different
+/// joints, at least two cells apart at rest, carried closer than half a cell. The flesh between them then keeps
+/// under a quarter of its rest thickness and (at ν near ½) cannot keep its volume: it turns inside out, and
+/// Newton pays for it. It happens where the capsules of neighbouring bones overlap as a joint bends (a fist's
+/// knuckles), and shows at fine resolutions, whose cells resolve the squeezed layer. `frame` < 0: nowhere.
+struct PressedFlesh {
+  int frame = -1;             ///< index into the times given: the frame with the smallest ratio
+  double time = 0.0;
+  int bone_a = -1, bone_b = -1;
+  double rest = 0.0, closest = 0.0;  ///< the pair's distance at rest and in that frame (model units)
+  int frames = 0;             ///< how many of the times press flesh so
+};
+///   times  the run's frame times (the bones' poses checked)
+[[nodiscard]] PressedFlesh pressed_flesh(const std::shared_ptr<const Flesh>& flesh, const std::vector<double>& times);
 
 /// The soft binding's springs (null without softly bound vertices): stiffness soft_stiffness × youngs ×
 /// cell size × weight per vertex, toward the vertex's rest position carried rigidly by its bone's joint.

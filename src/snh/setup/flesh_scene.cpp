@@ -50,6 +50,7 @@ void add_flesh_settings(const Flesh& flesh, const FleshSpec& spec, json& setting
   settings["seam_vertices"] = flesh.seam_vertices;
   settings["surface_volume"] = flesh.surface_volume;
   settings["bones"] = bones;
+  settings["radius_scale"] = spec.radius_scale;
   settings["joint_cells"] = to_string(spec.joint_cells);
   settings["released_vertices"] = flesh.released.vertex.size();
   json parts = json::array();
@@ -125,7 +126,8 @@ void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream&
   std::string counts;
   for (std::size_t b = 0; b < flesh.bones.size(); ++b)
     counts += fmt::format("{}{} {}", b ? ", " : "", flesh.bones[b].name, flesh.bound_per_bone[b]);
-  o << fmt::format("bones: {} binding {} volume vertices ({})\n", flesh.bones.size(), flesh.binding.vertex.size(), counts);
+  o << fmt::format("bones: {} binding {} volume vertices{} ({})\n", flesh.bones.size(), flesh.binding.vertex.size(),
+                   spec.radius_scale != 1.0 ? fmt::format(", capsule radii {:g} x the default", spec.radius_scale) : "", counts);
   if (!flesh.free_parts.empty()) {
     std::string parts;
     for (std::size_t i = 0; i < flesh.free_parts.size(); ++i) parts += (i ? ", " : "") + flesh.free_parts[i];
@@ -293,9 +295,24 @@ void add_flesh_output(const BuiltScene& b, const Simulation& sim, RunPlan& plan)
     plan.settings["contact"]["bone_colliders"] =
         std::count_if(points.begin(), points.end(), [](const std::vector<int>& p) { return !p.empty(); });
   }
+  std::vector<double> times;  // the frames' times, as the run's steps place them
+  for (int i = 1; i <= b.frames; ++i) times.push_back(b.end_time * i / b.frames);
+  const PressedFlesh pressed = pressed_flesh(b.body->flesh, times);
+  plan.settings["pressed_flesh"] = nullptr;
+  if (pressed.frame >= 0)
+    plan.settings["pressed_flesh"] = {{"frames", pressed.frames}, {"worst_frame", pressed.frame + 1}, {"time", pressed.time},
+                                      {"bones", {flesh.bones[pressed.bone_a].name, flesh.bones[pressed.bone_b].name}},
+                                      {"rest_distance", pressed.rest}, {"closest", pressed.closest}};
   const auto base_header = plan.header;
-  plan.header = [&flesh, &spec, base_header](std::ostream& o) {
+  plan.header = [&flesh, &spec, base_header, pressed](std::ostream& o) {
     write_flesh_header(flesh, spec, o);
+    if (pressed.frame >= 0)
+      o << fmt::format("warning: the bones press flesh inside out in {} frame{}: in frame {} (t = {:.4g}) {} and {} carry bound "
+                       "vertices {:.3g} apart at rest to {:.3g} ({:.0f} %), where their capsules overlap; the flesh between "
+                       "cannot keep its volume (a smaller --radius-scale, or smaller radii for these bones, leaves it room)\n",
+                       pressed.frames, pressed.frames == 1 ? "" : "s", pressed.frame + 1, pressed.time,
+                       flesh.bones[pressed.bone_a].name, flesh.bones[pressed.bone_b].name, pressed.rest, pressed.closest,
+                       100.0 * pressed.closest / pressed.rest);
     if (base_header) base_header(o);
   };
   const double rest_surface = surface_volume(flesh, flesh.model.vertices);

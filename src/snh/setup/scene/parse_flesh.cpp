@@ -93,6 +93,7 @@ std::optional<FleshSpec> parse_flesh(Keys& top, const std::filesystem::path& sou
       b.finish();
     }
   }
+  s.radius_scale = k.positive("radius_scale", s.radius_scale);
   const std::string joints = k.choice("joint_cells", to_string(s.joint_cells), {"soft", "free", "hard"});
   s.joint_cells = joints == "soft" ? JointCells::soft : joints == "free" ? JointCells::free : JointCells::hard;
   s.split_cells = k.boolean("split_cells", s.split_cells);
