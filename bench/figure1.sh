@@ -13,6 +13,7 @@
 # Usage: bench/figure1.sh [ELEMENTS]
 # Environment: SNH (default build/release/apps/snh), FRAMES (20), END_TIME (1.6667, seconds of the clip),
 #   SOLVER (mg; any --solver name), THREADS (0: all cores), JOINT_CELLS (free: see `snh flesh --help`),
+#   RADIUS_SCALE (1: the bones' default capsules; below 1 smaller ones, see `snh flesh --help`'s --radius-scale),
 #   OUT (default /tmp/snh-figure1/E-SOLVER), COMPARE (a second solver, e.g. cholmod: runs it too and prints
 #   the largest distance between the two runs' render surfaces, to show the same answer), REFERENCE (the run
 #   directory of an earlier benchmark, e.g. a copy of OUT/run: prints how far this run's render surfaces and
@@ -26,6 +27,7 @@ case "$ELEMENTS" in '' | *[!0-9]*) echo "figure1.sh: ELEMENTS must be a positive
 root="$(cd "$(dirname "$0")/.." && pwd)"
 SNH="${SNH:-$root/build/release/apps/snh}"
 FRAMES="${FRAMES:-20}" END_TIME="${END_TIME:-1.6667}" SOLVER="${SOLVER:-mg}" THREADS="${THREADS:-0}" JOINT_CELLS="${JOINT_CELLS:-free}"
+RADIUS_SCALE="${RADIUS_SCALE:-1}"
 OUT="${OUT:-/tmp/snh-figure1/$ELEMENTS-$SOLVER}"
 PY=/usr/bin/python3
 [ -x "$PY" ] || PY=python3
@@ -46,13 +48,14 @@ fi
 
 # scene RES SOLVER DIR FILE: the fist scene at lattice resolution RES.
 scene() {
-  "$PY" - "$root" "$1" "$2" "$3" "$4" "$FRAMES" "$END_TIME" "$JOINT_CELLS" "${CONTACT:-0}" <<'EOF'
+  "$PY" - "$root" "$1" "$2" "$3" "$4" "$FRAMES" "$END_TIME" "$JOINT_CELLS" "${CONTACT:-0}" "$RADIUS_SCALE" <<'EOF'
 import json, sys
-root, res, solver, out, path, frames, end, joints, contact = sys.argv[1:10]
+root, res, solver, out, path, frames, end, joints, contact, radius_scale = sys.argv[1:11]
 s = json.load(open(f"{root}/scenes/hand_fist.json"))
 s["flesh"]["model"] = f"{root}/data/hand/left.glb"
 s["flesh"]["resolution"] = int(res)
 s["flesh"]["joint_cells"] = joints
+s["flesh"]["radius_scale"] = float(radius_scale)
 s["frames"], s["end_time"] = int(frames), float(end)
 s["solver"] = {"linear": solver}
 s["output"] = {"dir": out}

@@ -4,7 +4,7 @@
 # motion per frame as figure1.sh's default 24 frames over 2 s), and writes figure1_growth.csv and
 # figure1_growth.png (seconds per step against elements, log-log, with the line of linear growth) in OUT.
 # Usage: bench/figure1_growth.sh [ELEMENTS ...]
-# Environment: as figure1.sh (SNH, SOLVER, THREADS, JOINT_CELLS, CONTACT; not REFERENCE, which is refused),
+# Environment: as figure1.sh (SNH, SOLVER, THREADS, JOINT_CELLS, RADIUS_SCALE, CONTACT; not REFERENCE, which is refused),
 # OUT (default /tmp/snh-figure1-growth).
 # With contact, run the frames where the fingers meet too: CONTACT=1 FRAMES=20 END_TIME=1.6667.
 set -euo pipefail
