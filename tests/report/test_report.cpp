@@ -371,6 +371,9 @@ FleshRun flesh_run(const std::string& name) {
   stats["bones"] = {{{"name", "shoulder>elbow"}, {"radius", 0.2}, {"bound", 9}},
                     {{"name", "wrist"}, {"radius", 0.1}, {"bound", 0}}};
   stats["usd"] = "flesh.usda";
+  stats["radius_scale"] = 0.6;
+  stats["pressed_flesh"] = {{"frames", 2}, {"worst_frame", 4}, {"time", 0.2}, {"bones", {"shoulder>elbow", "elbow>wrist"}},
+                            {"rest_distance", 0.5}, {"closest", 0.01}};
   std::ofstream(f.dir / "stats.json") << stats.dump(2) << "\n";
   return f;
 }
@@ -488,6 +491,10 @@ TEST(RunReport, FleshRunRenderSurfaceBonesAndSettings) {
   EXPECT_EQ(meta_value(d, "resolution"), "2");
   EXPECT_EQ(meta_value(d, "bound vertices"), "9");
   EXPECT_EQ(meta_value(d, "bones"), "2 (binding no vertex: wrist)");
+  EXPECT_EQ(meta_value(d, "capsule radii"), "0.6 x the default");
+  EXPECT_EQ(meta_value(d, "warning: bones press flesh inside out"),
+            "in 2 frame(s); worst frame 4: shoulder>elbow and elbow>wrist carry bound vertices 0.5 apart at rest to 0.01 (their "
+            "capsules overlap; smaller radii leave the flesh room)");
   EXPECT_EQ(meta_value(d, "USD stage"), (json{{"text", "flesh.usda"}, {"href", "flesh.usda"}}));
   fs::remove(f.dir / "flesh.usda");
   (void)write_report(f.dir);

@@ -308,6 +308,19 @@ void flesh_meta(json& meta, const fs::path& dir, const json& stats) {
     meta.push_back(
         {"bones", unbound.empty() ? std::to_string(count) : fmt::format("{} (binding no vertex: {})", count, unbound)});
   }
+  if (const auto it = stats.find("radius_scale"); it != stats.end() && it->is_number() && it->get<double>() != 1.0)
+    meta.push_back({"capsule radii", fmt::format("{:g} x the default", it->get<double>())});
+  // Where the bones press their flesh inside out (the run's header warns of it too).
+  if (const auto it = stats.find("pressed_flesh"); it != stats.end() && it->is_object()) {
+    const json& p = *it;
+    const json& bones = p.value("bones", json::array());
+    meta.push_back({"warning: bones press flesh inside out",
+                    fmt::format("in {} frame(s); worst frame {}: {} and {} carry bound vertices {:.3g} apart at rest to {:.3g} "
+                                "(their capsules overlap; smaller radii leave the flesh room)",
+                                p.value("frames", 0), p.value("worst_frame", 0), bones.size() > 0 ? bones[0].get<std::string>() : "?",
+                                bones.size() > 1 ? bones[1].get<std::string>() : "?", p.value("rest_distance", 0.0),
+                                p.value("closest", 0.0))});
+  }
   const std::string usd =
       stats.contains("usd") && stats.at("usd").is_string() ? stats.at("usd").get<std::string>() : "flesh.usda";
   if (fs::exists(dir / usd)) meta.push_back({"USD stage", {{"text", usd}, {"href", usd}}});
