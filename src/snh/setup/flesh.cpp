@@ -516,28 +516,24 @@ Flesh build_flesh(const FleshSpec& spec, const std::string& where, std::string_v
 PressedFlesh pressed_flesh(const std::shared_ptr<const Flesh>& flesh, const std::vector<double>& times) {
   PressedFlesh out;
   const double h = flesh->cell_size, near = 0.5 * h, apart = 2.0 * h * (1.0 - 1e-9);  // two lattice cells apart count, to rounding
+  const Binding& bound = flesh->binding;
+  if (bound.vertex.empty() || !(h > 0.0)) return out;
   const Eigen::MatrixXi& cells = flesh->volume.cells;
   // The bound vertices at the border of their joint's bound flesh (sharing a cell with a vertex that joint does
-  // not hold): where two joints' bound flesh overlaps, such vertices of each lie inside the other's, so the
-  // closest pairs are among them.
+  // not hold): where two joints' bound flesh overlaps, the border of one passes through the other (or lies wholly
+  // inside it), so overlaps show at borders. Only those are asked for neighbours, among all bound vertices.
   std::vector<int> joint_of(static_cast<std::size_t>(flesh->volume.vertex_count()), -1);
-  for (std::size_t i = 0; i < flesh->binding.vertex.size(); ++i)
-    joint_of[static_cast<std::size_t>(flesh->binding.vertex[i])] = flesh->bones[static_cast<std::size_t>(flesh->binding.bone[i])].joint;
+  for (std::size_t i = 0; i < bound.vertex.size(); ++i)
+    joint_of[static_cast<std::size_t>(bound.vertex[i])] = flesh->bones[static_cast<std::size_t>(bound.bone[i])].joint;
   std::vector<char> border(joint_of.size(), 0);
   for (Eigen::Index c = 0; c < cells.cols(); ++c)
     for (Eigen::Index a = 0; a < cells.rows(); ++a)
       for (Eigen::Index b = 0; b < cells.rows(); ++b)
         if (const int j = joint_of[static_cast<std::size_t>(cells(a, c))]; j >= 0 && joint_of[static_cast<std::size_t>(cells(b, c))] != j)
           border[static_cast<std::size_t>(cells(a, c))] = 1;
-  Binding bound;
-  for (std::size_t i = 0; i < flesh->binding.vertex.size(); ++i)
-    if (border[static_cast<std::size_t>(flesh->binding.vertex[i])]) {
-      bound.vertex.push_back(flesh->binding.vertex[i]);
-      bound.bone.push_back(flesh->binding.bone[i]);
-    }
-  if (bound.vertex.empty() || !(h > 0.0)) return out;
   const BoneCarried carried(flesh, bound);
   const auto n = static_cast<Eigen::Index>(bound.vertex.size());
+  auto vertex = [&](Eigen::Index i) { return bound.vertex[static_cast<std::size_t>(i)]; };
   Eigen::Matrix3Xd at;
   Eigen::Matrix<std::int64_t, 3, Eigen::Dynamic> cell(3, n);
   std::vector<std::pair<std::int64_t, int>> grid(bound.vertex.size());  // (cube of side `near`, vertex), sorted
@@ -553,18 +549,17 @@ PressedFlesh pressed_flesh(const std::shared_ptr<const Flesh>& flesh, const std:
     std::sort(grid.begin(), grid.end());
     bool pressed = false;
     for (Eigen::Index i = 0; i < n; ++i) {
-      const int ji = joint_of[static_cast<std::size_t>(bound.vertex[static_cast<std::size_t>(i)])];
+      if (!border[static_cast<std::size_t>(vertex(i))]) continue;
+      const int ji = joint_of[static_cast<std::size_t>(vertex(i))];
       for (std::int64_t dx = -1; dx <= 1; ++dx)
         for (std::int64_t dy = -1; dy <= 1; ++dy) {  // the three cubes along z have consecutive keys
           const std::int64_t first = key(cell(0, i) + dx, cell(1, i) + dy, cell(2, i) - 1), last = first + 2;
           for (auto it = std::lower_bound(grid.begin(), grid.end(), std::pair<std::int64_t, int>{first, 0});
                it != grid.end() && it->first <= last; ++it) {
             const int j = it->second;
-            if (j <= i || joint_of[static_cast<std::size_t>(bound.vertex[static_cast<std::size_t>(j)])] == ji) continue;
+            if (joint_of[static_cast<std::size_t>(vertex(j))] == ji) continue;
             const double d = (at.col(i) - at.col(j)).norm();
-            const double rest = (flesh->volume.vertices.col(bound.vertex[static_cast<std::size_t>(i)]) -
-                                 flesh->volume.vertices.col(bound.vertex[static_cast<std::size_t>(j)]))
-                                    .norm();
+            const double rest = (flesh->volume.vertices.col(vertex(i)) - flesh->volume.vertices.col(vertex(j))).norm();
             if (d >= near || rest < apart) continue;
             pressed = true;
             if (d / rest < worst)
