@@ -81,10 +81,15 @@ Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X,
   return out;
 }
 
+std::vector<int> bound_joints(const Binding& binding, const std::vector<Bone>& bones, Eigen::Index vertices) {
+  std::vector<int> joint(static_cast<std::size_t>(vertices), -1);
+  for (std::size_t i = 0; i < binding.vertex.size(); ++i) joint[static_cast<std::size_t>(binding.vertex[i])] = bones[binding.bone[i]].joint;
+  return joint;
+}
+
 JointSplit split_at_joints(const Binding& binding, const std::vector<Bone>& bones, const Eigen::MatrixXi& cells,
                            Eigen::Index vertices) {
-  std::vector<int> joint(static_cast<std::size_t>(vertices), -1);  // the joint each bound vertex moves with
-  for (std::size_t i = 0; i < binding.vertex.size(); ++i) joint[static_cast<std::size_t>(binding.vertex[i])] = bones[binding.bone[i]].joint;
+  const std::vector<int> joint = bound_joints(binding, bones, vertices);  // the joint each bound vertex moves with
   std::vector<bool> release(static_cast<std::size_t>(vertices), false);
   for (Eigen::Index c = 0; c < cells.cols(); ++c) {
     int first = -1;

@@ -59,6 +59,9 @@ using BoneAccess = std::function<bool(Eigen::Index vertex, int bone)>;
 ///   X  3 by #V volume rest positions
 [[nodiscard]] Binding bind_to_bones(const std::vector<Bone>& bones, const Eigen::Matrix3Xd& X, const BoneAccess& may = {});
 
+/// Per volume vertex (of `vertices`) the joint whose bone binds it, −1 for a vertex no bone binds.
+[[nodiscard]] std::vector<int> bound_joints(const Binding& binding, const std::vector<Bone>& bones, Eigen::Index vertices);
+
 /// A binding split at the joints: `released` holds the bound vertices that share a cell with a vertex bound to
 /// a bone of another joint (such a cell spans a joint, and two rigid motions at once crush or tear it as the
 /// joint bends: Newton stalls next to it), `kept` the rest, so that no cell is held by two joints.

@@ -522,9 +522,7 @@ PressedFlesh pressed_flesh(const std::shared_ptr<const Flesh>& flesh, const std:
   // The bound vertices at the border of their joint's bound flesh (sharing a cell with a vertex that joint does
   // not hold): where two joints' bound flesh overlaps, the border of one passes through the other (or lies wholly
   // inside it), so overlaps show at borders. Only those are asked for neighbours, among all bound vertices.
-  std::vector<int> joint_of(static_cast<std::size_t>(flesh->volume.vertex_count()), -1);
-  for (std::size_t i = 0; i < bound.vertex.size(); ++i)
-    joint_of[static_cast<std::size_t>(bound.vertex[i])] = flesh->bones[static_cast<std::size_t>(bound.bone[i])].joint;
+  const std::vector<int> joint_of = bound_joints(bound, flesh->bones, flesh->volume.vertex_count());
   std::vector<char> border(joint_of.size(), 0);
   for (Eigen::Index c = 0; c < cells.cols(); ++c)
     for (Eigen::Index a = 0; a < cells.rows(); ++a)
@@ -538,7 +536,6 @@ PressedFlesh pressed_flesh(const std::shared_ptr<const Flesh>& flesh, const std:
   Eigen::Matrix<std::int64_t, 3, Eigen::Dynamic> cell(3, n);
   std::vector<std::pair<std::int64_t, int>> grid(bound.vertex.size());  // (cube of side `near`, vertex), sorted
   auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) { return (x << 42) | (y << 21) | z; };
-  double worst = 1.0;
   for (std::size_t k = 0; k < times.size(); ++k) {
     carried.at(times[k], at);
     const Eigen::Vector3d lo = at.rowwise().minCoeff().array() - near;  // every cube index >= 1
@@ -562,9 +559,13 @@ PressedFlesh pressed_flesh(const std::shared_ptr<const Flesh>& flesh, const std:
             const double rest = (flesh->volume.vertices.col(vertex(i)) - flesh->volume.vertices.col(vertex(j))).norm();
             if (d >= near || rest < apart) continue;
             pressed = true;
-            if (d / rest < worst)
-              worst = d / rest, out = {.frame = static_cast<int>(k), .time = times[k], .bone_a = bound.bone[static_cast<std::size_t>(i)],
-                                       .bone_b = bound.bone[static_cast<std::size_t>(j)], .rest = rest, .closest = d, .frames = out.frames};
+            if (out.frame >= 0 && d / rest >= out.closest / out.rest) continue;  // not worse than the worst so far
+            out.frame = static_cast<int>(k);
+            out.time = times[k];
+            out.bone_a = bound.bone[static_cast<std::size_t>(i)];
+            out.bone_b = bound.bone[static_cast<std::size_t>(j)];
+            out.rest = rest;
+            out.closest = d;
           }
         }
     }
