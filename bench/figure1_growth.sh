@@ -5,7 +5,9 @@
 # figure1_growth.png (seconds per step against elements, log-log, with the line of linear growth) in OUT.
 # Usage: bench/figure1_growth.sh [ELEMENTS ...]
 # Environment: as figure1.sh (SNH, SOLVER, THREADS, JOINT_CELLS, RADIUS_SCALE, CONTACT; not REFERENCE, which is refused),
-# OUT (default /tmp/snh-figure1-growth).
+# OUT (default /tmp/snh-figure1-growth), BESIDE (an earlier run's figure1_growth.csv, drawn beside this run's
+# curve in the plot, e.g. the same sizes with the default capsules) and BESIDE_LABEL (its legend, default
+# "earlier run").
 # With contact, run the frames where the fingers meet too: CONTACT=1 FRAMES=20 END_TIME=1.6667.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -13,6 +15,13 @@ here="$(cd "$(dirname "$0")" && pwd)"
 if [ -n "${REFERENCE:-}" ]; then
   echo "figure1_growth.sh: REFERENCE compares one run with an earlier run of the same size: use it with bench/figure1.sh" >&2
   exit 2
+fi
+# BESIDE is checked before anything runs: a table this script wrote.
+if [ -n "${BESIDE:-}" ]; then
+  if [ ! -f "$BESIDE" ] || [ "$(head -1 "$BESIDE" 2>/dev/null)" != "elements,dofs,newton_per_step,cg_per_step,seconds_per_step,peak_mib" ]; then
+    echo "figure1_growth.sh: BESIDE=$BESIDE is not a figure1_growth.csv (an earlier run's table, from its OUT)" >&2
+    exit 2
+  fi
 fi
 sizes=("$@")
 [ ${#sizes[@]} -gt 0 ] || sizes=(25000 50000 100000 200000)
@@ -33,16 +42,29 @@ done
 cat "$csv"
 PY=/usr/bin/python3
 [ -x "$PY" ] || PY=python3
-[ "$(wc -l < "$csv")" -gt 1 ] && "$PY" - "$csv" "$OUT/figure1_growth.png" "${CONTACT:-0}" <<'EOF'
+[ "$(wc -l < "$csv")" -gt 1 ] && "$PY" - "$csv" "$OUT/figure1_growth.png" "${CONTACT:-0}" "${RADIUS_SCALE:-1}" "${BESIDE:-}" \
+  "${BESIDE_LABEL:-earlier run}" <<'EOF'
 import csv, sys
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
-rows = list(csv.DictReader(open(sys.argv[1])))
-e = [int(r["elements"]) for r in rows]
-s = [float(r["seconds_per_step"]) for r in rows]
+radius_scale, beside, beside_label = float(sys.argv[4]), sys.argv[5], sys.argv[6]
+
+
+def curve(path):
+    rows = list(csv.DictReader(open(path)))
+    return rows, [int(r["elements"]) for r in rows], [float(r["seconds_per_step"]) for r in rows]
+
+
+rows, e, s = curve(sys.argv[1])
 fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
-ax.loglog(e, s, "o-", label="snh (mg), seconds per step")
+label = "snh (mg), seconds per step"
+if radius_scale != 1.0:
+    label += f", capsule radii {radius_scale:g} x the default"
+ax.loglog(e, s, "o-", label=label)
+if beside:
+    _, be, bs = curve(beside)
+    ax.loglog(be, bs, "s-", color="tab:red", label=f"{beside_label}, seconds per step")
 ax.loglog(e, [s[0] * x / e[0] for x in e], "--", color="gray", label="linear growth from the smallest")
 for x, y, r in zip(e, s, rows):
     ax.annotate(f"{float(r['newton_per_step']):.1f} Newton, {r['cg_per_step']} CG", (x, y), textcoords="offset points",

@@ -5,7 +5,9 @@
 #   2. against a copy with one surface vertex moved: exit 1, that frame named;
 #   3. REFERENCE not a directory, or without the frames this run makes: exit 2 before anything runs;
 #   4. REFERENCE the very directory the run would replace: exit 2, and the directory is left as it was;
-#   5. bench/figure1_growth.sh (runs of several sizes) refuses REFERENCE: exit 2, before anything runs.
+#   5. bench/figure1_growth.sh (runs of several sizes) refuses REFERENCE: exit 2, before anything runs;
+#   6. figure1_growth.sh draws an earlier table BESIDE its own (exit 0, the plot written), and refuses a BESIDE
+#      that is not such a table: exit 2, before anything runs.
 # Usage: test_bench_figure1.sh SNH REPOSITORY
 set -u
 SNH="$1"
@@ -14,7 +16,7 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 pass=0 fail=0
 # shellcheck source=lib.sh
-. "$(dirname "$0")/lib.sh"  # ok, bad, expect_exit
+. "$(dirname "$0")/lib.sh"  # ok, bad, expect_exit, expect_error
 
 out="$(SNH="$SNH" FRAMES=2 END_TIME=0.1667 OUT="$work/out" bash "$root/bench/figure1.sh" 2000 2>&1)"
 code=$?
@@ -49,6 +51,18 @@ else bad "the refused reference $work/out/run was changed"; fi
 expect_exit 2 "figure1_growth.sh with REFERENCE" '^figure1_growth.sh: REFERENCE compares one run' -- \
   env REFERENCE="$work/same" SNH="$SNH" OUT="$work/growth" bash "$root/bench/figure1_growth.sh" 2000
 if [ ! -e "$work/growth" ]; then ok; else bad "figure1_growth.sh wrote $work/growth before refusing REFERENCE"; fi
+
+# A one-size growth run with smaller capsules, its own table drawn beside it as an earlier run's would be.
+printf 'elements,dofs,newton_per_step,cg_per_step,seconds_per_step,peak_mib\n1000,3000,3.0,20,0.10,100\n2000,6000,3.0,20,0.20,120\n' > "$work/earlier.csv"
+expect_exit 0 "figure1_growth.sh with BESIDE" '^plot: .*/growth2/figure1_growth.png$' -- \
+  env BESIDE="$work/earlier.csv" BESIDE_LABEL="default capsules" RADIUS_SCALE=0.6 SNH="$SNH" FRAMES=1 END_TIME=0.0833 \
+  OUT="$work/growth2" bash "$root/bench/figure1_growth.sh" 2000
+if [ -s "$work/growth2/figure1_growth.png" ]; then ok; else bad "figure1_growth.sh with BESIDE drew no plot"; fi
+expect_error "BESIDE that is not a growth table" '^figure1_growth.sh: BESIDE=.*/stats.json is not a figure1_growth.csv' -- \
+  env BESIDE="$work/same/stats.json" SNH="$SNH" OUT="$work/growth3" bash "$root/bench/figure1_growth.sh" 2000
+expect_error "BESIDE that does not exist" '^figure1_growth.sh: BESIDE=.*/none.csv is not a figure1_growth.csv' -- \
+  env BESIDE="$work/none.csv" SNH="$SNH" OUT="$work/growth3" bash "$root/bench/figure1_growth.sh" 2000
+if [ ! -e "$work/growth3" ]; then ok; else bad "figure1_growth.sh wrote $work/growth3 before refusing BESIDE"; fi
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
