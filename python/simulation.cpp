@@ -368,6 +368,7 @@ pyb::dict run_scene_py(const pyb::handle& scene_obj, std::optional<std::filesyst
   d["frames"] = static_cast<int>(r.frames.size());
   d["all_converged"] = r.all_converged;
   d["failure"] = r.failure;
+  d["warnings"] = r.warnings;
   d["unconverged_frames"] = r.unconverged;
   d["total_seconds"] = r.total_seconds;
   d["element"] = std::string(to_string(r.element));

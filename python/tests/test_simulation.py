@@ -339,6 +339,35 @@ def test_flesh_scene_from_a_dict(tmp_path):
     np.testing.assert_allclose(skin, obj, rtol=1e-9, atol=1e-12)
 
 
+def test_run_scene_returns_the_warnings_the_log_prints(tmp_path):
+    # The limb at resolution 24 bends its elbow 90 degrees: its default capsules press the flesh there inside out, its
+    # tip bone binds nothing, and frames converge with cells inside out. quiet=True prints nothing, so the dict
+    # carries each warning; they are the log's own "warning: " lines, as snh run prints them for the same scene.
+    import json
+    import re
+    import subprocess
+    from conftest import SOURCE
+    scene = {"flesh": {"model": str(SOURCE / "tests/data/flesh/limb.gltf"), "resolution": 24}}
+    r = snh.run_scene(scene, out=tmp_path / "pressed", quiet=True, report=False)
+    assert r["all_converged"]
+    w = r["warnings"]
+    assert any(re.match(r"the bones press flesh inside out in \d+ frames: in frame 24 \(t = 1\) "
+                        r"(shoulder>elbow and elbow>tip|elbow>tip and shoulder>elbow) carry", x) for x in w), w
+    assert w[-1] and re.fullmatch(r"\d+ frames converged with elements turned inside out \(at most \d+, in frame \d+\)", w[-1]), w
+    path = tmp_path / "limb.json"
+    path.write_text(json.dumps(scene))
+    log = subprocess.run([program("SNH_BIN"), "run", str(path), "--out", str(tmp_path / "cli"), "--no-report"], check=True,
+                         capture_output=True, text=True, timeout=120).stdout
+    assert [line[len("warning: "):] for line in log.splitlines() if line.startswith("warning: ")] == w[:-1]
+    # Capsules that leave the flesh room: nothing pressed, no cell inside out (the tip bone still binds nothing).
+    scene["flesh"]["radius_scale"] = 0.4
+    r = snh.run_scene(scene, out=tmp_path / "roomy", quiet=True, report=False)
+    assert r["all_converged"] and all(x.startswith("bone tip binds no volume vertex") for x in r["warnings"]), r["warnings"]
+    # A clean run warns of nothing.
+    box = {"mesh": {"box": {"element": "hex", "res": 2}}, "frames": 1}
+    assert snh.run_scene(box, out=tmp_path / "box", quiet=True, report=False)["warnings"] == []
+
+
 def test_a_dicts_paths_resolve_against_base_dir(tmp_path, monkeypatch):
     import json
     from conftest import SOURCE

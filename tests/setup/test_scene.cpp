@@ -636,6 +636,7 @@ TEST(SceneRun, AMeshFileRelativeToTheScene) {
   EXPECT_TRUE(r.all_converged) << r.failure;
   EXPECT_EQ(r.element, CellType::tet4);
   EXPECT_NE(log.str().find("1 inverted cell(s) re-oriented"), std::string::npos) << log.str();
+  EXPECT_EQ(r.warnings, std::vector<std::string>{"1 inverted cell(s) of the mesh re-oriented"});  // snh.run_scene's "warnings"
   // A broken mesh file: its reader's one-line error, naming the file and line.
   std::ofstream(dir / "meshes" / "two.ele") << "2 4 0\n1 1 2 3 4\n";
   try {

@@ -97,6 +97,7 @@ class RunLoop {
         solver_(sim.solver().name()) {}
 
   RunResult run() {
+    result_.warnings = plan_.warnings;
     prepare();
     const WriteOnException guard{[this] {
       if (unsaved_) write_progress("running", nullptr);

@@ -33,6 +33,10 @@ struct RunOutcome {
   int interrupted_by = 0;  ///< the signal (SIGINT, SIGTERM) that stopped the run; 0 if none
   double total_seconds = 0.0;
   double peak_memory_mib = 0.0;  ///< peak resident memory of the process (VmHWM)
+  /// What makes the results doubtful though the frames converged, one sentence each without the "warning: " the
+  /// log puts before it: the plan's (known before the first frame) and, for a scene, its frames that converged
+  /// with elements turned inside out. Empty for a clean run.
+  std::vector<std::string> warnings;
 };
 
 struct RunResult : RunOutcome {
@@ -60,6 +64,9 @@ struct RunPlan {
   bool keep_going = false;
   std::string fingerprint;        ///< the settings that decide the result (a resume must match)
   nlohmann::json settings;        ///< stats.json's fields that describe the run
+  /// What the run's set-up makes doubtful, known before its first frame (a flesh's bones that press flesh inside
+  /// out or bind nothing, a mesh's cells re-oriented): the header prints each, and the outcome starts with them.
+  std::vector<std::string> warnings;
   bool live_progress = false;     ///< the log is a terminal: a line updated at every Newton iteration
   /// Called before the first frame, after the directory is locked and checked: the run's header lines.
   std::function<void(std::ostream&)> header;

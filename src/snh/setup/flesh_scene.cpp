@@ -141,10 +141,24 @@ void write_flesh_header(const Flesh& flesh, const FleshSpec& spec, std::ostream&
     o << fmt::format("soft binding: {} more volume vertices within {:.4g} of the capsules, pulled by springs of {:g} x E x h "
                      "(fading to 0 at the shell's edge)\n",
                      flesh.soft.vertex.size(), spec.soft_shell, spec.soft_stiffness);
+}
+
+/// The flesh's warnings (RunPlan::warnings): bones that bind no volume vertex, and where the bones press their
+/// flesh inside out.
+std::vector<std::string> flesh_warnings(const Flesh& flesh, const PressedFlesh& pressed) {
+  std::vector<std::string> w;
   for (std::size_t b = 0; b < flesh.bones.size(); ++b)
     if (flesh.bound_per_bone[b] == 0)
-      o << fmt::format("warning: bone {} binds no volume vertex (capsule radius {:.4g}; cells {:.4g} wide)\n", flesh.bones[b].name,
-                       flesh.bones[b].radius, flesh.cell_size);
+      w.push_back(fmt::format("bone {} binds no volume vertex (capsule radius {:.4g}; cells {:.4g} wide)", flesh.bones[b].name,
+                              flesh.bones[b].radius, flesh.cell_size));
+  if (pressed.frame >= 0)
+    w.push_back(fmt::format("the bones press flesh inside out in {} frame{}: in frame {} (t = {:.4g}) {} and {} carry bound "
+                            "vertices {:.3g} apart at rest to {:.3g} ({:.0f} %), where their capsules overlap; the flesh between "
+                            "cannot keep its volume (a smaller --radius-scale, or smaller radii for these bones, leaves it room)",
+                            pressed.frames, pressed.frames == 1 ? "" : "s", pressed.frame + 1, pressed.time,
+                            flesh.bones[pressed.bone_a].name, flesh.bones[pressed.bone_b].name, pressed.rest, pressed.closest,
+                            100.0 * pressed.closest / pressed.rest));
+  return w;
 }
 
 /// The file name of part p's flesh cache: flesh_NAME.pc2, the name kept to letters, digits, '-' and '_' (others
@@ -303,16 +317,12 @@ void add_flesh_output(const BuiltScene& b, const Simulation& sim, RunPlan& plan)
     plan.settings["pressed_flesh"] = {{"frames", pressed.frames}, {"worst_frame", pressed.frame + 1}, {"time", pressed.time},
                                       {"bones", {flesh.bones[pressed.bone_a].name, flesh.bones[pressed.bone_b].name}},
                                       {"rest_distance", pressed.rest}, {"closest", pressed.closest}};
+  std::vector<std::string> warnings = flesh_warnings(flesh, pressed);
+  plan.warnings.insert(plan.warnings.end(), warnings.begin(), warnings.end());
   const auto base_header = plan.header;
-  plan.header = [&flesh, &spec, base_header, pressed](std::ostream& o) {
+  plan.header = [&flesh, &spec, base_header, warnings = std::move(warnings)](std::ostream& o) {
     write_flesh_header(flesh, spec, o);
-    if (pressed.frame >= 0)
-      o << fmt::format("warning: the bones press flesh inside out in {} frame{}: in frame {} (t = {:.4g}) {} and {} carry bound "
-                       "vertices {:.3g} apart at rest to {:.3g} ({:.0f} %), where their capsules overlap; the flesh between "
-                       "cannot keep its volume (a smaller --radius-scale, or smaller radii for these bones, leaves it room)\n",
-                       pressed.frames, pressed.frames == 1 ? "" : "s", pressed.frame + 1, pressed.time,
-                       flesh.bones[pressed.bone_a].name, flesh.bones[pressed.bone_b].name, pressed.rest, pressed.closest,
-                       100.0 * pressed.closest / pressed.rest);
+    for (const std::string& w : warnings) o << "warning: " << w << "\n";
     if (base_header) base_header(o);
   };
   const double rest_surface = surface_volume(flesh, flesh.model.vertices);

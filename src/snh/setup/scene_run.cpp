@@ -168,6 +168,17 @@ void add_muscle_output(const BuiltScene& b, RunPlan& plan) {
   };
 }
 
+/// The converged frames that hold inverted elements: how many, and the most in one frame (the first such frame).
+struct InsideOut {
+  int frames = 0, most = 0, worst = 0;
+};
+InsideOut inside_out_frames(const std::vector<StepRecord>& records) {
+  InsideOut io;
+  for (const StepRecord& rec : records)
+    if (rec.inverted > 0 && rec.converged && (++io.frames, rec.inverted > io.most)) io.most = rec.inverted, io.worst = rec.index;
+  return io;
+}
+
 RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
   const Scene& s = b.scene;
   RunPlan plan;
@@ -185,6 +196,8 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
   plan.fingerprint = "scene " + (s.settings.empty() ? s.source.string() : s.settings) +
                      (b.body->digest.empty() ? "" : " mesh contents " + b.body->digest);
   plan.settings = scene_settings(b, sim);
+  if (b.body->reoriented)  // the header's mesh line says so
+    plan.warnings.push_back(fmt::format("{} inverted cell(s) of the mesh re-oriented", b.body->reoriented));
   plan.live_progress = s.run.live_progress;
   plan.header = [&b, &sim](std::ostream& o) { write_header(b, sim, o); };
   plan.fill = [&sim](StepRecord& f, const StepReport*) {
@@ -235,12 +248,9 @@ RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
     if (!r.failed_frame.empty()) how += "; its last iterate: " + r.failed_frame;
     // Converged frames that hold inverted elements are warned of on their lines; the last line counts them,
     // so that a run that "finished" is not read as clean.
-    int inverted_frames = 0, most = 0, worst = 0;
-    for (const StepRecord& rec : r.records)
-      if (rec.inverted > 0 && rec.converged && (++inverted_frames, rec.inverted > most)) most = rec.inverted, worst = rec.index;
-    if (r.all_converged && inverted_frames > 0)
+    if (const InsideOut io = inside_out_frames(r.records); r.all_converged && io.frames > 0)
       how = fmt::format("finished, {} frame{} with inverted elements (warning: flesh turned inside out; at most {}, in frame {})",
-                        inverted_frames, inverted_frames == 1 ? "" : "s", most, worst);
+                        io.frames, io.frames == 1 ? "" : "s", io.most, io.worst);
     if (!r.unconverged.empty() && r.interrupted_by == 0 && !r.records.empty() && r.records.back().index == frames) {
       std::string list;
       for (std::size_t i = 0; i < r.unconverged.size() && i < 10; ++i) list += fmt::format("{}{}", i ? ", " : "", r.unconverged[i]);
@@ -276,6 +286,9 @@ SceneResult run_scene(const BuiltScene& b, std::ostream& log) {
     return result;
   }
   RunResult run = run_simulation(sim, plan, log);
+  if (const InsideOut io = inside_out_frames(run.records); io.frames > 0)
+    run.warnings.push_back(fmt::format("{} frame{} converged with elements turned inside out (at most {}, in frame {})", io.frames,
+                                       io.frames == 1 ? "" : "s", io.most, io.worst));
   static_cast<RunOutcome&>(result) = run;
   result.frames = std::move(run.records);
   result.final_positions = sim.x();
