@@ -18,7 +18,9 @@ if [ -n "${REFERENCE:-}" ]; then
 fi
 # BESIDE is checked before anything runs: a table this script wrote.
 if [ -n "${BESIDE:-}" ]; then
-  if [ ! -f "$BESIDE" ] || [ "$(head -1 "$BESIDE" 2>/dev/null)" != "elements,dofs,newton_per_step,cg_per_step,seconds_per_step,peak_mib" ]; then
+  # Its header, then rows of six numbers (the plot reads them only after every run).
+  if [ ! -f "$BESIDE" ] || [ "$(head -1 "$BESIDE" 2>/dev/null)" != "elements,dofs,newton_per_step,cg_per_step,seconds_per_step,peak_mib" ] ||
+    ! tail -n +2 "$BESIDE" | awk -F, 'NF != 6 { exit 1 } { for (i = 1; i <= 6; ++i) if ($i !~ /^[0-9]+(\.[0-9]+)?$/ || (i == 5 && $i + 0 <= 0)) exit 1 }'; then
     echo "figure1_growth.sh: BESIDE=$BESIDE is not a figure1_growth.csv (an earlier run's table, from its OUT)" >&2
     exit 2
   fi

@@ -7,7 +7,7 @@
 #   4. REFERENCE the very directory the run would replace: exit 2, and the directory is left as it was;
 #   5. bench/figure1_growth.sh (runs of several sizes) refuses REFERENCE: exit 2, before anything runs;
 #   6. figure1_growth.sh draws an earlier table BESIDE its own (exit 0, the plot written), and refuses a BESIDE
-#      that is not such a table: exit 2, before anything runs.
+#      that is not such a table (another file, a row not of numbers, no file): exit 2, before anything runs.
 # Usage: test_bench_figure1.sh SNH REPOSITORY
 set -u
 SNH="$1"
@@ -60,6 +60,9 @@ expect_exit 0 "figure1_growth.sh with BESIDE" '^plot: .*/growth2/figure1_growth.
 if [ -s "$work/growth2/figure1_growth.png" ]; then ok; else bad "figure1_growth.sh with BESIDE drew no plot"; fi
 expect_error "BESIDE that is not a growth table" '^figure1_growth.sh: BESIDE=.*/stats.json is not a figure1_growth.csv' -- \
   env BESIDE="$work/same/stats.json" SNH="$SNH" OUT="$work/growth3" bash "$root/bench/figure1_growth.sh" 2000
+printf 'elements,dofs,newton_per_step,cg_per_step,seconds_per_step,peak_mib\n1000,3000,3.0,20,fast,100\n' > "$work/words.csv"
+expect_error "BESIDE with a row that is not numbers" '^figure1_growth.sh: BESIDE=.*/words.csv is not a figure1_growth.csv' -- \
+  env BESIDE="$work/words.csv" SNH="$SNH" OUT="$work/growth3" bash "$root/bench/figure1_growth.sh" 2000
 expect_error "BESIDE that does not exist" '^figure1_growth.sh: BESIDE=.*/none.csv is not a figure1_growth.csv' -- \
   env BESIDE="$work/none.csv" SNH="$SNH" OUT="$work/growth3" bash "$root/bench/figure1_growth.sh" 2000
 if [ ! -e "$work/growth3" ]; then ok; else bad "figure1_growth.sh wrote $work/growth3 before refusing BESIDE"; fi
