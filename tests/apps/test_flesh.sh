@@ -48,6 +48,8 @@ python3 "$HERE/check_usda.py" "$work/broken.usda" > /dev/null 2>&1 && bad "check
 # two bones; at --radius-scale 0.4 they leave it room, and the header says the radii were scaled.
 "$SNH" flesh "$limb" --resolution 24 --out "$work/pressed" --no-report > "$work/pressed.log" 2>&1 \
   && grep -q '^warning: the bones press flesh inside out in [0-9]* frames: in frame 24 (t = 1) \(shoulder>elbow and elbow>tip\|elbow>tip and shoulder>elbow\) carry' "$work/pressed.log" \
+  && grep -q '^    "the bones press flesh inside out in [0-9]* frames: in frame 24' "$work/pressed/stats.json" \
+  && grep -q '^    "[0-9]* frames converged with elements turned inside out (at most [0-9]*, in frame [0-9]*)"$' "$work/pressed/stats.json" \
   && ok || bad "pressed flesh: $(grep -c 'press flesh' "$work/pressed.log") warnings; $(tail -1 "$work/pressed.log")"
 "$SNH" flesh "$limb" --resolution 24 --radius-scale 0.4 --out "$work/roomy" --no-report > "$work/roomy.log" 2>&1 \
   && grep -q '^bones: 3 binding [0-9]* volume vertices, capsule radii 0.4 x the default (shoulder>elbow' "$work/roomy.log" \

@@ -154,6 +154,8 @@ TEST(RunReport, StretchRunSurfaceFramesAndRanges) {
     EXPECT_EQ(d["kind"], "stretch");
     EXPECT_EQ(d["title"], "snh stretch --res 3 --steps 5 --stretch 2");
     EXPECT_TRUE(d["status"]["ok"].get<bool>());
+    EXPECT_EQ(d["status"]["text"], "converged every step");  // nothing to warn of
+    EXPECT_EQ(d["status"]["warnings"], json::array());
     const json& mesh = d["mesh"];
     const int res = 3, nv = (res + 1) * (res + 1) * (res + 1);
     EXPECT_EQ(mesh["vertex_count"], nv);
@@ -374,6 +376,7 @@ FleshRun flesh_run(const std::string& name) {
   stats["radius_scale"] = 0.6;
   stats["pressed_flesh"] = {{"frames", 2}, {"worst_frame", 4}, {"time", 0.2}, {"bones", {"shoulder>elbow", "elbow>wrist"}},
                             {"rest_distance", 0.5}, {"closest", 0.01}};
+  stats["warnings"] = {"the bones press flesh inside out in 2 frames", "2 frames converged with elements turned inside out"};
   std::ofstream(f.dir / "stats.json") << stats.dump(2) << "\n";
   return f;
 }
@@ -492,13 +495,28 @@ TEST(RunReport, FleshRunRenderSurfaceBonesAndSettings) {
   EXPECT_EQ(meta_value(d, "bound vertices"), "9");
   EXPECT_EQ(meta_value(d, "bones"), "2 (binding no vertex: wrist)");
   EXPECT_EQ(meta_value(d, "capsule radii"), "0.6 x the default");
-  EXPECT_EQ(meta_value(d, "warning: bones press flesh inside out"),
-            "in 2 frame(s); worst frame 4: shoulder>elbow and elbow>wrist carry bound vertices 0.5 apart at rest to 0.01 (their "
-            "capsules overlap; smaller radii leave the flesh room)");
+  EXPECT_EQ(meta_value(d, "warning: bones press flesh inside out"), "");  // listed under the status instead (below)
   EXPECT_EQ(meta_value(d, "USD stage"), (json{{"text", "flesh.usda"}, {"href", "flesh.usda"}}));
+  // The run's warnings: the status says how many, and the page lists them.
+  EXPECT_TRUE(d["status"]["ok"].get<bool>());
+  EXPECT_EQ(d["status"]["text"], "finished with 2 warnings");
+  EXPECT_EQ(d["status"]["warnings"],
+            (json{"the bones press flesh inside out in 2 frames", "2 frames converged with elements turned inside out"}));
   fs::remove(f.dir / "flesh.usda");
   (void)write_report(f.dir);
   EXPECT_EQ(meta_value(read_report_data(f.dir), "USD stage"), "");  // no link to a file that is not there
+
+  // A run from before stats.json listed its warnings: the pressed flesh among the settings, a plain status.
+  json stats = json::parse(test::file_text(f.dir / "stats.json"));
+  stats.erase("warnings");
+  std::ofstream(f.dir / "stats.json") << stats.dump(2) << "\n";
+  (void)write_report(f.dir);
+  const json older = read_report_data(f.dir);
+  EXPECT_EQ(meta_value(older, "warning: bones press flesh inside out"),
+            "in 2 frame(s); worst frame 4: shoulder>elbow and elbow>wrist carry bound vertices 0.5 apart at rest to 0.01 (their "
+            "capsules overlap; smaller radii leave the flesh room)");
+  EXPECT_EQ(older["status"]["text"], "finished");
+  EXPECT_EQ(older["status"]["warnings"], json::array());
 
   // Without bones.json, the surfaces alone.
   fs::remove(f.dir / "bones.json");

@@ -13,14 +13,18 @@ function metaValue(v) {
 export function header(data) {
   const status = data.status || {};
   const ok = status.ok !== false;
+  // A run that finished but warned (bones pressing flesh, frames converged inside out): not a plain tick.
+  const warnings = Array.isArray(status.warnings) ? status.warnings.filter((w) => typeof w === 'string') : [];
+  const warned = ok && warnings.length > 0;
   const meta = Array.isArray(data.meta) ? data.meta : [];
   return el('header', { class: 'snh-header' },
     el('div', { class: 'snh-kicker' }, data.render ? 'flesh run' : KIND_NAMES[data.kind] || data.kind || 'report',
       data.generated_by ? el('span', { class: 'snh-generated' }, ` · ${data.generated_by}`) : null),
     el('h1', { class: 'snh-title' }, data.title || 'snh report'),
-    el('div', { class: `snh-status ${ok ? 'snh-status-ok' : 'snh-status-fail'}`, role: 'status' },
-      el('span', { class: 'snh-status-icon', 'aria-hidden': 'true' }, ok ? '✓' : '✗'),
+    el('div', { class: `snh-status ${warned ? 'snh-status-warn' : ok ? 'snh-status-ok' : 'snh-status-fail'}`, role: 'status' },
+      el('span', { class: 'snh-status-icon', 'aria-hidden': 'true' }, warned ? '⚠' : ok ? '✓' : '✗'),
       el('span', {}, status.text || (ok ? 'ok' : 'failed'))),
+    warnings.length ? el('ul', { class: 'snh-warnings' }, warnings.map((w) => el('li', {}, w))) : null,
     meta.length
       ? el('dl', { class: 'snh-meta' }, meta.map(([k, v]) => el('div', {}, el('dt', {}, k), el('dd', {}, metaValue(v)))))
       : null);

@@ -97,6 +97,10 @@ test('stretch run report', { skip: !RUN && 'SNH_TEST_RUN_DIR is not set', timeou
   assert.ok(covered > 0.03, `the mesh covers ${(100 * covered).toFixed(1)}% of the canvas' middle third`);
   // Only a flesh run has the switch among flesh, skinning and volume.
   assert.equal(await page.locator('#snh-show-flesh').count(), report.render ? 1 : 0);
+  // The status: a plain tick for a run that finished clean, a warning sign and the list where it warned.
+  const warnings = report.status.warnings || [];
+  if (report.status.ok !== false) assert.equal(await page.locator(warnings.length ? '.snh-status-warn' : '.snh-status-ok').count(), 1);
+  assert.deepEqual(await page.$$eval('.snh-warnings li', (ls) => ls.map((l) => l.textContent)), warnings);
 
   // The slider to the last frame: the frame and the picture change.
   const count = await page.evaluate(() => window.snhReport.frameCount);
@@ -180,6 +184,12 @@ test('flesh run report', { skip: !FLESH && 'SNH_TEST_FLESH_DIR is not set', time
   const changedBetween = (a, b) => fraction(b, (p, x, y) => differs(p, pixel(a, x, y)));
   const visible = () => page.evaluate(() => window.snhReport.visible());
   const pressed = () => page.$$eval('.snh-seg', (bs) => bs.filter((b) => b.getAttribute('aria-pressed') === 'true').map((b) => b.dataset.show));
+
+  // Its warnings: the status is no plain tick, and lists each one.
+  assert.equal(await page.locator('.snh-status-warn').count(), 1);
+  assert.match(await page.locator('.snh-status').textContent(), /finished with 2 warnings/);
+  assert.deepEqual(await page.$$eval('.snh-warnings li', (ls) => ls.map((l) => l.textContent)), report.status.warnings);
+  assert.equal(report.status.warnings.length, 2);
 
   // The flesh first, with its bones; the volume's colours (legend, field) are not in use.
   assert.deepEqual(await page.$$eval('.snh-seg', (bs) => bs.map((b) => b.textContent)), ['flesh', 'skinning (LBS)', 'flesh − LBS distance', 'volume']);

@@ -310,8 +310,9 @@ void flesh_meta(json& meta, const fs::path& dir, const json& stats) {
   }
   if (const auto it = stats.find("radius_scale"); it != stats.end() && it->is_number() && it->get<double>() != 1.0)
     meta.push_back({"capsule radii", fmt::format("{:g} x the default", it->get<double>())});
-  // Where the bones press their flesh inside out (the run's header warns of it too).
-  if (const auto it = stats.find("pressed_flesh"); it != stats.end() && it->is_object()) {
+  // Where the bones press their flesh inside out (the run's header warns of it too). A run that lists its warnings
+  // (stats.json's "warnings") has it in the list under the status; only older runs show it here.
+  if (const auto it = stats.find("pressed_flesh"); it != stats.end() && it->is_object() && !stats.contains("warnings")) {
     const json& p = *it;
     const json& bones = p.value("bones", json::array());
     meta.push_back({"warning: bones press flesh inside out",
@@ -326,25 +327,10 @@ void flesh_meta(json& meta, const fs::path& dir, const json& stats) {
   if (fs::exists(dir / usd)) meta.push_back({"USD stage", {{"text", usd}, {"href", usd}}});
 }
 
-/// The report data of a stretch run (tetcli, hexcli, snh stretch) or a scene (snh run).
-json run_data(const fs::path& dir, const json& stats) {
-  const bool scene = stats.contains("frames") && !stats.contains("steps");
-  json d;
-  d["format"] = 1;
-  d["kind"] = scene ? "scene" : "stretch";
-  const std::string program = stats.value("program", std::string(scene ? "snh run" : "snh stretch"));
-  d["title"] = stats.contains("command_line") ? stats.at("command_line").get<std::string>()
-               : scene                        ? "snh run " + stats.value("scene", std::string())
-                                              : program;
-  d["generated_by"] = "snh " SNH_VERSION;
-
-  // Status: the run's own verdict.
+/// The run's own verdict for the page's status: ok, its text, and what it warned of. rows: its frames or steps.
+json run_status_of(const json& stats, const json& rows, bool scene) {
   const bool ok = stats.value("all_converged", false);
   const int signal = stats.value("interrupted_by_signal", 0);
-  const auto rows_at = stats.find(scene ? "frames" : "steps");
-  if (rows_at == stats.end() || !rows_at->is_array())
-    throw ReportError(fmt::format("{}: no \"{}\" array", (dir / "stats.json").string(), scene ? "frames" : "steps"));
-  const json& rows = *rows_at;
   std::string status = ok ? (scene ? "finished" : "converged every step") : "";
   const std::string run_status = stats.value("status", std::string());
   if (run_status == "running")
@@ -361,7 +347,35 @@ json run_data(const fs::path& dir, const json& stats) {
     status = "stopped: a step did not converge";
     if (!rows.empty()) status = fmt::format("stopped: step {} did not converge ({})", rows.back().value("step", 0), rows.back().value("failure", std::string()));
   }
-  d["status"] = {{"ok", ok}, {"text", status}};
+  // What the run warned of (stats.json's "warnings"; runs before it have none): a finished run that did is
+  // "finished with N warnings", and the page lists them under the status.
+  json warnings = json::array();
+  if (const auto it = stats.find("warnings"); it != stats.end() && it->is_array())
+    for (const json& w : *it)
+      if (w.is_string()) warnings.push_back(w);
+  if (ok && run_status != "running" && !warnings.empty())
+    status += fmt::format(" with {} warning{}", warnings.size(), warnings.size() == 1 ? "" : "s");
+  return {{"ok", ok}, {"text", status}, {"warnings", warnings}};
+}
+
+/// The report data of a stretch run (tetcli, hexcli, snh stretch) or a scene (snh run).
+json run_data(const fs::path& dir, const json& stats) {
+  const bool scene = stats.contains("frames") && !stats.contains("steps");
+  json d;
+  d["format"] = 1;
+  d["kind"] = scene ? "scene" : "stretch";
+  const std::string program = stats.value("program", std::string(scene ? "snh run" : "snh stretch"));
+  d["title"] = stats.contains("command_line") ? stats.at("command_line").get<std::string>()
+               : scene                        ? "snh run " + stats.value("scene", std::string())
+                                              : program;
+  d["generated_by"] = "snh " SNH_VERSION;
+
+  // Status: the run's own verdict.
+  const auto rows_at = stats.find(scene ? "frames" : "steps");
+  if (rows_at == stats.end() || !rows_at->is_array())
+    throw ReportError(fmt::format("{}: no \"{}\" array", (dir / "stats.json").string(), scene ? "frames" : "steps"));
+  const json& rows = *rows_at;
+  d["status"] = run_status_of(stats, rows, scene);
 
   // Settings, in this order, each where stats.json has it.
   struct Setting {

@@ -34,6 +34,7 @@ void write_stats(const RunPlan& plan, const RunResult& r, const std::string& sta
   j["interrupted_by_signal"] = r.interrupted_by;
   j["total_seconds"] = r.total_seconds;
   j["peak_memory_mib"] = r.peak_memory_mib;
+  j["warnings"] = r.warnings;
   add_totals(table, r.records, j);
   if (extra)
     for (auto it = extra->begin(); it != extra->end(); ++it) j[it.key()] = it.value();
@@ -190,6 +191,9 @@ class RunLoop {
   }
 
   RunResult finish(const std::string& status) {
+    if (const InsideOut io = inside_out_frames(result_.records); io.frames > 0)
+      result_.warnings.push_back(fmt::format("{} {}{} converged with elements turned inside out (at most {}, in {} {})", io.frames,
+                                             word_, io.frames == 1 ? "" : "s", io.most, word_, io.worst));
     result_.total_seconds = since(t_start_);
     result_.peak_memory_mib = peak_memory_mib();
     json extra = json::object();
@@ -368,6 +372,13 @@ class RunLoop {
 };
 
 }  // namespace
+
+InsideOut inside_out_frames(const std::vector<StepRecord>& records) {
+  InsideOut io;
+  for (const StepRecord& rec : records)
+    if (rec.inverted > 0 && rec.converged && (++io.frames, rec.inverted > io.most)) io.most = rec.inverted, io.worst = rec.index;
+  return io;
+}
 
 RunResult run_simulation(Simulation& sim, const RunPlan& plan, std::ostream& log) { return RunLoop(sim, plan, log).run(); }
 

@@ -34,14 +34,21 @@ struct RunOutcome {
   double total_seconds = 0.0;
   double peak_memory_mib = 0.0;  ///< peak resident memory of the process (VmHWM)
   /// What makes the results doubtful though the frames converged, one sentence each without the "warning: " the
-  /// log puts before it: the plan's (known before the first frame) and, for a scene, its frames that converged
-  /// with elements turned inside out. Empty for a clean run.
+  /// log puts before it: the plan's (known before the first frame), then the frames that converged with elements
+  /// turned inside out (inside_out_frames). Empty for a clean run; stats.json's "warnings".
   std::vector<std::string> warnings;
 };
 
 struct RunResult : RunOutcome {
   std::vector<StepRecord> records;  ///< with the initial state's first where the table has one
 };
+
+/// The converged frames (steps) of `records` that hold inverted elements: how many, and the most in one of them
+/// (`worst`, the first with that many).
+struct InsideOut {
+  int frames = 0, most = 0, worst = 0;
+};
+[[nodiscard]] InsideOut inside_out_frames(const std::vector<StepRecord>& records);
 
 struct RunPlan {
   std::filesystem::path out;

@@ -168,17 +168,6 @@ void add_muscle_output(const BuiltScene& b, RunPlan& plan) {
   };
 }
 
-/// The converged frames that hold inverted elements: how many, and the most in one frame (the first such frame).
-struct InsideOut {
-  int frames = 0, most = 0, worst = 0;
-};
-InsideOut inside_out_frames(const std::vector<StepRecord>& records) {
-  InsideOut io;
-  for (const StepRecord& rec : records)
-    if (rec.inverted > 0 && rec.converged && (++io.frames, rec.inverted > io.most)) io.most = rec.inverted, io.worst = rec.index;
-  return io;
-}
-
 RunPlan scene_plan(const BuiltScene& b, Simulation& sim) {
   const Scene& s = b.scene;
   RunPlan plan;
@@ -286,9 +275,6 @@ SceneResult run_scene(const BuiltScene& b, std::ostream& log) {
     return result;
   }
   RunResult run = run_simulation(sim, plan, log);
-  if (const InsideOut io = inside_out_frames(run.records); io.frames > 0)
-    run.warnings.push_back(fmt::format("{} frame{} converged with elements turned inside out (at most {}, in frame {})", io.frames,
-                                       io.frames == 1 ? "" : "s", io.most, io.worst));
   static_cast<RunOutcome&>(result) = run;
   result.frames = std::move(run.records);
   result.final_positions = sim.x();
