@@ -18,6 +18,7 @@
 #include "snh/material/registry.hpp"
 #include "snh/mesh/box.hpp"
 #include "snh/run/checkpoint.hpp"
+#include "snh/run/driver.hpp"
 #include "snh/run/output.hpp"
 #include "snh/run/run_directory.hpp"
 #include "test_support.hpp"
@@ -161,6 +162,22 @@ TEST(FrameWriter, AFailedFrameIsKeptOutOfTheSeriesAndANoteMarksAFrameInIt) {
   EXPECT_NE(text2.find("<!-- frame 1 did not converge - twice -->\n<DataSet timestep=\"0.5\""), std::string::npos) << text2;
   EXPECT_EQ(read_pvd(d / "frames.pvd").size(), 2u);
   fs::remove_all(d);
+}
+
+// The warning of frames that converged inside out counts solved frames only: not the initial state (frame 0, which a
+// lab case starts inverted), nor a frame that did not converge (its failure says more).
+TEST(RunOutcome, FramesInsideOutCountSolvedConvergedFramesOnly) {
+  auto record = [](int index, int inverted, bool converged) {
+    StepRecord r;
+    r.index = index, r.inverted = inverted, r.converged = converged;
+    return r;
+  };
+  const InsideOut io = inside_out_frames({record(0, 9, true), record(1, 2, true), record(2, 7, false), record(3, 4, true),
+                                          record(4, 0, true), record(5, 4, true)});
+  EXPECT_EQ(io.frames, 3);
+  EXPECT_EQ(io.most, 4);
+  EXPECT_EQ(io.worst, 3);
+  EXPECT_EQ(inside_out_frames({record(0, 9, true)}).frames, 0);
 }
 
 TEST(RunDirectory, ForceWritesIntoADirectoryOfSomeoneElse) {

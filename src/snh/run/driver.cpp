@@ -375,8 +375,9 @@ class RunLoop {
 
 InsideOut inside_out_frames(const std::vector<StepRecord>& records) {
   InsideOut io;
-  for (const StepRecord& rec : records)
-    if (rec.inverted > 0 && rec.converged && (++io.frames, rec.inverted > io.most)) io.most = rec.inverted, io.worst = rec.index;
+  for (const StepRecord& rec : records)  // index 0: a scene's initial state, given and not solved (the lab starts inverted)
+    if (rec.index > 0 && rec.inverted > 0 && rec.converged && (++io.frames, rec.inverted > io.most))
+      io.most = rec.inverted, io.worst = rec.index;
   return io;
 }
 

@@ -44,7 +44,7 @@ struct RunResult : RunOutcome {
 };
 
 /// The converged frames (steps) of `records` that hold inverted elements: how many, and the most in one of them
-/// (`worst`, the first with that many).
+/// (`worst`, the first with that many). A scene's initial state (frame 0) is given, not solved, and not counted.
 struct InsideOut {
   int frames = 0, most = 0, worst = 0;
 };
