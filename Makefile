@@ -25,13 +25,13 @@ build: configure
 	cmake --build --preset $(PRESET) -j $(JOBS)
 
 demo: build
-	$(BUILD)/apps/tetcli 10 stable_neo_hookean 1.0 10.0 output
+	$(BUILD)/apps/tetcli 10 stable_neo_hookean 1.0 10.0 output/stretch
 	$(BUILD)/apps/snh run scenes/bunny_squash.json --out output/bunny_squash
 	$(BUILD)/apps/snh run scenes/hand_fist.json --out output/hand_fist
-	@echo "demo output: $(CURDIR)/output (the stretch test: frames 000.obj ... 025.obj, 000.vtu ... 025.vtu + frames.pvd for ParaView, stats.json, stats.csv)"
+	@echo "demo output: $(CURDIR)/output/stretch (the stretch test: frames 000.obj ... 025.obj, 000.vtu ... 025.vtu + frames.pvd for ParaView, stats.json, stats.csv)"
 	@echo "             $(CURDIR)/output/bunny_squash (the bunny squashed and released: the same files)"
 	@echo "             $(CURDIR)/output/hand_fist (the hand's flesh closing into a fist: surface/ and lbs/ OBJ frames, flesh.usda)"
-	@echo "open in a browser: $(CURDIR)/output/index.html"
+	@echo "open in a browser: $(CURDIR)/output/stretch/index.html"
 	@echo "                   $(CURDIR)/output/bunny_squash/index.html"
 	@echo "                   $(CURDIR)/output/hand_fist/index.html"
 

@@ -68,6 +68,17 @@ grep -q '"resolution": 20' "$out/limb/stats.json" && grep -q '"joint_cells": "fr
 grep -q 'def Mesh "flesh"' "$out/limb/flesh.usda" && grep -q 'def Mesh "linear_blend_skinning"' "$out/limb/flesh.usda" \
   && ok || bad "README five steps: flesh.usda lacks its two meshes"
 
+# `make demo` after the five steps (a newcomer may take either first): its runs, read from the Makefile's demo
+# recipe, each write a folder of their own under output/, beside output/limb. A run into output/ itself was
+# refused there, since output/ then held only the steps' folder and no run of its own.
+grep -E '^\s+\$\(BUILD\)/apps/' "$SRC/Makefile" | sed 's/^[[:space:]]*//; s/\$(BUILD)/build\/release/g' > "$work/demo.sh"
+[ "$(wc -l < "$work/demo.sh")" -ge 3 ] && ok || bad "Makefile: no demo recipe found ($(wc -l < "$work/demo.sh") program lines)"
+if (cd "$root" && bash -e "$work/demo.sh") > "$work/demo.log" 2>&1; then ok
+else bad "make demo after the README's five steps: $(tail -3 "$work/demo.log")"; fi
+for f in stretch/index.html bunny_squash/index.html hand_fist/index.html limb/index.html; do
+  [ -s "$out/$f" ] && ok || bad "make demo after the five steps: output/$f missing"
+done
+
 # The Python snippet, pasted into the interpreter.
 if [ -z "$PYDIR" ]; then
   echo "test_readme: the python block skipped: no Python module directory given (the module was not built)"
