@@ -309,8 +309,8 @@ void add_flesh_output(const BuiltScene& b, const Simulation& sim, RunPlan& plan)
     plan.settings["contact"]["bone_colliders"] =
         std::count_if(points.begin(), points.end(), [](const std::vector<int>& p) { return !p.empty(); });
   }
-  std::vector<double> times;  // the frames' times, as the run's steps place them
-  for (int i = 1; i <= b.frames; ++i) times.push_back(b.end_time * i / b.frames);
+  std::vector<double> times;  // the frames' times, as the run records them (frame i at i · frame_duration)
+  for (int i = 1; i <= plan.frames; ++i) times.push_back(i * plan.frame_duration);
   const PressedFlesh pressed = pressed_flesh(b.body->flesh, times);
   plan.settings["pressed_flesh"] = nullptr;
   if (pressed.frame >= 0)
